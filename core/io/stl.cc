@@ -1,0 +1,127 @@
+#include <cstring>
+#include <unordered_map>
+
+#include "absl/hash/hash.h"
+#include "absl/strings/str_cat.h"
+#include "core/io/formats.h"
+
+namespace meshsmooth::io {
+namespace {
+
+struct PositionKey {
+  double x, y, z;
+  bool operator==(const PositionKey& o) const { return x == o.x && y == o.y && z == o.z; }
+  template <typename H>
+  friend H AbslHashValue(H h, const PositionKey& k) {
+    return H::combine(std::move(h), k.x, k.y, k.z);
+  }
+};
+
+// STL is a triangle soup: corners with the same position become one vertex, numbered in order
+// of first appearance.
+class Welder {
+ public:
+  explicit Welder(Mesh& mesh, ReadInfo& info) : mesh_(mesh), info_(info) {}
+  int32_t Add(const Vec3& p) {
+    // +0.0 and -0.0 compare equal but hash differently: normalise before hashing.
+    const PositionKey key{p.x + 0.0, p.y + 0.0, p.z + 0.0};
+    auto [it, inserted] = index_.try_emplace(key, mesh_.num_vertices());
+    if (inserted) {
+      mesh_.positions.push_back(p);
+    } else {
+      ++info_.welded_corners;
+    }
+    return it->second;
+  }
+
+ private:
+  Mesh& mesh_;
+  ReadInfo& info_;
+  std::unordered_map<PositionKey, int32_t, absl::Hash<PositionKey>> index_;
+};
+
+bool LooksBinary(std::string_view data) {
+  if (data.size() < 84) return false;
+  uint32_t n = 0;
+  std::memcpy(&n, data.data() + 80, 4);
+  return data.size() == 84 + 50 * static_cast<uint64_t>(n);
+}
+
+}  // namespace
+
+absl::StatusOr<Mesh> ParseStl(std::string_view data, ReadInfo& info) {
+  Mesh mesh;
+  Welder welder(mesh, info);
+  if (LooksBinary(data)) {
+    uint32_t n = 0;
+    std::memcpy(&n, data.data() + 80, 4);
+    mesh.triangles.reserve(n);
+    for (uint32_t f = 0; f < n; ++f) {
+      const char* rec = data.data() + 84 + 50 * static_cast<size_t>(f);
+      Triangle t;
+      for (int c = 0; c < 3; ++c) {
+        float xyz[3];
+        std::memcpy(xyz, rec + 12 + 12 * c, sizeof xyz);
+        t[c] = welder.Add({xyz[0], xyz[1], xyz[2]});
+      }
+      mesh.triangles.push_back(t);
+    }
+    return mesh;
+  }
+  std::string_view rest = data;
+  if (NextToken(rest) != "solid") {
+    return absl::InvalidArgumentError("STL: neither binary (size does not match the face count) nor ASCII (no 'solid')");
+  }
+  Triangle t{};
+  int corner = 0;
+  for (std::string_view tok = NextToken(rest); !tok.empty(); tok = NextToken(rest)) {
+    if (tok == "vertex") {
+      Vec3 p;
+      if (!ParseDouble(NextToken(rest), p.x) || !ParseDouble(NextToken(rest), p.y) ||
+          !ParseDouble(NextToken(rest), p.z)) {
+        return absl::InvalidArgumentError(absl::StrCat("STL: bad vertex in facet ", mesh.triangles.size()));
+      }
+      if (corner == 3) {
+        return absl::InvalidArgumentError(absl::StrCat("STL: facet ", mesh.triangles.size(), " has more than 3 vertices"));
+      }
+      t[corner++] = welder.Add(p);
+    } else if (tok == "endloop") {
+      if (corner != 3) {
+        return absl::InvalidArgumentError(absl::StrCat("STL: facet ", mesh.triangles.size(), " has ", corner, " vertices"));
+      }
+      mesh.triangles.push_back(t);
+      corner = 0;
+    }
+  }
+  return mesh;
+}
+
+std::string WriteStl(const Mesh& mesh) {
+  const int32_t n = mesh.num_vertices();
+  uint32_t count = 0;
+  for (const Triangle& t : mesh.triangles) count += IsUsableTriangle(t, n);
+  std::string out(80, '\0');
+  const char header[] = "binary STL written by meshsmooth";
+  std::memcpy(out.data(), header, sizeof header - 1);
+  out.append(reinterpret_cast<const char*>(&count), 4);
+  out.reserve(84 + 50 * static_cast<size_t>(count));
+  for (const Triangle& t : mesh.triangles) {
+    if (!IsUsableTriangle(t, n)) continue;  // STL cannot reference a vertex that is not there
+    const Vec3 &a = mesh.positions[t[0]], &b = mesh.positions[t[1]], &c = mesh.positions[t[2]];
+    Vec3 nrm = Cross(b - a, c - a);
+    const double len = Norm(nrm);
+    if (len > 0.0) nrm *= 1.0 / len;
+    float rec[12] = {static_cast<float>(nrm.x), static_cast<float>(nrm.y), static_cast<float>(nrm.z)};
+    int k = 3;
+    for (const Vec3* p : {&a, &b, &c}) {
+      rec[k++] = static_cast<float>(p->x);
+      rec[k++] = static_cast<float>(p->y);
+      rec[k++] = static_cast<float>(p->z);
+    }
+    out.append(reinterpret_cast<const char*>(rec), sizeof rec);
+    out.append(2, '\0');
+  }
+  return out;
+}
+
+}  // namespace meshsmooth::io

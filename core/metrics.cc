@@ -1,0 +1,125 @@
+#include "core/metrics.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <sstream>
+
+#include "absl/strings/str_cat.h"
+
+namespace meshsmooth {
+namespace {
+
+// Angle between u and v; atan2 stays finite (0) for zero-length vectors.
+double Angle(const Vec3& u, const Vec3& v) { return std::atan2(Norm(Cross(u, v)), Dot(u, v)); }
+
+template <typename Fn>
+void ForEachEdge(const Topology& topo, Fn&& fn) {
+  for (int32_t v = 0; v < topo.num_vertices(); ++v) {
+    for (int32_t i = topo.ring_offsets[v]; i < topo.ring_offsets[v + 1]; ++i) {
+      if (v < topo.ring[i]) fn(v, topo.ring[i]);
+    }
+  }
+}
+
+}  // namespace
+
+double MeanEdgeLength(const Mesh& mesh, const Topology& topo) {
+  double sum = 0.0;
+  int64_t count = 0;
+  ForEachEdge(topo, [&](int32_t a, int32_t b) {
+    sum += Norm(mesh.positions[a] - mesh.positions[b]);
+    ++count;
+  });
+  return count > 0 ? sum / static_cast<double>(count) : 0.0;
+}
+
+MeshMetrics ComputeMetrics(const Mesh& mesh, const Topology& topo) {
+  MeshMetrics m;
+  Vec3 centroid;
+  int64_t referenced = 0;
+  for (int32_t v = 0; v < topo.num_vertices(); ++v) {
+    if (topo.kind[v] == VertexKind::kIsolated) continue;
+    centroid += mesh.positions[v];
+    ++referenced;
+  }
+  if (referenced > 0) centroid *= 1.0 / static_cast<double>(referenced);
+
+  double min_angle = std::numeric_limits<double>::infinity(), sum_min_angle = 0.0;
+  int64_t below10 = 0;
+  constexpr double kTenDeg = 10.0 * std::numbers::pi / 180.0;
+  for (int32_t f : topo.faces) {
+    const Triangle& t = mesh.triangles[f];
+    const Vec3 a = mesh.positions[t[0]] - centroid, b = mesh.positions[t[1]] - centroid,
+               c = mesh.positions[t[2]] - centroid;
+    m.area += 0.5 * Norm(Cross(b - a, c - a));
+    m.signed_volume += Dot(a, Cross(b, c)) / 6.0;
+    const double angles[3] = {Angle(b - a, c - a), Angle(a - b, c - b), Angle(a - c, b - c)};
+    const double face_min = std::min({angles[0], angles[1], angles[2]});
+    min_angle = std::min(min_angle, face_min);
+    sum_min_angle += face_min;
+    for (double ang : angles) below10 += ang < kTenDeg;
+  }
+  const double nf = static_cast<double>(topo.faces.size());
+  if (!topo.faces.empty()) {
+    m.min_angle_deg = min_angle * 180.0 / std::numbers::pi;
+    m.mean_angle_deg = sum_min_angle / nf * 180.0 / std::numbers::pi;
+    m.share_angles_below_10deg = static_cast<double>(below10) / (3.0 * nf);
+  }
+
+  m.edge_length_mean = MeanEdgeLength(mesh, topo);
+  double sq = 0.0;
+  int64_t count = 0;
+  ForEachEdge(topo, [&](int32_t a, int32_t b) {
+    const double d = Norm(mesh.positions[a] - mesh.positions[b]) - m.edge_length_mean;
+    sq += d * d;
+    ++count;
+  });
+  if (count > 0 && m.edge_length_mean > 0.0) {
+    m.edge_length_cv = std::sqrt(sq / static_cast<double>(count)) / m.edge_length_mean;
+  }
+  return m;
+}
+
+absl::StatusOr<Displacement> CompareMeshes(const Mesh& before, const Mesh& after) {
+  if (before.positions.size() != after.positions.size()) {
+    return absl::InvalidArgumentError(absl::StrCat("vertex counts differ: ", before.positions.size(),
+                                                   " and ", after.positions.size()));
+  }
+  if (before.triangles != after.triangles) {
+    return absl::InvalidArgumentError("the meshes' triangles differ");
+  }
+  Displacement d;
+  double sq = 0.0;
+  for (size_t i = 0; i < before.positions.size(); ++i) {
+    const double len = Norm(after.positions[i] - before.positions[i]);
+    sq += len * len;
+    d.max = std::max(d.max, len);
+  }
+  if (!before.positions.empty()) d.rms = std::sqrt(sq / static_cast<double>(before.positions.size()));
+  const int32_t n = before.num_vertices();
+  for (const Triangle& t : before.triangles) {
+    if (!IsUsableTriangle(t, n)) continue;
+    auto normal = [&t](const Mesh& m) {
+      const Vec3& p = m.positions[t[0]];
+      return Cross(m.positions[t[1]] - p, m.positions[t[2]] - p);
+    };
+    if (Dot(normal(before), normal(after)) < 0.0) ++d.flipped_normals;
+  }
+  return d;
+}
+
+std::string FormatMetrics(const MeshMetrics& m) {
+  std::ostringstream o;
+  o << "area: " << m.area << "\n"
+    << "signed volume: " << m.signed_volume << "\n"
+    << "edge length mean: " << m.edge_length_mean << "\n"
+    << "edge length CV: " << m.edge_length_cv << "\n"
+    << "min angle (deg): " << m.min_angle_deg << "\n"
+    << "mean of the faces' min angle (deg): " << m.mean_angle_deg << "\n"
+    << "angles below 10 deg: " << 100.0 * m.share_angles_below_10deg << "%\n";
+  return o.str();
+}
+
+}  // namespace meshsmooth

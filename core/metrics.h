@@ -1,0 +1,41 @@
+// Shape and mesh-quality numbers shared by the tests, the benchmarks and the job summary.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include "absl/status/statusor.h"
+#include "core/mesh.h"
+#include "core/topology.h"
+
+namespace meshsmooth {
+
+struct MeshMetrics {
+  double area = 0.0;            // sum of the usable faces' areas
+  double signed_volume = 0.0;   // sum of det(a-c, b-c, ...)/6 about the centroid c; > 0 outward
+  double edge_length_mean = 0.0;
+  double edge_length_cv = 0.0;  // standard deviation / mean over the unique edges
+  double min_angle_deg = 0.0;   // smallest triangle angle
+  double mean_angle_deg = 0.0;  // mean of the smallest angle of each face
+  double share_angles_below_10deg = 0.0;  // of all triangle angles
+};
+
+// Metrics of the usable faces and edges of `topo` (built from `mesh`).
+MeshMetrics ComputeMetrics(const Mesh& mesh, const Topology& topo);
+
+struct Displacement {
+  double rms = 0.0;             // RMS of |after_i - before_i| over all vertices
+  double max = 0.0;
+  int64_t flipped_normals = 0;  // usable faces whose normal turned by more than 90 degrees
+};
+
+// Compares two meshes with the same connectivity. InvalidArgument when the vertex counts or
+// triangles differ.
+absl::StatusOr<Displacement> CompareMeshes(const Mesh& before, const Mesh& after);
+
+// Mean edge length of the usable faces' unique edges (0 for a mesh without edges).
+double MeanEdgeLength(const Mesh& mesh, const Topology& topo);
+
+std::string FormatMetrics(const MeshMetrics& m);
+
+}  // namespace meshsmooth

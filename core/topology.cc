@@ -1,0 +1,283 @@
+#include "core/topology.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <sstream>
+#include <utility>
+
+namespace meshsmooth {
+namespace {
+
+// Union-find with path halving; indices are int32 like the rest of the mesh.
+class DisjointSets {
+ public:
+  explicit DisjointSets(size_t n) : parent_(n) { std::iota(parent_.begin(), parent_.end(), 0); }
+  int32_t Find(int32_t x) {
+    while (parent_[x] != x) {
+      parent_[x] = parent_[parent_[x]];
+      x = parent_[x];
+    }
+    return x;
+  }
+  void Union(int32_t a, int32_t b) {
+    a = Find(a);
+    b = Find(b);
+    if (a != b) parent_[std::max(a, b)] = std::min(a, b);
+  }
+
+ private:
+  std::vector<int32_t> parent_;
+};
+
+// One incident face of a vertex v, rotated so that it reads (v, a, b).
+struct LocalFace {
+  int32_t a, b;
+};
+
+// One (neighbour, local face) incidence; sorted by neighbour to group the faces of an edge.
+struct Incidence {
+  int32_t w, face;
+  bool operator<(const Incidence& o) const { return w < o.w || (w == o.w && face < o.face); }
+};
+
+// Scratch buffers reused across vertices so the per-vertex work allocates nothing.
+struct Scratch {
+  std::vector<LocalFace> faces;
+  std::vector<Incidence> inc;
+  std::vector<int32_t> fan_parent;
+  std::vector<int32_t> ring;
+};
+
+int32_t FanFind(std::vector<int32_t>& p, int32_t x) {
+  while (p[x] != x) x = p[x] = p[p[x]];
+  return x;
+}
+
+// Range of incidences of neighbour w in the sorted list.
+std::pair<int32_t, int32_t> FacesOf(const std::vector<Incidence>& inc, int32_t w) {
+  auto lo = std::lower_bound(inc.begin(), inc.end(), Incidence{w, std::numeric_limits<int32_t>::min()});
+  auto hi = lo;
+  while (hi != inc.end() && hi->w == w) ++hi;
+  return {static_cast<int32_t>(lo - inc.begin()), static_cast<int32_t>(hi - inc.begin())};
+}
+
+int32_t OtherVertex(const LocalFace& f, int32_t w) { return f.a == w ? f.b : f.a; }
+
+// Walks a single fan whose edges have at most two faces. Returns false if the walk does not
+// visit every neighbour (then the caller treats the vertex as non-manifold).
+bool WalkFan(Scratch& s, int32_t start, int32_t start_face, bool closed, int32_t distinct) {
+  s.ring.clear();
+  s.ring.push_back(start);
+  int32_t cur = start, face = start_face;
+  const int32_t limit = static_cast<int32_t>(s.faces.size()) + 1;
+  for (int32_t step = 0; step < limit; ++step) {
+    const int32_t next = OtherVertex(s.faces[face], cur);
+    if (closed && next == start) break;
+    s.ring.push_back(next);
+    auto [lo, hi] = FacesOf(s.inc, next);
+    int32_t other = -1;
+    for (int32_t i = lo; i < hi; ++i) {
+      if (s.inc[i].face != face) other = s.inc[i].face;
+    }
+    if (other < 0) break;  // reached the other boundary edge
+    cur = next;
+    face = other;
+  }
+  return static_cast<int32_t>(s.ring.size()) == distinct;
+}
+
+}  // namespace
+
+Topology BuildTopology(const Mesh& mesh, ValidationReport* report) {
+  const int32_t n = mesh.num_vertices();
+  ValidationReport r;
+  r.vertices = n;
+  r.faces = mesh.num_triangles();
+
+  Topology topo;
+  topo.kind.assign(n, VertexKind::kIsolated);
+  topo.ring_offsets.assign(static_cast<size_t>(n) + 1, 0);
+  topo.faces.reserve(mesh.triangles.size());
+  for (int32_t f = 0; f < mesh.num_triangles(); ++f) {
+    const Triangle& t = mesh.triangles[f];
+    if (IsUsableTriangle(t, n)) {
+      topo.faces.push_back(f);
+    } else if (t[0] < 0 || t[0] >= n || t[1] < 0 || t[1] >= n || t[2] < 0 || t[2] >= n) {
+      ++r.faces_out_of_range;
+    } else {
+      ++r.faces_repeated_index;
+    }
+  }
+
+  // Vertex -> incident usable faces, by counting sort.
+  std::vector<int32_t> vf_offsets(static_cast<size_t>(n) + 1, 0);
+  for (int32_t f : topo.faces) {
+    for (int32_t v : mesh.triangles[f]) ++vf_offsets[v + 1];
+  }
+  std::partial_sum(vf_offsets.begin(), vf_offsets.end(), vf_offsets.begin());
+  std::vector<int32_t> vf(vf_offsets.back());
+  {
+    std::vector<int32_t> fill(vf_offsets.begin(), vf_offsets.end() - 1);
+    for (int32_t f : topo.faces) {
+      for (int32_t v : mesh.triangles[f]) vf[fill[v]++] = f;
+    }
+  }
+
+  // Coordinates: non-finite count and the bounding box of the finite ones.
+  Vec3 lo{std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
+          std::numeric_limits<double>::infinity()};
+  Vec3 hi = -lo;
+  for (const Vec3& p : mesh.positions) {
+    if (!IsFinite(p)) {
+      ++r.non_finite_vertices;
+      continue;
+    }
+    lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
+    hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
+  }
+  const double diag2 = r.non_finite_vertices < n ? SquaredNorm(hi - lo) : 0.0;
+  for (int32_t f : topo.faces) {
+    const Triangle& t = mesh.triangles[f];
+    const Vec3& p0 = mesh.positions[t[0]];
+    const double area = 0.5 * Norm(Cross(mesh.positions[t[1]] - p0, mesh.positions[t[2]] - p0));
+    if (area < 1e-12 * diag2) ++r.zero_area_faces;  // NaN areas compare false: not counted
+  }
+
+  DisjointSets boundary_sets(n);
+  std::vector<uint8_t> on_boundary(n, 0);
+  topo.ring.reserve(vf.size() + 16);
+  Scratch s;
+  for (int32_t v = 0; v < n; ++v) {
+    s.faces.clear();
+    for (int32_t i = vf_offsets[v]; i < vf_offsets[v + 1]; ++i) {
+      const Triangle& t = mesh.triangles[vf[i]];
+      const int32_t k = t[0] == v ? 0 : (t[1] == v ? 1 : 2);
+      s.faces.push_back({t[(k + 1) % 3], t[(k + 2) % 3]});
+    }
+    const int32_t nf = static_cast<int32_t>(s.faces.size());
+    if (nf == 0) {
+      ++r.unreferenced_vertices;
+      topo.ring_offsets[v + 1] = static_cast<int32_t>(topo.ring.size());
+      continue;
+    }
+    s.inc.clear();
+    for (int32_t i = 0; i < nf; ++i) {
+      s.inc.push_back({s.faces[i].a, i});
+      s.inc.push_back({s.faces[i].b, i});
+    }
+    std::sort(s.inc.begin(), s.inc.end());
+    s.fan_parent.resize(nf);
+    std::iota(s.fan_parent.begin(), s.fan_parent.end(), 0);
+
+    int32_t distinct = 0, boundary_start = -1, boundary_start_face = -1;
+    bool has_nonmanifold_edge = false, has_boundary_edge = false;
+    for (size_t i = 0; i < s.inc.size();) {
+      size_t j = i;
+      while (j < s.inc.size() && s.inc[j].w == s.inc[i].w) ++j;
+      const int32_t w = s.inc[i].w;
+      const size_t count = j - i;
+      ++distinct;
+      if (count == 1) {
+        has_boundary_edge = true;
+        // Prefer the neighbour from which the fan runs in the faces' own orientation.
+        if (boundary_start < 0 || s.faces[s.inc[i].face].a == w) {
+          boundary_start = w;
+          boundary_start_face = s.inc[i].face;
+        }
+        if (v < w) {
+          ++r.boundary_edges;
+          boundary_sets.Union(v, w);
+          on_boundary[v] = on_boundary[w] = 1;
+        }
+      } else if (count == 2) {
+        const int32_t f0 = s.inc[i].face, f1 = s.inc[i + 1].face;
+        s.fan_parent[FanFind(s.fan_parent, f0)] = FanFind(s.fan_parent, f1);
+        if (v < w && (s.faces[f0].a == w) == (s.faces[f1].a == w)) {
+          ++r.inconsistently_oriented_edges;
+        }
+      } else {
+        has_nonmanifold_edge = true;
+        if (v < w) ++r.nonmanifold_edges;
+      }
+      if (v < w) ++r.edges;
+      i = j;
+    }
+    int32_t fans = 0;
+    for (int32_t i = 0; i < nf; ++i) fans += FanFind(s.fan_parent, i) == i;
+    if (fans > 1) ++r.nonmanifold_vertices;
+
+    bool walked = false;
+    if (fans == 1 && !has_nonmanifold_edge) {
+      walked = has_boundary_edge ? WalkFan(s, boundary_start, boundary_start_face, false, distinct)
+                                 : WalkFan(s, s.faces[0].a, 0, true, distinct);
+    }
+    if (walked) {
+      topo.kind[v] = has_boundary_edge ? VertexKind::kBoundary : VertexKind::kInterior;
+      topo.ring.insert(topo.ring.end(), s.ring.begin(), s.ring.end());
+    } else {
+      topo.kind[v] = VertexKind::kNonManifold;
+      for (size_t i = 0; i < s.inc.size(); ++i) {
+        if (i == 0 || s.inc[i].w != s.inc[i - 1].w) topo.ring.push_back(s.inc[i].w);
+      }
+    }
+    topo.ring_offsets[v + 1] = static_cast<int32_t>(topo.ring.size());
+  }
+
+  for (int32_t v = 0; v < n; ++v) {
+    if (on_boundary[v] && boundary_sets.Find(v) == v) ++r.boundary_loops;
+  }
+  DisjointSets components(n);
+  for (int32_t f : topo.faces) {
+    const Triangle& t = mesh.triangles[f];
+    components.Union(t[0], t[1]);
+    components.Union(t[1], t[2]);
+  }
+  for (int32_t v = 0; v < n; ++v) {
+    if (topo.kind[v] != VertexKind::kIsolated && components.Find(v) == v) ++r.connected_components;
+  }
+  std::vector<Triangle> sorted;
+  sorted.reserve(topo.faces.size());
+  for (int32_t f : topo.faces) {
+    Triangle t = mesh.triangles[f];
+    std::sort(t.begin(), t.end());
+    sorted.push_back(t);
+  }
+  std::sort(sorted.begin(), sorted.end());
+  for (size_t i = 1; i < sorted.size(); ++i) r.duplicate_faces += sorted[i] == sorted[i - 1];
+
+  if (report != nullptr) *report = r;
+  return topo;
+}
+
+ValidationReport Validate(const Mesh& mesh) {
+  ValidationReport r;
+  BuildTopology(mesh, &r);
+  return r;
+}
+
+std::string FormatReport(const ValidationReport& r) {
+  std::ostringstream o;
+  o << "vertices: " << r.vertices << "\n"
+    << "faces: " << r.faces << "\n"
+    << "faces dropped (index out of range): " << r.faces_out_of_range << "\n"
+    << "faces dropped (repeated index): " << r.faces_repeated_index << "\n"
+    << "zero-area faces: " << r.zero_area_faces << "\n"
+    << "duplicate faces: " << r.duplicate_faces << "\n"
+    << "unreferenced vertices: " << r.unreferenced_vertices << "\n"
+    << "non-finite vertices: " << r.non_finite_vertices << "\n"
+    << "edges: " << r.edges << "\n"
+    << "boundary edges: " << r.boundary_edges << "\n"
+    << "boundary loops: " << r.boundary_loops << "\n"
+    << "non-manifold edges: " << r.nonmanifold_edges << "\n"
+    << "non-manifold vertices: " << r.nonmanifold_vertices << "\n"
+    << "inconsistently oriented edges: " << r.inconsistently_oriented_edges << "\n"
+    << "connected components: " << r.connected_components << "\n"
+    << "closed: " << (r.closed() ? "yes" : "no") << "\n"
+    << "manifold: " << (r.manifold() ? "yes" : "no") << "\n"
+    << "euler characteristic: " << r.euler_characteristic() << "\n";
+  return o.str();
+}
+
+}  // namespace meshsmooth

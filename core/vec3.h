@@ -1,0 +1,42 @@
+// A plain 3-vector of doubles for the hot loops: trivially copyable, no allocation,
+// laid out as three contiguous doubles so arrays of it are arrays of xyz.
+#pragma once
+
+#include <cmath>
+
+namespace meshsmooth {
+
+struct Vec3 {
+  double x = 0.0, y = 0.0, z = 0.0;
+
+  constexpr Vec3& operator+=(const Vec3& o) { x += o.x; y += o.y; z += o.z; return *this; }
+  constexpr Vec3& operator-=(const Vec3& o) { x -= o.x; y -= o.y; z -= o.z; return *this; }
+  constexpr Vec3& operator*=(double s) { x *= s; y *= s; z *= s; return *this; }
+  friend constexpr Vec3 operator+(Vec3 a, const Vec3& b) { return a += b; }
+  friend constexpr Vec3 operator-(Vec3 a, const Vec3& b) { return a -= b; }
+  friend constexpr Vec3 operator-(const Vec3& a) { return {-a.x, -a.y, -a.z}; }
+  friend constexpr Vec3 operator*(Vec3 a, double s) { return a *= s; }
+  friend constexpr Vec3 operator*(double s, Vec3 a) { return a *= s; }
+  friend constexpr bool operator==(const Vec3& a, const Vec3& b) = default;
+};
+
+constexpr double Dot(const Vec3& a, const Vec3& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+constexpr Vec3 Cross(const Vec3& a, const Vec3& b) {
+  return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
+inline double Norm(const Vec3& a) { return std::sqrt(Dot(a, a)); }
+constexpr double SquaredNorm(const Vec3& a) { return Dot(a, a); }
+inline bool IsFinite(const Vec3& a) {
+  return std::isfinite(a.x) && std::isfinite(a.y) && std::isfinite(a.z);
+}
+
+// The float32 value nearest to each coordinate (what binary PLY, STL and Draco store).
+// Through a volatile because g++ 12.2 at -O2 miscompiles the plain
+// `p = {float(p.x), float(p.y), float(p.z)}`: its SLP vectoriser drops the double -> float ->
+// double round trip of the first two components (seen on this project's toolchain).
+inline Vec3 RoundToFloat(const Vec3& p) {
+  volatile float x = static_cast<float>(p.x), y = static_cast<float>(p.y), z = static_cast<float>(p.z);
+  return {x, y, z};
+}
+
+}  // namespace meshsmooth

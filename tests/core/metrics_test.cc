@@ -1,0 +1,72 @@
+#include "core/metrics.h"
+
+#include <cmath>
+#include <numbers>
+
+#include "core/shapes.h"
+#include "gtest/gtest.h"
+
+namespace meshsmooth {
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+
+TEST(MetricsTest, Icosphere5AreaAndVolumeWithinOnePercent) {
+  const Mesh m = Icosphere(5);
+  const MeshMetrics mm = ComputeMetrics(m, BuildTopology(m));
+  EXPECT_NEAR(mm.area, 4.0 * kPi, 0.01 * 4.0 * kPi);
+  EXPECT_NEAR(mm.signed_volume, 4.0 * kPi / 3.0, 0.01 * 4.0 * kPi / 3.0);
+  EXPECT_GT(mm.signed_volume, 0.0);  // faces point outward
+  EXPECT_LT(mm.edge_length_cv, 0.2);
+  EXPECT_GT(mm.min_angle_deg, 40.0);
+  EXPECT_EQ(mm.share_angles_below_10deg, 0.0);
+}
+
+TEST(MetricsTest, RightTriangleAnglesAndEdges) {
+  Mesh m;
+  m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  m.triangles = {{0, 1, 2}};
+  const MeshMetrics mm = ComputeMetrics(m, BuildTopology(m));
+  EXPECT_DOUBLE_EQ(mm.area, 0.5);
+  EXPECT_NEAR(mm.min_angle_deg, 45.0, 1e-12);
+  EXPECT_NEAR(mm.mean_angle_deg, 45.0, 1e-12);
+  const double mean = (2.0 + std::sqrt(2.0)) / 3.0;
+  EXPECT_NEAR(mm.edge_length_mean, mean, 1e-12);
+  const double var = (2 * (1 - mean) * (1 - mean) + (std::sqrt(2.0) - mean) * (std::sqrt(2.0) - mean)) / 3.0;
+  EXPECT_NEAR(mm.edge_length_cv, std::sqrt(var) / mean, 1e-12);
+}
+
+TEST(MetricsTest, NeedleTrianglesCountBelowTenDegrees) {
+  Mesh m;
+  m.positions = {{0, 0, 0}, {1, 0, 0}, {0.5, 0.01, 0}, {0.5, 0, 0}};
+  m.triangles = {{0, 1, 2}, {0, 3, 1}};  // a needle and a zero-area sliver
+  const MeshMetrics mm = ComputeMetrics(m, BuildTopology(m));
+  EXPECT_NEAR(mm.share_angles_below_10deg, 4.0 / 6.0, 1e-12);
+  EXPECT_EQ(mm.min_angle_deg, 0.0);
+  EXPECT_TRUE(std::isfinite(mm.mean_angle_deg));
+}
+
+TEST(MetricsTest, DisplacementAndFlippedNormals) {
+  const Mesh a = Icosphere(2);
+  Mesh b = a;
+  b.positions[0] += Vec3{0.0, 0.0, 0.03};
+  b.positions[1] += Vec3{0.04, 0.0, 0.0};
+  absl::StatusOr<Displacement> d = CompareMeshes(a, b);
+  ASSERT_TRUE(d.ok());
+  EXPECT_NEAR(d->max, 0.04, 1e-15);
+  EXPECT_NEAR(d->rms, std::sqrt((0.0009 + 0.0016) / a.positions.size()), 1e-15);
+  EXPECT_EQ(d->flipped_normals, 0);
+
+  Mesh c = a;  // pull one vertex through the sphere: its fan flips
+  c.positions[0] = a.positions[0] * -0.5;
+  d = CompareMeshes(a, c);
+  ASSERT_TRUE(d.ok());
+  EXPECT_EQ(d->flipped_normals, 5);  // vertex 0 is a valence-5 icosahedron corner
+
+  Mesh e = a;
+  e.triangles.pop_back();
+  EXPECT_EQ(CompareMeshes(a, e).status().code(), absl::StatusCode::kInvalidArgument);
+}
+
+}  // namespace
+}  // namespace meshsmooth

@@ -1,0 +1,88 @@
+#include "core/shapes.h"
+
+#include <cmath>
+#include <numbers>
+
+#include "core/metrics.h"
+#include "core/topology.h"
+#include "gtest/gtest.h"
+
+namespace meshsmooth {
+namespace {
+
+TEST(ShapesTest, IcosphereCountsAndUnitRadius) {
+  for (int level = 0; level <= 4; ++level) {
+    const Mesh m = Icosphere(level);
+    EXPECT_EQ(m.positions.size(), 10u * (1u << (2 * level)) + 2);
+    EXPECT_EQ(m.triangles.size(), 20u * (1u << (2 * level)));
+    for (const Vec3& p : m.positions) ASSERT_NEAR(Norm(p), 1.0, 1e-15);
+  }
+}
+
+TEST(ShapesTest, TwoRateTorusIsClosedGenusOneWithTwoSpacings) {
+  const double R = 1.0, r = 0.4;
+  const Mesh m = TwoRateTorus(96, 32, R, r, 3.0);
+  ValidationReport rep;
+  const Topology t = BuildTopology(m, &rep);
+  EXPECT_TRUE(rep.closed());
+  EXPECT_TRUE(rep.manifold());
+  EXPECT_EQ(rep.euler_characteristic(), 0);
+  const MeshMetrics mm = ComputeMetrics(m, t);
+  const double volume = 2.0 * std::numbers::pi * std::numbers::pi * R * r * r;
+  EXPECT_NEAR(mm.signed_volume, volume, 0.02 * volume);  // outward, close to the smooth torus
+  // Spacing along the major circle: 3x longer in the coarse half (chords, so not exactly 3).
+  const double fine = Norm(m.positions[32] - m.positions[0]);
+  const double coarse = Norm(m.positions[95 * 32] - m.positions[0]);
+  EXPECT_NEAR(coarse / fine, 3.0, 0.01);
+  EXPECT_GT(mm.edge_length_cv, 0.3);  // the two rates show in the regularity metric
+}
+
+TEST(ShapesTest, TwoRatePlaneHasOneBoundaryLoop) {
+  const Mesh m = TwoRatePlane(48, 32, 3.0);
+  ValidationReport rep;
+  const Topology t = BuildTopology(m, &rep);
+  EXPECT_EQ(rep.boundary_loops, 1);
+  EXPECT_EQ(rep.boundary_edges, 2 * (48 + 32));
+  EXPECT_EQ(rep.euler_characteristic(), 1);
+  const MeshMetrics mm = ComputeMetrics(m, t);
+  EXPECT_NEAR(mm.area, 1.0, 1e-12);
+  int interior = 0;
+  for (VertexKind k : t.kind) interior += k == VertexKind::kInterior;
+  EXPECT_EQ(interior, 47 * 31);
+}
+
+TEST(ShapesTest, NoiseIsSeededAndBounded) {
+  const Mesh clean = Icosphere(3);
+  Mesh a = clean, b = clean, c = clean;
+  AddUniformNoise(a, 0.3, 42);
+  AddUniformNoise(b, 0.3, 42);
+  AddUniformNoise(c, 0.3, 43);
+  EXPECT_EQ(a.positions, b.positions);
+  EXPECT_NE(a.positions, c.positions);
+  const double h = MeanEdgeLength(clean, BuildTopology(clean));
+  double max_dev = 0.0, sum = 0.0;
+  for (size_t i = 0; i < clean.positions.size(); ++i) {
+    const Vec3 d = a.positions[i] - clean.positions[i];
+    for (double x : {d.x, d.y, d.z}) {
+      max_dev = std::max(max_dev, std::abs(x));
+      sum += x;
+    }
+  }
+  EXPECT_LE(max_dev, 0.3 * h);
+  EXPECT_GT(max_dev, 0.28 * h);  // the range is used, not a fraction of it
+  EXPECT_NEAR(sum / (3.0 * clean.positions.size()), 0.0, 0.02 * h);  // zero mean
+}
+
+
+TEST(Vec3Test, RoundToFloatRoundsEveryComponent) {
+  std::vector<Vec3> v(8, Vec3{0.1, 0.2, 0.3});
+  for (Vec3& p : v) p = RoundToFloat(p);
+  for (const Vec3& p : v) {
+    EXPECT_EQ(p.x, static_cast<double>(0.1f));
+    EXPECT_EQ(p.y, static_cast<double>(0.2f));
+    EXPECT_EQ(p.z, static_cast<double>(0.3f));
+  }
+}
+
+}  // namespace
+}  // namespace meshsmooth
