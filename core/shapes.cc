@@ -86,20 +86,60 @@ Mesh Icosphere(int level) {
   return m;
 }
 
-Mesh TwoRateTorus(int nu, int nv, double major_radius, double minor_radius, double ratio) {
-  const std::vector<double> u = TwoRateSamples(nu, ratio, 2.0 * std::numbers::pi);
+Mesh TwoRateTorus(int tube_segments, double major_radius, double minor_radius, int32_t* dense_vertices) {
+  const int dense_count = std::max(8, tube_segments + tube_segments % 2), coarse_count = dense_count / 2;
+  // Every other column is shifted by half a step around the tube and columns are sqrt(3)/2
+  // steps apart (at the mean radius), so the triangles are close to equilateral.
+  const double dv = 2.0 * std::numbers::pi / dense_count;
+  const double du = std::sqrt(3.0) / 2.0 * minor_radius / major_radius * dv;
+  const int dense_columns = 2 * std::max(1, static_cast<int>(std::lround(std::numbers::pi / du / 2.0)));
+  const double split = dense_columns * du;
+  const int coarse_columns =
+      2 * std::max(1, static_cast<int>(std::lround((2.0 * std::numbers::pi - split) / (4.0 * du))));
+  const double coarse_du = (2.0 * std::numbers::pi - split) / coarse_columns;
+
+  struct Column {
+    int32_t first, count;
+    double v0;  // angle of the column's first vertex around the tube
+  };
+  std::vector<Column> columns;
   Mesh m;
-  m.positions.reserve(static_cast<size_t>(nu) * nv);
-  for (int i = 0; i < nu; ++i) {
-    for (int j = 0; j < nv; ++j) {
-      const double v = 2.0 * std::numbers::pi * j / nv;
+  auto add_column = [&](double u, int count, bool shifted) {
+    const double step = 2.0 * std::numbers::pi / count;
+    columns.push_back({m.num_vertices(), count, shifted ? 0.5 * step : 0.0});
+    for (int j = 0; j < count; ++j) {
+      const double v = columns.back().v0 + step * j;
       const double ring = major_radius + minor_radius * std::cos(v);
-      m.positions.push_back({ring * std::cos(u[i]), ring * std::sin(u[i]), minor_radius * std::sin(v)});
+      m.positions.push_back({ring * std::cos(u), ring * std::sin(u), minor_radius * std::sin(v)});
     }
-  }
-  auto id = [nu, nv](int i, int j) { return static_cast<int32_t>((i % nu) * nv + (j % nv)); };
-  for (int i = 0; i < nu; ++i) {
-    for (int j = 0; j < nv; ++j) AddQuad(m, id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
+  };
+  for (int i = 0; i < dense_columns; ++i) add_column(i * du, dense_count, i % 2 == 1);
+  if (dense_vertices != nullptr) *dense_vertices = m.num_vertices();
+  for (int i = 0; i < coarse_columns; ++i) add_column(split + i * coarse_du, coarse_count, i % 2 == 1);
+
+  // Zip each pair of neighbouring columns into a strip: walk both columns upwards in v and
+  // always advance the one whose next vertex comes first. Handles equal counts and the 2:1
+  // seams alike; triangles are counter-clockwise in (u, v), so normals point outward.
+  for (size_t c = 0; c < columns.size(); ++c) {
+    const Column a = columns[c], b = columns[(c + 1) % columns.size()];
+    const double sa = 2.0 * std::numbers::pi / a.count, sb = 2.0 * std::numbers::pi / b.count;
+    auto va = [&](int i) { return a.v0 + sa * i; };
+    // Start B at its last vertex below A's first one.
+    int k0 = static_cast<int>(std::floor((a.v0 - b.v0) / sb + 1e-9));
+    auto vb = [&](int k) { return b.v0 + sb * k; };
+    int i = 0, k = k0;
+    auto A = [&a](int j) { return a.first + ((j % a.count) + a.count) % a.count; };
+    auto B = [&b](int j) { return b.first + ((j % b.count) + b.count) % b.count; };
+    while (i < a.count || k < k0 + b.count) {
+      const bool advance_a = k >= k0 + b.count || (i < a.count && va(i + 1) < vb(k + 1) - 1e-12);
+      if (advance_a) {
+        m.triangles.push_back({A(i), B(k), A(i + 1)});
+        ++i;
+      } else {
+        m.triangles.push_back({A(i), B(k), B(k + 1)});
+        ++k;
+      }
+    }
   }
   return m;
 }

@@ -12,12 +12,14 @@ namespace meshsmooth {
 // faces outward. 10*4^level + 2 vertices. Same vertex order as ../shared/reference/paper_flows.py.
 Mesh Icosphere(int level);
 
-// Torus with major radius R and tube radius r on a regular nu x nv grid (nu around the major
-// circle, nv around the tube; both even, >= 4). Half of the nu columns cover an arc `ratio`
-// times shorter than the other half, so the mesh has two sampling rates (the paper's Fig. 4).
-// ratio = 1 gives a uniform torus. Closed, genus 1, faces outward.
-Mesh TwoRateTorus(int nu, int nv, double major_radius = 1.0, double minor_radius = 0.4,
-                  double ratio = 3.0);
+// Torus with two sampling rates (the paper's Fig. 4): half of it (the u in [0, pi) half
+// around the major circle) is sampled twice as densely as the other half, in both directions,
+// with near-equilateral triangles in each half and a strip of transition triangles at the two seams
+// (no T-junction). `tube_segments` (even, >= 8) vertices go around the tube in the dense half,
+// half as many in the coarse half. The dense half's vertices come first: their count is
+// written to `*dense_vertices` when it is not null. Closed, genus 1, faces outward.
+Mesh TwoRateTorus(int tube_segments = 32, double major_radius = 1.0, double minor_radius = 0.25,
+                  int32_t* dense_vertices = nullptr);
 
 // Unit square patch in the z = 0 plane on an nx x ny grid; the left half of the columns is
 // sampled `ratio` times more densely than the right half (the paper's Fig. 7). Open: one

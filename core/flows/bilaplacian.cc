@@ -1,0 +1,36 @@
+// Bilaplacian flow: P <- P - lambda U0^2(P), U0^2(P) = (1/n) sum_i U0(Q_i) - U0(P).
+// The paper prints "+ lambda U^2"; the stable sign (thin-plate gradient descent, Taubin with
+// mu = lambda) is minus (NOTES.md). Uses the plain umbrella U0 as the paper does. lambda is
+// dimensionless, (0, 0.5] (U0^2 has eigenvalues up to 4); default 0.2.
+#include "core/flows/kernel.h"
+
+namespace meshsmooth::flows {
+namespace {
+
+class Bilaplacian final : public FlowKernel {
+ public:
+  bool curvature_units() const override { return false; }
+  // U0 at every vertex with a ring (fixed ones too: their U0 enters their neighbours' U0^2).
+  void Prepare(const StepContext& c, const Vec3* cur, int32_t n, int threads) override {
+    u_.resize(n);
+    ForBlocks(n, threads, [&](int32_t, int32_t begin, int32_t end) {
+      for (int32_t v = begin; v < end; ++v) {
+        u_[v] = c.offsets[v + 1] > c.offsets[v] ? UmbrellaU0(c, cur, v) : Vec3{};
+      }
+    });
+  }
+  BlockStats Step(const StepContext& c, const Vec3* cur, Vec3* next, int32_t begin, int32_t end) const override {
+    const Vec3* u = u_.data();
+    // The umbrella of the field U0 is U0^2.
+    return ApplyStep(c, cur, next, begin, end, [&](int32_t v) { return -UmbrellaU0(c, u, v); });
+  }
+
+ private:
+  std::vector<Vec3> u_;
+};
+
+}  // namespace
+
+std::unique_ptr<FlowKernel> MakeBilaplacian(const FlowParams&) { return std::make_unique<Bilaplacian>(); }
+
+}  // namespace meshsmooth::flows

@@ -1,0 +1,139 @@
+// The paper's smoothing flows behind one small interface: a flow name, a parameter struct and
+// a run control. See ../shared/paper/polyhedral-surface-smoothing.md (equation numbers below)
+// and ../shared/paper/NOTES.md for the paper's slips and the choices made where it is silent.
+//
+// Every flow is an explicit Jacobi iteration: each iteration reads the old positions and
+// writes new ones, so the result is bit-identical whatever the number of threads.
+//
+// Flows ("flow" field) and what one iteration does, with F the flow's speed and lambda the
+// effective step:
+//   laplacian       P += lambda U(P), U = U0 (eq. 3) or U1 (eq. 4)                    eq. (2)
+//   taubin          P += lambda U(P) over the whole mesh, then P -= mu U(P): one
+//                   iteration is one lambda pass plus one mu pass                     eq. (6)
+//   bilaplacian     P -= lambda U0^2(P) (the stable sign, NOTES.md)
+//   mcf             P += lambda H n, cotangent weights, H the true mean curvature     eqs. (7)-(8)
+//   mcf_tangential  P += lambda H n + step C (U0 - (U0.n) n)                          eq. (11)
+//   median          P += lambda F, F of eq. (13) with epsilon                         eqs. (12)-(13)
+// and the adaptive threshold of eq. (14) wraps any of them (AdaptiveMode).
+//
+// Units: the umbrella flows (laplacian, taubin, bilaplacian) take a dimensionless step. The
+// curvature flows (mcf, mcf_tangential, median) take the step relative to the squared mean
+// edge length h^2 of the input (effective lambda = step * h^2), so the same parameters work on
+// a mesh in millimetres and in metres. FlowResult reports the effective step.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "absl/status/statusor.h"
+#include "core/mesh.h"
+#include "core/topology.h"
+
+namespace meshsmooth {
+
+enum class UmbrellaWeights {
+  kUniform,          // U0, eq. (3)
+  kInverseDistance,  // U1, eq. (4)
+};
+
+enum class BoundaryMode {
+  kFixed,  // boundary vertices do not move (default)
+  kCurve,  // boundary loops are smoothed as polygonal curves (1-D umbrella along the loop)
+};
+
+enum class AdaptiveMode {
+  kNone,      // plain flow
+  kConstant,  // eq. (14) with a constant T (in the flow's speed units, see below)
+  kRing1,     // T(P) = mean |H| over the first ring of P
+  kRing2,     // T(P) = mean |H| over the first and second rings of P
+};
+
+struct FlowParams {
+  std::string flow = "median";
+  int iterations = 20;  // 1 .. kMaxIterations
+  // The paper's lambda: dimensionless for the umbrella flows, relative to h^2 for the
+  // curvature flows. Unset = the flow's default (DefaultStep); set, it must be > 0.
+  std::optional<double> step;
+
+  UmbrellaWeights weights = UmbrellaWeights::kUniform;  // laplacian, taubin
+  double taubin_mu = 0.0;          // taubin: mu > lambda; 0 = derive from the pass band
+  double taubin_pass_band = 0.1;   // taubin: k_PB = 1/lambda - 1/mu (> 0), used when mu is 0
+  double tangential_weight = 5.0;  // mcf_tangential: C; the tangential term moves by step*C*U0t
+  double epsilon = 0.1;            // median: eq. (13)'s epsilon, in (0, 1)
+
+  // Eq. (14). The threshold compares with |F|. For kConstant, T is in the flow's speed units:
+  // curvature (1/length) for the curvature flows, and for the umbrella flows length relative
+  // to h (|U|/h). kRing1/kRing2 compute T(P) from |H| and, for the umbrella flows, convert it
+  // with |U0| ~ h^2 |H| / 2 (a regular mesh's umbrella).
+  AdaptiveMode adaptive = AdaptiveMode::kNone;
+  double adaptive_threshold = 0.0;  // T for kConstant
+  int adaptive_recompute_every = 10;  // K: T(P) is recomputed every K iterations
+
+  BoundaryMode boundary = BoundaryMode::kFixed;
+  // Optional per-vertex lock mask (non-zero = keep fixed); empty = none. Vertices on
+  // non-manifold edges or vertices and isolated vertices are always fixed.
+  std::vector<uint8_t> locked;
+
+  // Stop early when the largest displacement of an iteration falls below tolerance * h
+  // (0 = run every iteration).
+  double tolerance = 0.0;
+
+  int threads = 0;  // worker threads for the per-vertex loops; 0 = all hardware threads
+};
+
+inline constexpr int kMaxIterations = 100000;
+
+struct Progress {
+  int iteration = 0;  // 1-based, iterations done so far
+  int total = 0;
+  double max_displacement = 0.0;   // largest |P_new - P_old| of this iteration (mesh units)
+  double mean_displacement = 0.0;  // over the vertices that may move
+  double moved_share = 0.0;        // share of movable vertices that moved (adaptive: < 1)
+};
+
+struct RunControl {
+  std::function<void(const Progress&)> on_progress;  // called after every iteration
+  const std::atomic<bool>* cancel = nullptr;         // checked every iteration
+  double time_budget_seconds = 0.0;                  // > 0: stop when exceeded
+};
+
+enum class StopReason { kIterations, kTolerance, kTimeBudget };
+
+struct FlowResult {
+  int iterations_run = 0;
+  StopReason stop_reason = StopReason::kIterations;
+  double effective_step = 0.0;  // lambda actually used (mesh units for the curvature flows)
+  double effective_mu = 0.0;    // taubin's mu
+  double mean_edge_length = 0.0;  // h of the input
+  Progress last;
+};
+
+// The flows' names, in a stable order.
+const std::vector<std::string>& FlowNames();
+
+// The default step of a flow (dimensionless or relative to h^2, as above).
+double DefaultStep(const std::string& flow);
+
+// InvalidArgument with a message naming the parameter when `p` is out of range for `mesh`.
+absl::Status ValidateFlowParams(const FlowParams& p, int32_t num_vertices);
+
+// Runs the flow on `mesh` (positions change in place; connectivity never does).
+// Errors: InvalidArgument for bad parameters or non-finite input coordinates; Cancelled when
+// the cancel flag is set (the mesh holds the last completed iteration); FailedPrecondition,
+// naming the iteration and suggesting a smaller step, when the flow diverges (the mesh holds
+// the last iteration before it).
+absl::StatusOr<FlowResult> Smooth(Mesh& mesh, const Topology& topo, const FlowParams& p,
+                                  const RunControl& control = {});
+
+// Same, building the topology itself.
+absl::StatusOr<FlowResult> Smooth(Mesh& mesh, const FlowParams& p, const RunControl& control = {});
+
+// Per-vertex mean-curvature normal H n (eq. 8 with the mixed Voronoi area, so |H| = 1/r on a
+// sphere; points towards the centre of curvature). Zero for vertices that are not interior.
+std::vector<Vec3> MeanCurvatureNormals(const Mesh& mesh, const Topology& topo);
+
+}  // namespace meshsmooth

@@ -1,0 +1,195 @@
+// Internal to core/flows: the per-vertex operators and the fused Jacobi step shared by the
+// flow files. Everything here is inline so each flow's vertex loop compiles into one tight
+// loop (no virtual call, no allocation per vertex).
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "core/flows/flow.h"
+
+namespace meshsmooth::flows {
+
+// What a vertex does in an iteration.
+enum Role : uint8_t {
+  kFixed = 0,  // copies its position
+  kFree = 1,   // interior vertex: moves by the flow
+  kCurve = 2,  // boundary vertex in BoundaryMode::kCurve: 1-D umbrella along its loop
+};
+
+// Everything a step needs besides positions; built once per run.
+struct StepContext {
+  const int32_t* offsets = nullptr;  // Topology::ring_offsets
+  const int32_t* ring = nullptr;     // Topology::ring
+  const uint8_t* role = nullptr;
+  const VertexKind* kind = nullptr;  // Topology::kind
+  double lambda = 0.0;          // effective step of this pass (negative for taubin's mu pass)
+  double curve_lambda = 0.0;    // step of the boundary-curve umbrella in this pass
+  const double* threshold = nullptr;  // eq. (14): per-vertex T in the flow's speed units, or null
+  double h = 1.0;               // mean edge length of the input
+  double inv_h2 = 1.0;          // 1 / h^2
+};
+
+// Displacement statistics of one block of vertices; reduced in block order, so the totals do
+// not depend on the number of threads.
+struct BlockStats {
+  double max_sq = 0.0;
+  double sum = 0.0;
+  int64_t moved = 0;
+  int64_t movable = 0;
+  bool non_finite = false;
+};
+
+// Cotangents of needle triangles are clamped to this magnitude (NOTES.md, degenerate places).
+inline constexpr double kCotMax = 1e3;
+
+inline Vec3 UmbrellaU0(const StepContext& c, const Vec3* pos, int32_t v) {
+  const int32_t b = c.offsets[v], e = c.offsets[v + 1];
+  Vec3 sum;
+  for (int32_t i = b; i < e; ++i) sum += pos[c.ring[i]];
+  return sum * (1.0 / (e - b)) - pos[v];
+}
+
+// U1, eq. (4): weights 1/|P - Q|, with coincident neighbours given the weight of a 1e-9 h edge.
+inline Vec3 UmbrellaU1(const StepContext& c, const Vec3* pos, int32_t v) {
+  const int32_t b = c.offsets[v], e = c.offsets[v + 1];
+  const Vec3 p = pos[v];
+  const double floor = 1e-9 * c.h;
+  Vec3 sum;
+  double wsum = 0.0;
+  for (int32_t i = b; i < e; ++i) {
+    const Vec3 q = pos[c.ring[i]];
+    const double w = 1.0 / std::max(Norm(q - p), floor);
+    sum += q * w;
+    wsum += w;
+  }
+  return sum * (1.0 / wsum) - p;
+}
+
+// The 1-D umbrella of a boundary vertex: midpoint of its two loop neighbours minus P.
+inline Vec3 CurveUmbrella(const StepContext& c, const Vec3* pos, int32_t v) {
+  return (pos[c.ring[c.offsets[v]]] + pos[c.ring[c.offsets[v + 1] - 1]]) * 0.5 - pos[v];
+}
+
+struct Curvature {
+  Vec3 hn;      // mean-curvature normal H n: |hn| = H, pointing to the centre of curvature
+  Vec3 normal;  // area-weighted face normal (not normalised; orientation of the ring)
+};
+
+// Eq. (8) with the mixed Voronoi area of Meyer et al. in place of A/3 (NOTES.md): on a sphere
+// of radius r, |H n| = 1/r. Zero-area triangles contribute nothing; cotangents are clamped.
+// Only for interior vertices (closed ring).
+inline Curvature MeanCurvatureNormal(const StepContext& c, const Vec3* pos, int32_t v) {
+  const int32_t b = c.offsets[v], e = c.offsets[v + 1];
+  const Vec3 p = pos[v];
+  Vec3 sum, normal;
+  double area = 0.0;
+  Vec3 a = pos[c.ring[e - 1]] - p;  // Q_{k-1} - P, wrapping around the closed ring
+  for (int32_t i = b; i < e; ++i) {
+    const Vec3 q = pos[c.ring[i]] - p;  // triangle (P, Q_{k-1}, Q_k) with edges a, q
+    const Vec3 cr = Cross(a, q);
+    normal += cr;
+    const double dbl_area = Norm(cr);
+    const double la = SquaredNorm(a), lq = SquaredNorm(q);
+    if (dbl_area > 1e-12 * (la + lq)) {
+      const Vec3 d = q - a;  // Q_k - Q_{k-1}
+      const double dot_p = Dot(a, q), dot_a = -Dot(a, d), dot_q = Dot(q, d);
+      const double inv = 1.0 / dbl_area;
+      // Angle at Q_{k-1} is opposite edge P-Q_k; angle at Q_k is opposite edge P-Q_{k-1}.
+      const double cot_a = std::clamp(dot_a * inv, -kCotMax, kCotMax);
+      const double cot_q = std::clamp(dot_q * inv, -kCotMax, kCotMax);
+      sum += q * cot_a + a * cot_q;
+      if (dot_p >= 0.0 && dot_a >= 0.0 && dot_q >= 0.0) {
+        area += (lq * cot_a + la * cot_q) * 0.125;  // Voronoi region of a non-obtuse triangle
+      } else {
+        area += dot_p < 0.0 ? dbl_area * 0.25 : dbl_area * 0.125;  // half or quarter of its area
+      }
+    }
+    a = q;
+  }
+  Curvature k;
+  k.normal = normal;
+  if (area > 0.0) k.hn = sum * (0.25 / area);
+  return k;
+}
+
+// Eq. (14): shortens F by T, or stops the vertex when |F| <= T.
+inline Vec3 Threshold(const Vec3& f, double t) {
+  const double len = Norm(f);
+  return len > t ? f * ((len - t) / len) : Vec3{};
+}
+
+// The fused Jacobi step over vertices [begin, end): next = cur + lambda F for free vertices,
+// the boundary-curve umbrella for curve vertices, a copy for fixed ones, with the block's
+// displacement statistics.
+template <typename SpeedFn>
+inline BlockStats ApplyStep(const StepContext& c, const Vec3* cur, Vec3* next, int32_t begin, int32_t end,
+                            SpeedFn&& speed) {
+  BlockStats s;
+  for (int32_t v = begin; v < end; ++v) {
+    const uint8_t role = c.role[v];
+    if (role == kFixed) {
+      next[v] = cur[v];
+      continue;
+    }
+    Vec3 step;
+    if (role == kFree) {
+      Vec3 f = speed(v);
+      if (c.threshold != nullptr) f = Threshold(f, c.threshold[v]);
+      step = f * c.lambda;
+    } else {
+      step = CurveUmbrella(c, cur, v) * c.curve_lambda;
+    }
+    const Vec3 p = cur[v] + step;
+    next[v] = p;
+    const double d2 = SquaredNorm(step);
+    s.max_sq = std::max(s.max_sq, d2);
+    s.sum += std::sqrt(d2);
+    s.moved += d2 > 0.0;
+    ++s.movable;
+    s.non_finite |= !IsFinite(p);
+  }
+  return s;
+}
+
+// One flow: how one pass moves the vertices of a block. Flow files implement it.
+class FlowKernel {
+ public:
+  virtual ~FlowKernel() = default;
+  // Passes per iteration and each pass's step factor (taubin: 1 and -mu/lambda).
+  virtual int passes() const { return 1; }
+  virtual double pass_factor(int /*pass*/) const { return 1.0; }
+  // True for the curvature flows: step relative to h^2, speed in 1/length.
+  virtual bool curvature_units() const = 0;
+  // Work over all vertices before a pass's blocks (bilaplacian: U at every vertex).
+  virtual void Prepare(const StepContext& /*c*/, const Vec3* /*cur*/, int32_t /*n*/, int /*threads*/) {}
+  virtual BlockStats Step(const StepContext& c, const Vec3* cur, Vec3* next, int32_t begin, int32_t end) const = 0;
+};
+
+std::unique_ptr<FlowKernel> MakeLaplacian(const FlowParams& p);
+std::unique_ptr<FlowKernel> MakeTaubin(const FlowParams& p, double lambda, double mu);
+std::unique_ptr<FlowKernel> MakeBilaplacian(const FlowParams& p);
+std::unique_ptr<FlowKernel> MakeMcf(const FlowParams& p);
+std::unique_ptr<FlowKernel> MakeMcfTangential(const FlowParams& p);
+std::unique_ptr<FlowKernel> MakeMedian(const FlowParams& p);
+
+// Eq. (14)'s T(P): mean |H| over the first ring (rings = 1) or the first and second rings
+// (rings = 2) of every vertex, over interior neighbours only; written to `t`.
+void RingThresholds(const StepContext& c, const Vec3* pos, int32_t n, int rings, int threads, std::vector<double>& t);
+
+// Runs fn(block, begin, end) over [0, n) in fixed blocks of kBlock vertices on up to
+// `threads` threads. Block boundaries do not depend on the thread count, so per-block results
+// reduced in block order are deterministic.
+inline constexpr int32_t kBlock = 4096;
+
+template <typename Fn>
+void ForBlocks(int32_t n, int threads, Fn&& fn) {
+  const int32_t blocks = (n + kBlock - 1) / kBlock;
+#pragma omp parallel for schedule(static) num_threads(threads) if (threads > 1 && blocks > 1)
+  for (int32_t b = 0; b < blocks; ++b) fn(b, b * kBlock, std::min(n, (b + 1) * kBlock));
+}
+
+}  // namespace meshsmooth::flows

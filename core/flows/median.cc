@@ -1,0 +1,42 @@
+// The paper's flow, eqs. (12)-(13): move each vertex along the median direction m = U0/|U0|
+// so that its normal speed equals the mean curvature:
+//   F = |H| m / cos(theta)             if cos(theta) >  epsilon
+//   F = 2 H n - |H| m / cos(theta)     if cos(theta) < -epsilon   (saddles, Fig. 8b)
+//   F = 0                              if |cos(theta)| <= epsilon
+// with cos(theta) = m . Hn / |Hn|. Smooths like the mean curvature flow and keeps or improves
+// the regularity. Where |Hn| or |U0| is (numerically) zero the vertex does not move that
+// iteration (NOTES.md). lambda = step * h^2; defaults step 0.1, epsilon 0.1.
+#include "core/flows/kernel.h"
+
+namespace meshsmooth::flows {
+namespace {
+
+class Median final : public FlowKernel {
+ public:
+  explicit Median(double epsilon) : epsilon_(epsilon) {}
+  bool curvature_units() const override { return true; }
+  BlockStats Step(const StepContext& c, const Vec3* cur, Vec3* next, int32_t begin, int32_t end) const override {
+    const double eps = epsilon_;
+    const double tiny_h = 1e-12 / c.h, tiny_u = 1e-12 * c.h;
+    return ApplyStep(c, cur, next, begin, end, [&](int32_t v) {
+      const Vec3 hn = MeanCurvatureNormal(c, cur, v).hn;
+      const Vec3 u = UmbrellaU0(c, cur, v);
+      const double hm = Norm(hn), um = Norm(u);
+      if (!(hm > tiny_h) || !(um > tiny_u)) return Vec3{};
+      const Vec3 m = u * (1.0 / um);
+      const double cos_theta = Dot(m, hn) / hm;
+      if (cos_theta > eps) return m * (hm / cos_theta);
+      if (cos_theta < -eps) return hn * 2.0 - m * (hm / cos_theta);
+      return Vec3{};
+    });
+  }
+
+ private:
+  double epsilon_;
+};
+
+}  // namespace
+
+std::unique_ptr<FlowKernel> MakeMedian(const FlowParams& p) { return std::make_unique<Median>(p.epsilon); }
+
+}  // namespace meshsmooth::flows

@@ -1,0 +1,302 @@
+// The driver shared by every flow: parameters, roles (free, fixed, boundary curve), the Jacobi
+// double buffer, threads, eq. (14)'s threshold, stopping, progress and divergence checks.
+#include <omp.h>
+
+#include <chrono>
+#include <cmath>
+#include <limits>
+
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+#include "core/flows/flow.h"
+#include "core/flows/kernel.h"
+#include "core/metrics.h"
+
+namespace meshsmooth {
+namespace {
+
+using flows::BlockStats;
+using flows::FlowKernel;
+using flows::StepContext;
+
+// Meshes smaller than this run on one thread: below it, waking threads costs more than the
+// iteration (a 20k-vertex U0 iteration takes ~0.1 ms).
+constexpr int32_t kParallelThreshold = 20000;
+
+bool IsCurvatureFlow(const std::string& flow) {
+  return flow == "mcf" || flow == "mcf_tangential" || flow == "median";
+}
+
+double StepUpperBound(const std::string& flow) {
+  if (flow == "bilaplacian") return 0.5;
+  if (IsCurvatureFlow(flow)) return 10.0;
+  return 1.0;
+}
+
+double TaubinMu(const FlowParams& p, double lambda) {
+  return p.taubin_mu > 0.0 ? p.taubin_mu : 1.0 / (1.0 / lambda - p.taubin_pass_band);
+}
+
+absl::StatusOr<std::unique_ptr<FlowKernel>> MakeKernel(const FlowParams& p, double lambda, double mu) {
+  if (p.flow == "laplacian") return flows::MakeLaplacian(p);
+  if (p.flow == "taubin") return flows::MakeTaubin(p, lambda, mu);
+  if (p.flow == "bilaplacian") return flows::MakeBilaplacian(p);
+  if (p.flow == "mcf") return flows::MakeMcf(p);
+  if (p.flow == "mcf_tangential") return flows::MakeMcfTangential(p);
+  if (p.flow == "median") return flows::MakeMedian(p);
+  return absl::InvalidArgumentError(absl::StrCat("unknown flow '", p.flow, "'"));
+}
+
+BlockStats Reduce(const std::vector<BlockStats>& blocks) {
+  BlockStats total;
+  for (const BlockStats& b : blocks) {
+    total.max_sq = std::max(total.max_sq, b.max_sq);
+    total.sum += b.sum;
+    total.moved += b.moved;
+    total.movable += b.movable;
+    total.non_finite |= b.non_finite;
+  }
+  return total;
+}
+
+}  // namespace
+
+const std::vector<std::string>& FlowNames() {
+  static const std::vector<std::string> kNames = {"laplacian", "taubin", "bilaplacian",
+                                                  "mcf",       "mcf_tangential", "median"};
+  return kNames;
+}
+
+double DefaultStep(const std::string& flow) {
+  if (flow == "bilaplacian") return 0.2;
+  if (IsCurvatureFlow(flow)) return 0.1;
+  return 0.5;
+}
+
+absl::Status ValidateFlowParams(const FlowParams& p, int32_t num_vertices) {
+  const auto& names = FlowNames();
+  if (std::find(names.begin(), names.end(), p.flow) == names.end()) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        "unknown flow '", p.flow, "' (laplacian, taubin, bilaplacian, mcf, mcf_tangential, median)"));
+  }
+  if (p.iterations < 1 || p.iterations > kMaxIterations) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("iterations must be in 1..", kMaxIterations, ", got ", p.iterations));
+  }
+  const double step = p.step.value_or(DefaultStep(p.flow));
+  const double upper = StepUpperBound(p.flow);
+  if (!(step > 0.0) || !(step <= upper)) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "step must be in (0, %g] for %s, got %g%s", upper, p.flow, step,
+        IsCurvatureFlow(p.flow) ? " (relative to the squared mean edge length)" : ""));
+  }
+  if (p.flow == "taubin") {
+    if (p.taubin_mu > 0.0) {
+      if (!(p.taubin_mu > step) || !(p.taubin_mu <= 1.0)) {
+        return absl::InvalidArgumentError(
+            absl::StrFormat("taubin needs mu > lambda and mu <= 1 (lambda %g, mu %g)", step, p.taubin_mu));
+      }
+    } else if (!(p.taubin_pass_band > 0.0) || !(p.taubin_pass_band < 1.0 / step - 1.0)) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "taubin pass band k_PB must be in (0, 1/lambda - 1) = (0, %g) so that lambda < mu <= 1, got %g",
+          1.0 / step - 1.0, p.taubin_pass_band));
+    }
+  }
+  if (!std::isfinite(p.taubin_mu) || p.taubin_mu < 0.0) {
+    return absl::InvalidArgumentError(absl::StrFormat("taubin mu must be >= 0 (0 = from the pass band), got %g", p.taubin_mu));
+  }
+  if (p.flow == "mcf_tangential" && (!(p.tangential_weight >= 0.0) || !(step * p.tangential_weight <= 1.0))) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "mcf_tangential needs C >= 0 and step * C <= 1 (the tangential umbrella step), got C %g, step %g",
+        p.tangential_weight, step));
+  }
+  if (!(p.epsilon > 0.0) || !(p.epsilon < 1.0)) {
+    return absl::InvalidArgumentError(absl::StrFormat("epsilon must be in (0, 1), got %g", p.epsilon));
+  }
+  if (p.adaptive == AdaptiveMode::kConstant && (!(p.adaptive_threshold >= 0.0) || !std::isfinite(p.adaptive_threshold))) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("the adaptive threshold T must be finite and >= 0, got %g", p.adaptive_threshold));
+  }
+  if (p.adaptive_recompute_every < 1) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("the adaptive recompute interval must be >= 1, got ", p.adaptive_recompute_every));
+  }
+  if (!(p.tolerance >= 0.0) || !std::isfinite(p.tolerance)) {
+    return absl::InvalidArgumentError(absl::StrFormat("tolerance must be finite and >= 0, got %g", p.tolerance));
+  }
+  if (!p.locked.empty() && p.locked.size() != static_cast<size_t>(num_vertices)) {
+    return absl::InvalidArgumentError(absl::StrCat("the lock mask has ", p.locked.size(),
+                                                   " entries for ", num_vertices, " vertices"));
+  }
+  if (p.threads < 0) return absl::InvalidArgumentError(absl::StrCat("threads must be >= 0, got ", p.threads));
+  return absl::OkStatus();
+}
+
+absl::StatusOr<FlowResult> Smooth(Mesh& mesh, const FlowParams& p, const RunControl& control) {
+  const Topology topo = BuildTopology(mesh);
+  return Smooth(mesh, topo, p, control);
+}
+
+absl::StatusOr<FlowResult> Smooth(Mesh& mesh, const Topology& topo, const FlowParams& p, const RunControl& control) {
+  const int32_t n = mesh.num_vertices();
+  if (absl::Status s = ValidateFlowParams(p, n); !s.ok()) return s;
+  if (topo.num_vertices() != n) {
+    return absl::InvalidArgumentError("the topology was built for another mesh");
+  }
+  Vec3 lo{std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
+          std::numeric_limits<double>::infinity()};
+  Vec3 hi = -lo;
+  int64_t non_finite = 0;
+  for (int32_t v = 0; v < n; ++v) {
+    if (topo.kind[v] == VertexKind::kIsolated) continue;
+    const Vec3& q = mesh.positions[v];
+    if (!IsFinite(q)) {
+      ++non_finite;
+      continue;
+    }
+    lo = {std::min(lo.x, q.x), std::min(lo.y, q.y), std::min(lo.z, q.z)};
+    hi = {std::max(hi.x, q.x), std::max(hi.y, q.y), std::max(hi.z, q.z)};
+  }
+  if (non_finite > 0) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("the mesh has ", non_finite, " vertices with NaN or infinite coordinates"));
+  }
+  const double h = MeanEdgeLength(mesh, topo);
+  if (!(h > 0.0) || !std::isfinite(h)) {
+    return absl::InvalidArgumentError("the mesh has no edge of non-zero length to smooth");
+  }
+  const double diagonal = Norm(hi - lo);
+
+  FlowResult result;
+  result.mean_edge_length = h;
+  const double step = p.step.value_or(DefaultStep(p.flow));
+  const bool curvature = IsCurvatureFlow(p.flow);
+  const double lambda = curvature ? step * h * h : step;
+  const double mu = p.flow == "taubin" ? TaubinMu(p, step) : 0.0;
+  result.effective_step = lambda;
+  result.effective_mu = mu;
+  absl::StatusOr<std::unique_ptr<FlowKernel>> kernel = MakeKernel(p, step, mu);
+  if (!kernel.ok()) return kernel.status();
+
+  std::vector<uint8_t> role(n, flows::kFixed);
+  int64_t movable = 0;
+  for (int32_t v = 0; v < n; ++v) {
+    if (!p.locked.empty() && p.locked[v] != 0) continue;
+    if (topo.kind[v] == VertexKind::kInterior) {
+      role[v] = flows::kFree;
+    } else if (topo.kind[v] == VertexKind::kBoundary && p.boundary == BoundaryMode::kCurve) {
+      role[v] = flows::kCurve;
+    }
+    movable += role[v] != flows::kFixed;
+  }
+
+  const int threads = n < kParallelThreshold ? 1 : (p.threads > 0 ? p.threads : omp_get_max_threads());
+  StepContext ctx;
+  ctx.offsets = topo.ring_offsets.data();
+  ctx.ring = topo.ring.data();
+  ctx.role = role.data();
+  ctx.kind = topo.kind.data();
+  ctx.h = h;
+  ctx.inv_h2 = 1.0 / (h * h);
+  // Curvature flows move a boundary curve like the curve-shortening flow with the same time
+  // step (kappa ~ 2 U / h^2), capped at the stable umbrella step 0.5.
+  const double curve_step = curvature ? std::min(2.0 * step, 0.5) : step;
+
+  // Eq. (14): T in the flow's speed units (see FlowParams).
+  std::vector<double> threshold;
+  const double t_scale = p.adaptive == AdaptiveMode::kConstant ? (curvature ? 1.0 : h)
+                                                               : (curvature ? 1.0 : 0.5 * h * h);
+  if (p.adaptive == AdaptiveMode::kConstant) threshold.assign(n, p.adaptive_threshold * t_scale);
+
+  std::vector<Vec3> cur = mesh.positions, next(n), start;
+  const int passes = (*kernel)->passes();
+  if (passes > 1) start.resize(n);
+  const int32_t blocks = (n + flows::kBlock - 1) / flows::kBlock;
+  std::vector<BlockStats> stats(blocks);
+  const auto t0 = std::chrono::steady_clock::now();
+
+  for (int it = 1; it <= p.iterations; ++it) {
+    if (control.cancel != nullptr && control.cancel->load(std::memory_order_relaxed)) {
+      mesh.positions = cur;
+      return absl::CancelledError(absl::StrCat("cancelled after ", it - 1, " iterations"));
+    }
+    if (p.adaptive == AdaptiveMode::kRing1 || p.adaptive == AdaptiveMode::kRing2) {
+      if ((it - 1) % p.adaptive_recompute_every == 0) {
+        flows::RingThresholds(ctx, cur.data(), n, p.adaptive == AdaptiveMode::kRing1 ? 1 : 2, threads, threshold);
+        for (double& t : threshold) t *= t_scale;
+      }
+    }
+    ctx.threshold = threshold.empty() ? nullptr : threshold.data();
+    if (passes > 1) start = cur;
+    for (int pass = 0; pass < passes; ++pass) {
+      const double factor = (*kernel)->pass_factor(pass);
+      ctx.lambda = lambda * factor;
+      ctx.curve_lambda = curve_step * factor;
+      (*kernel)->Prepare(ctx, cur.data(), n, threads);
+      const FlowKernel& k = **kernel;
+      flows::ForBlocks(n, threads, [&](int32_t b, int32_t begin, int32_t end) {
+        stats[b] = k.Step(ctx, cur.data(), next.data(), begin, end);
+      });
+      cur.swap(next);
+    }
+    if (passes > 1) {  // displacement over the whole iteration, not the last pass
+      flows::ForBlocks(n, threads, [&](int32_t b, int32_t begin, int32_t end) {
+        BlockStats s;
+        for (int32_t v = begin; v < end; ++v) {
+          if (role[v] == flows::kFixed) continue;
+          const double d2 = SquaredNorm(cur[v] - start[v]);
+          s.max_sq = std::max(s.max_sq, d2);
+          s.sum += std::sqrt(d2);
+          s.moved += d2 > 0.0;
+          ++s.movable;
+          s.non_finite |= !IsFinite(cur[v]);
+        }
+        stats[b] = s;
+      });
+    }
+    const BlockStats total = Reduce(stats);
+    Progress progress;
+    progress.iteration = it;
+    progress.total = p.iterations;
+    progress.max_displacement = std::sqrt(total.max_sq);
+    progress.mean_displacement = movable > 0 ? total.sum / static_cast<double>(movable) : 0.0;
+    progress.moved_share = movable > 0 ? static_cast<double>(total.moved) / static_cast<double>(movable) : 0.0;
+    if (total.non_finite || !(progress.max_displacement <= diagonal)) {
+      mesh.positions = passes > 1 ? start : next;  // the last iteration before the failure
+      return absl::FailedPreconditionError(absl::StrFormat(
+          "%s diverged at iteration %d (%s); try a smaller step than %g", p.flow, it,
+          total.non_finite ? "a coordinate became NaN or infinite"
+                           : absl::StrFormat("a vertex moved %g, more than the mesh's size %g",
+                                             progress.max_displacement, diagonal),
+          step));
+    }
+    result.iterations_run = it;
+    result.last = progress;
+    if (control.on_progress) control.on_progress(progress);
+    if (p.tolerance > 0.0 && progress.max_displacement < p.tolerance * h) {
+      result.stop_reason = StopReason::kTolerance;
+      break;
+    }
+    if (control.time_budget_seconds > 0.0 &&
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() > control.time_budget_seconds) {
+      result.stop_reason = StopReason::kTimeBudget;
+      break;
+    }
+  }
+  mesh.positions = std::move(cur);
+  return result;
+}
+
+std::vector<Vec3> MeanCurvatureNormals(const Mesh& mesh, const Topology& topo) {
+  StepContext ctx;
+  ctx.offsets = topo.ring_offsets.data();
+  ctx.ring = topo.ring.data();
+  ctx.kind = topo.kind.data();
+  std::vector<Vec3> hn(mesh.positions.size());
+  for (int32_t v = 0; v < topo.num_vertices(); ++v) {
+    if (topo.kind[v] == VertexKind::kInterior) hn[v] = flows::MeanCurvatureNormal(ctx, mesh.positions.data(), v).hn;
+  }
+  return hn;
+}
+
+}  // namespace meshsmooth
