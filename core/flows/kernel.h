@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <vector>
 
@@ -30,6 +31,8 @@ struct StepContext {
   double curve_lambda = 0.0;    // step of the boundary-curve umbrella in this pass
   const double* threshold = nullptr;  // eq. (14): per-vertex T in the flow's speed units, or null
   double h = 1.0;               // mean edge length of the input
+  // Curvature flows: a free vertex moves at most this far (squared) in one pass; see smooth.cc.
+  double max_step_sq = std::numeric_limits<double>::infinity();
   double inv_h2 = 1.0;          // 1 / h^2
 };
 
@@ -40,6 +43,7 @@ struct BlockStats {
   double sum = 0.0;
   int64_t moved = 0;
   int64_t movable = 0;
+  int64_t capped = 0;  // vertices whose step was capped at max_step_sq
   bool non_finite = false;
 };
 
@@ -140,6 +144,11 @@ inline BlockStats ApplyStep(const StepContext& c, const Vec3* cur, Vec3* next, i
       Vec3 f = speed(v);
       if (c.threshold != nullptr) f = Threshold(f, c.threshold[v]);
       step = f * c.lambda;
+      const double len2 = SquaredNorm(step);
+      if (len2 > c.max_step_sq) {
+        step *= std::sqrt(c.max_step_sq / len2);
+        ++s.capped;
+      }
     } else {
       step = CurveUmbrella(c, cur, v) * c.curve_lambda;
     }

@@ -1,0 +1,183 @@
+// Invariants every flow keeps on every mesh of a list (synthetic, plus the real meshes of
+// ../shared/data/meshes when present): no NaN, boundary and non-manifold vertices fixed by
+// default, locked vertices fixed, and the same bytes with 1 and 2 threads.
+#include <atomic>
+#include <cstring>
+
+#include "core/io/mesh_io.h"
+#include "gtest/gtest.h"
+#include "tests/flow_fixtures.h"
+#include "tests/test_data.h"
+
+namespace meshsmooth {
+namespace {
+
+using namespace meshsmooth::testing;
+
+struct Case {
+  std::string name;
+  Mesh mesh;
+};
+
+std::vector<Case> Meshes() {
+  std::vector<Case> cases;
+  cases.push_back({"noisy icosphere(6)", NoisySphere(6)});  // 40962 vertices: runs on 2 threads
+  cases.push_back({"noisy two-rate torus", NoisyTorus()});
+  Mesh plane = TwoRatePlane(48, 32);
+  AddUniformNoise(plane, 0.3, 5);
+  cases.push_back({"noisy two-rate plane", plane});
+  if (std::filesystem::is_directory(SharedData("meshes"))) {
+    for (const char* f : {"beetle.obj", "camelhead.obj", "fandisk.obj", "stanford-bunny.ply", "stanford-dragon.ply"}) {
+      absl::StatusOr<Mesh> m = ReadMesh((SharedData("meshes") / f).string());
+      if (m.ok()) cases.push_back({f, *std::move(m)});
+    }
+  }
+  return cases;
+}
+
+bool SameBytes(const Mesh& a, const Mesh& b) {
+  return a.positions.size() == b.positions.size() &&
+         std::memcmp(a.positions.data(), b.positions.data(), a.positions.size() * sizeof(Vec3)) == 0;
+}
+
+TEST(FlowInvariantsTest, EveryFlowOnEveryMesh) {
+  for (const Case& c : Meshes()) {
+    const Topology topo = BuildTopology(c.mesh);
+    const int32_t n = c.mesh.num_vertices();
+    std::vector<uint8_t> locked(n, 0);
+    for (int32_t v = 0; v < n; v += 17) locked[v] = 1;
+    for (const std::string& flow : FlowNames()) {
+      SCOPED_TRACE(c.name + " / " + flow);
+      FlowParams p = Params(flow, 3);
+      p.threads = 1;
+      Mesh one = c.mesh;
+      absl::StatusOr<FlowResult> r = Smooth(one, topo, p);
+      ASSERT_TRUE(r.ok()) << r.status();
+      p.threads = 2;
+      Mesh two = c.mesh;
+      ASSERT_TRUE(Smooth(two, topo, p).ok());
+      EXPECT_TRUE(SameBytes(one, two)) << "1 and 2 threads differ";
+      int64_t moved = 0;
+      for (int32_t v = 0; v < n; ++v) {
+        ASSERT_TRUE(IsFinite(one.positions[v]) || !IsFinite(c.mesh.positions[v])) << "vertex " << v;
+        if (topo.kind[v] != VertexKind::kInterior) {
+          ASSERT_EQ(one.positions[v], c.mesh.positions[v]) << "non-interior vertex " << v << " moved";
+        }
+        moved += !(one.positions[v] == c.mesh.positions[v]);
+      }
+      EXPECT_GT(moved, 0);
+      p.locked = locked;
+      Mesh lock = c.mesh;
+      ASSERT_TRUE(Smooth(lock, topo, p).ok());
+      for (int32_t v = 0; v < n; v += 17) ASSERT_EQ(lock.positions[v], c.mesh.positions[v]) << "locked " << v;
+    }
+  }
+}
+
+TEST(FlowInvariantsTest, BoundaryCurveModeSmoothsTheLoopInItsPlane) {
+  const Mesh plane = TwoRatePlane(24, 16);
+  Mesh m = plane;
+  // Wiggle the boundary inside the plane.
+  const Topology topo = BuildTopology(m);
+  for (int32_t v = 0; v < m.num_vertices(); ++v) {
+    if (topo.kind[v] == VertexKind::kBoundary) m.positions[v] += Vec3{0.01 * ((v * 7) % 3 - 1), 0.01 * ((v * 5) % 3 - 1), 0.0};
+  }
+  for (const char* flow : {"laplacian", "median"}) {
+    FlowParams p = Params(flow, 5);
+    p.boundary = BoundaryMode::kCurve;
+    Mesh s = m;
+    ASSERT_TRUE(Smooth(s, topo, p).ok());
+    int moved = 0;
+    for (int32_t v = 0; v < m.num_vertices(); ++v) {
+      ASSERT_EQ(s.positions[v].z, 0.0);
+      if (topo.kind[v] == VertexKind::kBoundary && !(s.positions[v] == m.positions[v])) ++moved;
+    }
+    EXPECT_GT(moved, 40) << flow;
+  }
+}
+
+TEST(FlowInvariantsTest, ProgressCancelToleranceAndTimeBudget) {
+  const Mesh noisy = NoisySphere(4);
+  {
+    std::vector<int> seen;
+    RunControl control;
+    control.on_progress = [&](const Progress& pr) {
+      seen.push_back(pr.iteration);
+      EXPECT_EQ(pr.total, 7);
+      EXPECT_GT(pr.max_displacement, 0.0);
+      EXPECT_LE(pr.mean_displacement, pr.max_displacement);
+      EXPECT_GT(pr.moved_share, 0.9);
+    };
+    Mesh m = noisy;
+    ASSERT_TRUE(Smooth(m, Params("median", 7), control).ok());
+    EXPECT_EQ(seen, (std::vector<int>{1, 2, 3, 4, 5, 6, 7}));
+  }
+  {
+    std::atomic<bool> cancel{false};
+    RunControl control;
+    control.cancel = &cancel;
+    control.on_progress = [&](const Progress& pr) {
+      if (pr.iteration == 3) cancel = true;
+    };
+    Mesh m = noisy;
+    const absl::Status s = Smooth(m, Params("laplacian", 100), control).status();
+    EXPECT_EQ(s.code(), absl::StatusCode::kCancelled);
+    EXPECT_EQ(m.positions, Smoothed(noisy, Params("laplacian", 3)).positions);  // 3 iterations kept
+  }
+  {
+    FlowParams p = Params("laplacian", 5000);
+    p.tolerance = 1e-3;
+    Mesh m = noisy;
+    absl::StatusOr<FlowResult> r = Smooth(m, p);
+    ASSERT_TRUE(r.ok());
+    EXPECT_EQ(r->stop_reason, StopReason::kTolerance);
+    EXPECT_LT(r->iterations_run, 5000);
+    EXPECT_LT(r->last.max_displacement, 1e-3 * r->mean_edge_length);
+  }
+  {
+    RunControl control;
+    control.time_budget_seconds = 1e-6;
+    Mesh m = noisy;
+    absl::StatusOr<FlowResult> r = Smooth(m, Params("median", 1000), control);
+    ASSERT_TRUE(r.ok());
+    EXPECT_EQ(r->stop_reason, StopReason::kTimeBudget);
+    EXPECT_LT(r->iterations_run, 1000);
+  }
+}
+
+TEST(FlowInvariantsTest, BadParametersAndInputsAreRefusedClearly) {
+  const Mesh m0 = Icosphere(2);
+  struct Bad {
+    FlowParams p;
+    std::string expect;
+  };
+  std::vector<Bad> bad;
+  bad.push_back({Params("laplacien", 1), "unknown flow 'laplacien'"});
+  bad.push_back({Params("median", 0), "iterations"});
+  bad.push_back({Params("median", kMaxIterations + 1), "iterations"});
+  bad.push_back({Params("mcf", 1, -1.0), "step"});
+  bad.push_back({Params("mcf", 1, std::numeric_limits<double>::quiet_NaN()), "step"});
+  FlowParams lock = Params("median", 1);
+  lock.locked = {1, 0};
+  bad.push_back({lock, "lock mask"});
+  FlowParams tol = Params("median", 1);
+  tol.tolerance = -1;
+  bad.push_back({tol, "tolerance"});
+  for (const Bad& b : bad) {
+    Mesh m = m0;
+    const absl::Status s = Smooth(m, b.p).status();
+    EXPECT_EQ(s.code(), absl::StatusCode::kInvalidArgument) << b.expect;
+    EXPECT_NE(s.message().find(b.expect), std::string::npos) << s;
+    EXPECT_EQ(m.positions, m0.positions);
+  }
+  Mesh nan = m0;
+  nan.positions[3].y = std::numeric_limits<double>::quiet_NaN();
+  const absl::Status s = Smooth(nan, Params("median", 1)).status();
+  EXPECT_EQ(s.code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_NE(s.message().find("NaN"), std::string::npos) << s;
+  Mesh empty;
+  EXPECT_EQ(Smooth(empty, Params("median", 1)).status().code(), absl::StatusCode::kInvalidArgument);
+}
+
+}  // namespace
+}  // namespace meshsmooth
