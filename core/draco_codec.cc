@@ -3,26 +3,22 @@
 #include <exception>
 #include <memory>
 
+#include "absl/container/flat_hash_map.h"
 #include "absl/strings/str_cat.h"
 #include "draco/compression/decode.h"
 #include "draco/compression/encode.h"
 #include "draco/mesh/mesh.h"
 
 namespace meshsmooth {
+namespace {
+absl::StatusOr<std::string> EncodeWithOptions(const draco::Mesh& dm, const DracoOptions& options);
+}  // namespace
 
 absl::StatusOr<std::string> EncodeDraco(const Mesh& mesh, const DracoOptions& options) {
-  if (options.quantization_bits < 0 || options.quantization_bits > 30) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("quantization bits must be 0 (lossless) or 1..30, got ", options.quantization_bits));
-  }
-  if (options.speed < 0 || options.speed > 10) {
-    return absl::InvalidArgumentError(absl::StrCat("Draco speed must be 0..10, got ", options.speed));
-  }
   const int32_t n = mesh.num_vertices();
   if (n == 0 || mesh.triangles.empty()) {
     return absl::InvalidArgumentError("cannot encode an empty mesh (no vertices or no faces)");
   }
-
   draco::Mesh dm;
   dm.set_num_points(n);
   draco::GeometryAttribute ga;
@@ -39,23 +35,13 @@ absl::StatusOr<std::string> EncodeDraco(const Mesh& mesh, const DracoOptions& op
     if (t[0] < 0 || t[0] >= n || t[1] < 0 || t[1] >= n || t[2] < 0 || t[2] >= n) continue;
     dm.AddFace({draco::PointIndex(t[0]), draco::PointIndex(t[1]), draco::PointIndex(t[2])});
   }
-
-  draco::Encoder encoder;
-  encoder.SetSpeedOptions(options.speed, options.speed);
-  encoder.SetEncodingMethod(options.method == DracoMethod::kSequential ? draco::MESH_SEQUENTIAL_ENCODING
-                                                                       : draco::MESH_EDGEBREAKER_ENCODING);
-  if (options.quantization_bits > 0) {
-    encoder.SetAttributeQuantization(draco::GeometryAttribute::POSITION, options.quantization_bits);
-  }
-  draco::EncoderBuffer out;
-  const draco::Status status = encoder.EncodeMeshToBuffer(dm, &out);
-  if (!status.ok()) {
-    return absl::InvalidArgumentError(absl::StrCat("Draco encoding failed: ", status.error_msg_string()));
-  }
-  return std::string(out.data(), out.size());
+  return EncodeWithOptions(dm, options);
 }
 
-absl::StatusOr<Mesh> DecodeDraco(std::string_view bytes) {
+namespace {
+
+// Decodes a Draco triangle mesh with clear errors; the positions attribute is checked.
+absl::StatusOr<std::unique_ptr<draco::Mesh>> DecodeToDraco(std::string_view bytes) {
   if (bytes.empty()) return absl::InvalidArgumentError("empty Draco data");
   draco::DecoderBuffer buffer;
   buffer.Init(bytes.data(), bytes.size());
@@ -91,8 +77,14 @@ absl::StatusOr<Mesh> DecodeDraco(std::string_view bytes) {
   if (pos == nullptr || pos->num_components() < 3 || pos->size() == 0) {
     return absl::InvalidArgumentError("the Draco mesh has no 3-D position attribute");
   }
+  return dm;
+}
+
+// Positions of every point, and faces over points.
+absl::StatusOr<Mesh> PointMesh(const draco::Mesh& dm) {
+  const draco::PointAttribute* pos = dm.GetNamedAttribute(draco::GeometryAttribute::POSITION);
   Mesh mesh;
-  const uint32_t n = dm->num_points();
+  const uint32_t n = dm.num_points();
   mesh.positions.resize(n);
   for (uint32_t i = 0; i < n; ++i) {
     const draco::AttributeValueIndex avi = pos->mapped_index(draco::PointIndex(i));
@@ -102,15 +94,163 @@ absl::StatusOr<Mesh> DecodeDraco(std::string_view bytes) {
     }
     mesh.positions[i] = {xyz[0], xyz[1], xyz[2]};
   }
-  mesh.triangles.resize(dm->num_faces());
-  for (uint32_t f = 0; f < dm->num_faces(); ++f) {
-    const draco::Mesh::Face& face = dm->face(draco::FaceIndex(f));
+  mesh.triangles.resize(dm.num_faces());
+  for (uint32_t f = 0; f < dm.num_faces(); ++f) {
+    const draco::Mesh::Face& face = dm.face(draco::FaceIndex(f));
     for (int c = 0; c < 3; ++c) {
       const uint32_t v = face[c].value();
       mesh.triangles[f][c] = v < n ? static_cast<int32_t>(v) : -1;
     }
   }
   return mesh;
+}
+
+absl::StatusOr<std::string> EncodeWithOptions(const draco::Mesh& dm, const DracoOptions& options) {
+  if (options.quantization_bits < 0 || options.quantization_bits > 30) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("quantization bits must be 0 (lossless) or 1..30, got ", options.quantization_bits));
+  }
+  if (options.speed < 0 || options.speed > 10) {
+    return absl::InvalidArgumentError(absl::StrCat("Draco speed must be 0..10, got ", options.speed));
+  }
+  draco::Encoder encoder;
+  encoder.SetSpeedOptions(options.speed, options.speed);
+  encoder.SetEncodingMethod(options.method == DracoMethod::kSequential ? draco::MESH_SEQUENTIAL_ENCODING
+                                                                       : draco::MESH_EDGEBREAKER_ENCODING);
+  if (options.quantization_bits > 0) {
+    encoder.SetAttributeQuantization(draco::GeometryAttribute::POSITION, options.quantization_bits);
+  }
+  draco::EncoderBuffer out;
+  const draco::Status status = encoder.EncodeMeshToBuffer(dm, &out);
+  if (!status.ok()) {
+    return absl::InvalidArgumentError(absl::StrCat("Draco encoding failed: ", status.error_msg_string()));
+  }
+  return std::string(out.data(), out.size());
+}
+
+struct PositionKey {
+  double x, y, z;
+  bool operator==(const PositionKey& o) const { return x == o.x && y == o.y && z == o.z; }
+  template <typename H>
+  friend H AbslHashValue(H h, const PositionKey& k) {
+    return H::combine(std::move(h), k.x + 0.0, k.y + 0.0, k.z + 0.0);
+  }
+};
+
+}  // namespace
+
+absl::StatusOr<Mesh> DecodeDraco(std::string_view bytes) {
+  absl::StatusOr<std::unique_ptr<draco::Mesh>> dm = DecodeToDraco(bytes);
+  if (!dm.ok()) return dm.status();
+  return PointMesh(**dm);
+}
+
+struct DracoMesh::Impl {
+  std::unique_ptr<draco::Mesh> draco;
+  Mesh welded;
+  std::vector<int32_t> point_to_vertex;
+  int64_t seam_points = 0;
+};
+
+DracoMesh::DracoMesh(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+DracoMesh::DracoMesh(DracoMesh&&) noexcept = default;
+DracoMesh& DracoMesh::operator=(DracoMesh&&) noexcept = default;
+DracoMesh::~DracoMesh() = default;
+
+absl::StatusOr<DracoMesh> DracoMesh::Decode(std::string_view bytes) {
+  absl::StatusOr<std::unique_ptr<draco::Mesh>> dm = DecodeToDraco(bytes);
+  if (!dm.ok()) return dm.status();
+  absl::StatusOr<Mesh> points = PointMesh(**dm);
+  if (!points.ok()) return points.status();
+  auto impl = std::make_unique<Impl>();
+  impl->draco = std::move(dm).value();
+  impl->point_to_vertex.resize(points->positions.size());
+  absl::flat_hash_map<PositionKey, int32_t> index;
+  index.reserve(points->positions.size());
+  for (size_t p = 0; p < points->positions.size(); ++p) {
+    const Vec3& q = points->positions[p];
+    auto [it, inserted] = index.try_emplace(PositionKey{q.x, q.y, q.z}, impl->welded.num_vertices());
+    if (inserted) {
+      impl->welded.positions.push_back(q);
+    } else {
+      ++impl->seam_points;
+    }
+    impl->point_to_vertex[p] = it->second;
+  }
+  impl->welded.triangles = std::move(points->triangles);
+  for (Triangle& t : impl->welded.triangles) {
+    for (int32_t& v : t) v = v >= 0 ? impl->point_to_vertex[v] : -1;
+  }
+  return DracoMesh(std::move(impl));
+}
+
+const Mesh& DracoMesh::welded() const { return impl_->welded; }
+int64_t DracoMesh::num_points() const { return impl_->draco->num_points(); }
+int64_t DracoMesh::seam_points() const { return impl_->seam_points; }
+
+std::vector<std::string> DracoMesh::attribute_names() const {
+  std::vector<std::string> names;
+  for (int32_t i = 0; i < impl_->draco->num_attributes(); ++i) {
+    const draco::PointAttribute* a = impl_->draco->attribute(i);
+    if (a->attribute_type() == draco::GeometryAttribute::POSITION) continue;
+    names.push_back(a->TypeToString(a->attribute_type()));
+  }
+  return names;
+}
+
+absl::StatusOr<std::string> DracoMesh::Encode(const Mesh& smoothed, const DracoOptions& options) {
+  if (smoothed.positions.size() != impl_->welded.positions.size()) {
+    return absl::InvalidArgumentError(absl::StrCat("expected ", impl_->welded.positions.size(),
+                                                   " positions, got ", smoothed.positions.size()));
+  }
+  draco::Mesh& dm = *impl_->draco;
+  const uint32_t n = dm.num_points();
+  draco::PointAttribute* pos = dm.attribute(dm.GetNamedAttributeId(draco::GeometryAttribute::POSITION));
+  // A position attribute stored in another type (or with more components) is replaced by a
+  // plain float32 xyz one with the same point mapping.
+  if (pos->data_type() != draco::DT_FLOAT32 || pos->num_components() != 3) {
+    draco::GeometryAttribute ga;
+    ga.Init(draco::GeometryAttribute::POSITION, nullptr, 3, draco::DT_FLOAT32, false, 3 * sizeof(float), 0);
+    auto fresh = std::make_unique<draco::PointAttribute>(ga);
+    fresh->SetIdentityMapping();
+    fresh->Reset(n);
+    const int id = dm.GetNamedAttributeId(draco::GeometryAttribute::POSITION);
+    dm.SetAttribute(id, std::move(fresh));
+    pos = dm.attribute(id);
+  }
+  for (uint32_t p = 0; p < n; ++p) {
+    const Vec3& q = smoothed.positions[impl_->point_to_vertex[p]];
+    const float v[3] = {static_cast<float>(q.x), static_cast<float>(q.y), static_cast<float>(q.z)};
+    pos->SetAttributeValue(pos->mapped_index(draco::PointIndex(p)), v);
+  }
+  const int normal_id = dm.GetNamedAttributeId(draco::GeometryAttribute::NORMAL);
+  if (normal_id >= 0) {
+    draco::PointAttribute* nrm = dm.attribute(normal_id);
+    if (nrm->data_type() == draco::DT_FLOAT32 && nrm->num_components() == 3) {
+      // Sum the area-weighted normals of each point's faces into the point's normal value.
+      std::vector<Vec3> sum(nrm->size());
+      for (uint32_t f = 0; f < dm.num_faces(); ++f) {
+        const draco::Mesh::Face& face = dm.face(draco::FaceIndex(f));
+        if (face[0].value() >= n || face[1].value() >= n || face[2].value() >= n) continue;
+        const Vec3& a = smoothed.positions[impl_->point_to_vertex[face[0].value()]];
+        const Vec3& b = smoothed.positions[impl_->point_to_vertex[face[1].value()]];
+        const Vec3& c = smoothed.positions[impl_->point_to_vertex[face[2].value()]];
+        const Vec3 fn = Cross(b - a, c - a);
+        for (int k = 0; k < 3; ++k) {
+          const uint32_t vi = nrm->mapped_index(face[k]).value();
+          if (vi < sum.size()) sum[vi] += fn;
+        }
+      }
+      for (size_t i = 0; i < sum.size(); ++i) {
+        const double len = Norm(sum[i]);
+        if (!(len > 0.0)) continue;  // keep the old normal where no face defines one
+        const float v[3] = {static_cast<float>(sum[i].x / len), static_cast<float>(sum[i].y / len),
+                            static_cast<float>(sum[i].z / len)};
+        nrm->SetAttributeValue(draco::AttributeValueIndex(static_cast<uint32_t>(i)), v);
+      }
+    }
+  }
+  return EncodeWithOptions(dm, options);
 }
 
 }  // namespace meshsmooth

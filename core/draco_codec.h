@@ -6,8 +6,11 @@
 // each coordinate to a grid over the bounding box: error <= extent / (2^q - 1) / 2.
 #pragma once
 
+#include <cstdint>
+#include <memory>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
@@ -30,5 +33,41 @@ absl::StatusOr<std::string> EncodeDraco(const Mesh& mesh, const DracoOptions& op
 // InvalidArgument with a clear message for corrupt bytes, a point cloud, an empty mesh or a
 // mesh without positions. Vertices are Draco's points (attribute seams stay split).
 absl::StatusOr<Mesh> DecodeDraco(std::string_view bytes);
+
+// A decoded Draco mesh with every attribute it carries (normals, texture coordinates,
+// colours, generic attributes, metadata), for smoothing its positions in place.
+//
+// Points that a format split at attribute seams (same position, different UV or normal) are
+// welded by exact position into one vertex of welded(), so they move together and no crack
+// opens; Encode() writes each vertex's new position back to every point of it. Without seams
+// (and without coincident points) vertex i is point i.
+class DracoMesh {
+ public:
+  // Same errors as DecodeDraco().
+  static absl::StatusOr<DracoMesh> Decode(std::string_view bytes);
+
+  DracoMesh(DracoMesh&&) noexcept;
+  DracoMesh& operator=(DracoMesh&&) noexcept;
+  ~DracoMesh();
+
+  // One vertex per distinct position; faces over those vertices, in Draco's face order.
+  const Mesh& welded() const;
+  int64_t num_points() const;
+  // Points that share their position with an earlier point (welded into it).
+  int64_t seam_points() const;
+  // Names of the attributes besides positions, e.g. "NORMAL", "TEX_COORD", "COLOR", "GENERIC".
+  std::vector<std::string> attribute_names() const;
+
+  // Sets the positions from `smoothed` (same vertex count as welded()), recomputes normals
+  // from them (area-weighted over each point's faces, so hard edges split at seams stay hard),
+  // keeps every other attribute unchanged, and encodes. Quantization applies to positions
+  // only; other attributes are stored losslessly.
+  absl::StatusOr<std::string> Encode(const Mesh& smoothed, const DracoOptions& options = {});
+
+ private:
+  struct Impl;
+  explicit DracoMesh(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
 
 }  // namespace meshsmooth

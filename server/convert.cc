@@ -1,0 +1,123 @@
+#include "server/convert.h"
+
+#include "absl/strings/str_cat.h"
+
+namespace meshsmooth::server {
+
+absl::StatusOr<JobParams> FromProto(const v1::JobSpec& spec, int max_iterations) {
+  JobParams j;
+  FlowParams& p = j.flow;
+  p.flow = spec.flow().empty() ? "median" : spec.flow();
+  if (spec.iterations() > static_cast<uint32_t>(max_iterations)) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("iterations ", spec.iterations(), " is above this server's limit of ", max_iterations));
+  }
+  if (spec.iterations() > 0) p.iterations = static_cast<int>(spec.iterations());
+  if (spec.step() != 0.0) p.step = spec.step();
+  p.weights = spec.weights() == v1::UMBRELLA_WEIGHTS_INVERSE_DISTANCE ? UmbrellaWeights::kInverseDistance
+                                                                       : UmbrellaWeights::kUniform;
+  if (spec.has_taubin_mu()) p.taubin_mu = spec.taubin_mu();
+  if (spec.has_taubin_pass_band()) p.taubin_pass_band = spec.taubin_pass_band();
+  if (spec.has_tangential_weight()) p.tangential_weight = spec.tangential_weight();
+  if (spec.has_epsilon()) p.epsilon = spec.epsilon();
+  switch (spec.adaptive().mode()) {
+    case v1::ADAPTIVE_MODE_CONSTANT: p.adaptive = AdaptiveMode::kConstant; break;
+    case v1::ADAPTIVE_MODE_RING1: p.adaptive = AdaptiveMode::kRing1; break;
+    case v1::ADAPTIVE_MODE_RING2: p.adaptive = AdaptiveMode::kRing2; break;
+    default: p.adaptive = AdaptiveMode::kNone; break;
+  }
+  p.adaptive_threshold = spec.adaptive().threshold();
+  if (spec.adaptive().recompute_every() > 0) {
+    p.adaptive_recompute_every = static_cast<int>(std::min<uint32_t>(spec.adaptive().recompute_every(), 1u << 30));
+  }
+  p.boundary = spec.boundary() == v1::BOUNDARY_MODE_CURVE ? BoundaryMode::kCurve : BoundaryMode::kFixed;
+  p.tolerance = spec.tolerance();
+  if (absl::Status s = ValidateFlowParams(p, 0); !s.ok()) return s;
+
+  if (spec.output().quantization_bits() > 30) {
+    return absl::InvalidArgumentError(absl::StrCat("output.quantization_bits must be 0 (lossless) or 1..30, got ",
+                                                   spec.output().quantization_bits()));
+  }
+  j.output.quantization_bits = static_cast<int>(spec.output().quantization_bits());
+  j.output.method = spec.output().edgebreaker() ? DracoMethod::kEdgebreaker : DracoMethod::kSequential;
+  return j;
+}
+
+void ToProto(const ValidationReport& r, v1::ValidationReport* out) {
+  out->set_vertices(r.vertices);
+  out->set_faces(r.faces);
+  out->set_faces_out_of_range(r.faces_out_of_range);
+  out->set_faces_repeated_index(r.faces_repeated_index);
+  out->set_zero_area_faces(r.zero_area_faces);
+  out->set_duplicate_faces(r.duplicate_faces);
+  out->set_unreferenced_vertices(r.unreferenced_vertices);
+  out->set_non_finite_vertices(r.non_finite_vertices);
+  out->set_edges(r.edges);
+  out->set_boundary_edges(r.boundary_edges);
+  out->set_boundary_loops(r.boundary_loops);
+  out->set_nonmanifold_edges(r.nonmanifold_edges);
+  out->set_nonmanifold_vertices(r.nonmanifold_vertices);
+  out->set_inconsistently_oriented_edges(r.inconsistently_oriented_edges);
+  out->set_connected_components(r.connected_components);
+  out->set_closed(r.closed());
+  out->set_manifold(r.manifold());
+}
+
+void ToProto(const MeshMetrics& m, v1::MeshMetrics* out) {
+  out->set_area(m.area);
+  out->set_signed_volume(m.signed_volume);
+  out->set_edge_length_mean(m.edge_length_mean);
+  out->set_edge_length_cv(m.edge_length_cv);
+  out->set_min_angle_deg(m.min_angle_deg);
+  out->set_mean_min_angle_deg(m.mean_angle_deg);
+  out->set_share_angles_below_10deg(m.share_angles_below_10deg);
+}
+
+void ToProto(const Progress& p, v1::Progress* out) {
+  out->set_iteration(static_cast<uint32_t>(p.iteration));
+  out->set_total(static_cast<uint32_t>(p.total));
+  out->set_max_displacement(p.max_displacement);
+  out->set_mean_displacement(p.mean_displacement);
+  out->set_moved_share(p.moved_share);
+}
+
+void ToProto(const ParameterInfo& p, v1::ParameterInfo* out) {
+  out->set_name(p.name);
+  out->set_description(p.description);
+  out->set_default_value(p.default_value);
+  out->set_min_value(p.min_value);
+  out->set_max_value(p.max_value);
+  out->set_min_exclusive(p.min_exclusive);
+  out->set_max_exclusive(p.max_exclusive);
+  for (const std::string& c : p.choices) out->add_choices(c);
+}
+
+void ToProto(const JobParams& params, const FlowResult& result, v1::EffectiveParameters* out) {
+  const FlowParams& p = params.flow;
+  out->set_flow(p.flow);
+  out->set_iterations_requested(static_cast<uint32_t>(p.iterations));
+  out->set_iterations_run(static_cast<uint32_t>(result.iterations_run));
+  out->set_step(p.step.value_or(DefaultStep(p.flow)));
+  out->set_effective_step(result.effective_step);
+  out->set_taubin_mu(result.effective_mu);
+  out->set_mean_edge_length(result.mean_edge_length);
+  out->set_stop_reason(result.stop_reason == StopReason::kTolerance    ? "tolerance"
+                       : result.stop_reason == StopReason::kTimeBudget ? "time_budget"
+                                                                       : "iterations");
+  out->set_weights(p.weights == UmbrellaWeights::kInverseDistance ? v1::UMBRELLA_WEIGHTS_INVERSE_DISTANCE
+                                                                  : v1::UMBRELLA_WEIGHTS_UNIFORM);
+  out->set_boundary(p.boundary == BoundaryMode::kCurve ? v1::BOUNDARY_MODE_CURVE : v1::BOUNDARY_MODE_FIXED);
+  v1::AdaptiveThreshold* a = out->mutable_adaptive();
+  a->set_mode(p.adaptive == AdaptiveMode::kConstant ? v1::ADAPTIVE_MODE_CONSTANT
+              : p.adaptive == AdaptiveMode::kRing1  ? v1::ADAPTIVE_MODE_RING1
+              : p.adaptive == AdaptiveMode::kRing2  ? v1::ADAPTIVE_MODE_RING2
+                                                    : v1::ADAPTIVE_MODE_NONE);
+  a->set_threshold(p.adaptive_threshold);
+  a->set_recompute_every(static_cast<uint32_t>(p.adaptive_recompute_every));
+  out->set_epsilon(p.epsilon);
+  out->set_tangential_weight(p.tangential_weight);
+  out->mutable_output()->set_quantization_bits(static_cast<uint32_t>(params.output.quantization_bits));
+  out->mutable_output()->set_edgebreaker(params.output.method == DracoMethod::kEdgebreaker);
+}
+
+}  // namespace meshsmooth::server

@@ -1,0 +1,86 @@
+// meshsmoothd: the meshsmooth gRPC server.
+//
+// Prints "meshsmoothd listening on HOST:PORT" on stdout once it serves (with --listen
+// HOST:0 the port is the one the system picked). SIGINT/SIGTERM shut it down gracefully.
+// Exit codes: 0 after a clean shutdown; 1 when it cannot start; 2 for a bad command line.
+#include <pthread.h>
+#include <signal.h>
+
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+#include <thread>
+
+#include "CLI/CLI.hpp"
+#include "server/server.h"
+
+int main(int argc, char** argv) {
+  using meshsmooth::server::ServerOptions;
+  ServerOptions o;
+  std::string token_file;
+  CLI::App app{"meshsmoothd: the meshsmooth smoothing server (gRPC, meshsmooth.v1.MeshSmoother)"};
+  app.add_option("--listen", o.listen, "host:port to listen on; port 0 picks a free one")->capture_default_str();
+  app.add_option("--workers", o.workers, "jobs smoothed at once; 0 = hardware threads")->capture_default_str();
+  app.add_option("--queue-depth", o.queue_depth, "jobs that may wait for a worker; more get RESOURCE_EXHAUSTED")
+      ->capture_default_str()->check(CLI::NonNegativeNumber);
+  app.add_option("--threads-per-job", o.threads_per_job, "threads of one job's vertex loops; 0 = hardware threads")
+      ->capture_default_str()->check(CLI::NonNegativeNumber);
+  app.add_option("--max-upload-bytes", o.max_upload_bytes, "largest Draco upload of one job")->capture_default_str();
+  app.add_option("--max-vertices", o.max_vertices, "largest mesh, in vertices")->capture_default_str();
+  app.add_option("--max-iterations", o.max_iterations, "most iterations one job may ask for")->capture_default_str();
+  app.add_option("--max-job-seconds", o.max_job_seconds, "smoothing time limit of one job (DEADLINE_EXCEEDED)")
+      ->capture_default_str();
+  app.add_option("--max-concurrent-streams", o.max_concurrent_streams, "Smooth calls open at once")
+      ->capture_default_str();
+  app.add_option("--grace-seconds", o.grace_seconds, "on SIGINT/SIGTERM, time running jobs get to finish")
+      ->capture_default_str();
+  app.add_option("--tls-cert", o.tls_cert_file, "PEM certificate chain; with --tls-key enables TLS");
+  app.add_option("--tls-key", o.tls_key_file, "PEM private key");
+  app.add_option("--auth-token-file", token_file,
+                 "file holding a bearer token; calls must then send 'authorization: Bearer <token>'");
+  app.add_flag("--quiet", [&o](int64_t) { o.log_jobs = false; }, "no per-job log lines");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;
+  }
+  if (!token_file.empty()) {
+    std::ifstream in(token_file);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    std::string token = ss.str();
+    while (!token.empty() && std::isspace(static_cast<unsigned char>(token.back()))) token.pop_back();
+    while (!token.empty() && std::isspace(static_cast<unsigned char>(token.front()))) token.erase(0, 1);
+    if (!in || token.empty()) {
+      std::cerr << "meshsmoothd: cannot read a token from '" << token_file << "'\n";
+      return 1;
+    }
+    o.auth_token = token;
+  }
+
+  // Block the shutdown signals before gRPC starts its threads, then wait for them on one
+  // thread of our own (RECIPES.md #5).
+  sigset_t signals;
+  sigemptyset(&signals);
+  sigaddset(&signals, SIGINT);
+  sigaddset(&signals, SIGTERM);
+  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+
+  auto server = meshsmooth::server::Server::Start(o);
+  if (!server.ok()) {
+    std::cerr << "meshsmoothd: " << server.status().message() << "\n";
+    return 1;
+  }
+  const std::string host = o.listen.substr(0, o.listen.rfind(':'));
+  std::printf("meshsmoothd listening on %s:%d\n", host.c_str(), (*server)->port());
+  std::fflush(stdout);
+
+  int sig = 0;
+  sigwait(&signals, &sig);
+  std::fprintf(stderr, "meshsmoothd: %s, shutting down (grace %g s)\n", sig == SIGINT ? "SIGINT" : "SIGTERM",
+               o.grace_seconds);
+  (*server)->Shutdown();
+  std::fprintf(stderr, "meshsmoothd: stopped\n");
+  return 0;
+}

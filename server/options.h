@@ -1,0 +1,30 @@
+// Every knob of meshsmoothd in one place (flags in main.cc map onto these fields).
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+namespace meshsmooth::server {
+
+struct ServerOptions {
+  std::string listen = "127.0.0.1:50051";  // host:port; port 0 picks a free port
+  int workers = 0;                         // smoothing jobs run at once; 0 = hardware threads
+  int queue_depth = 64;                    // jobs waiting for a worker; beyond: RESOURCE_EXHAUSTED
+  int threads_per_job = 0;                 // threads of one job's vertex loops; 0 = hardware threads
+  int64_t max_upload_bytes = 512ll << 20;  // Draco bytes of one job
+  int64_t max_vertices = 20'000'000;       // vertices of one mesh (after welding seams)
+  int max_iterations = 10'000;
+  double max_job_seconds = 600.0;          // smoothing time of one job
+  int max_concurrent_streams = 128;        // Smooth calls open at once
+  double grace_seconds = 10.0;             // on shutdown, running jobs get this long to finish
+  std::string tls_cert_file, tls_key_file;  // both or neither
+  std::string auth_token;                   // non-empty: calls need "authorization: Bearer <token>"
+  bool log_jobs = true;                     // one line per job on stderr
+};
+
+// Largest chunk a client may send; messages are limited to this plus framing.
+inline constexpr int64_t kMaxChunkBytes = 1 << 20;
+// Result chunks the server sends.
+inline constexpr int64_t kResultChunkBytes = 1 << 20;
+
+}  // namespace meshsmooth::server

@@ -1,0 +1,58 @@
+#include "server/worker_pool.h"
+
+#include <algorithm>
+
+namespace meshsmooth::server {
+
+WorkerPool::WorkerPool(int workers, int queue_depth) : queue_depth_(std::max(0, queue_depth)) {
+  workers = std::max(1, workers);
+  threads_.reserve(workers);
+  for (int i = 0; i < workers; ++i) threads_.emplace_back([this] { Loop(); });
+}
+
+WorkerPool::~WorkerPool() { Stop(); }
+
+std::optional<int> WorkerPool::TrySubmit(std::function<void()> task) {
+  std::lock_guard<std::mutex> lock(mu_);
+  if (stopping_) return std::nullopt;
+  // Tasks that an idle worker will take at once do not count against the queue depth.
+  const int waiting = static_cast<int>(queue_.size()) - idle_;  // tasks no idle worker will take
+  if (waiting >= queue_depth_) return std::nullopt;
+  queue_.push_back(std::move(task));
+  cv_.notify_one();
+  return std::max(0, waiting);
+}
+
+void WorkerPool::Stop() {
+  std::deque<std::function<void()>> dropped;
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    if (stopping_ && threads_.empty()) return;
+    stopping_ = true;
+    dropped.swap(queue_);
+    cv_.notify_all();
+  }
+  dropped.clear();  // destroys the tasks (and what they own) outside the lock
+  for (std::thread& t : threads_) {
+    if (t.joinable()) t.join();
+  }
+  threads_.clear();
+}
+
+void WorkerPool::Loop() {
+  for (;;) {
+    std::function<void()> task;
+    {
+      std::unique_lock<std::mutex> lock(mu_);
+      ++idle_;
+      cv_.wait(lock, [this] { return stopping_ || !queue_.empty(); });
+      --idle_;
+      if (stopping_) return;
+      task = std::move(queue_.front());
+      queue_.pop_front();
+    }
+    task();
+  }
+}
+
+}  // namespace meshsmooth::server

@@ -1,0 +1,511 @@
+#!/usr/bin/python3
+"""End-to-end test of meshsmoothd through its gRPC API, from an independent Python client.
+
+Run (ctest does this):
+  /usr/bin/python3 tests/python/e2e_client_test.py --server build/server/meshsmoothd \
+      --proto-root proto [--shared ../shared]
+
+Needs only Debian packages: python3-grpcio, python3-protobuf, python3-numpy, protobuf-compiler,
+protobuf-compiler-grpc (grpc_python_plugin) and draco (draco_encoder, draco_decoder).
+Stubs are generated from the .proto at test time, so this client is written against the
+public contract, not against the C++ code. Prints one "ok: ..." / "FAIL: ..." line per check
+and closes with "N passed, M failed"; exits 1 when anything failed.
+"""
+
+import argparse
+import importlib
+import os
+import queue
+import re
+import signal
+import subprocess
+import sys
+import tempfile
+import threading
+import traceback
+
+import numpy as np
+
+PROTO_FILE = "meshsmooth/v1/smoothing.proto"
+GRPC_PYTHON_PLUGIN = "/usr/bin/grpc_python_plugin"
+EXPECTED_FLOWS = {"laplacian", "taubin", "bilaplacian", "mcf", "mcf_tangential", "median"}
+READY_RE = re.compile(r"^meshsmoothd listening on 127\.0\.0\.1:(\d+)$")
+READY_TIMEOUT_S = 30.0
+SMOOTH_DEADLINE_S = 60.0
+ERROR_DEADLINE_S = 30.0
+# Well below the contract's 1 MiB limit. The lossless sequential test mesh is ~15 KB, so 64 KiB
+# would send it in one piece: 4 KiB makes it several chunks and exercises reassembly.
+CHUNK_BYTES = 4 * 1024
+ICOSPHERE_VERTICES = 642
+ICOSPHERE_FACES = 1280
+
+
+class CheckFailed(Exception):
+    pass
+
+
+def require(condition, message):
+    if not condition:
+        raise CheckFailed(message)
+
+
+class Report:
+    def __init__(self):
+        self.passed = 0
+        self.failed = 0
+
+    def ok(self, name):
+        self.passed += 1
+        print(f"ok: {name}", flush=True)
+
+    def fail(self, name, why):
+        self.failed += 1
+        print(f"FAIL: {name}: {why}", flush=True)
+
+    def check(self, name, fn, *args, **kwargs):
+        """Runs fn; any exception is a failure of this check only. Returns fn's value or None."""
+        try:
+            value = fn(*args, **kwargs)
+        except CheckFailed as e:
+            self.fail(name, e)
+            return None
+        except Exception as e:  # noqa: BLE001 - one broken check must not hide the others
+            self.fail(name, f"{type(e).__name__}: {e}")
+            traceback.print_exc(file=sys.stderr)
+            return None
+        self.ok(name)
+        return value
+
+    def summary_line(self):
+        return f"{self.passed} passed, {self.failed} failed"
+
+
+# ----------------------------------------------------------------------------------------------
+# Stubs
+
+
+def generate_stubs(proto_root, out_dir):
+    """Generates the Python stubs of smoothing.proto into out_dir; returns (pb2, pb2_grpc)."""
+    proto_root = os.path.abspath(proto_root)
+    require(os.path.isfile(os.path.join(proto_root, PROTO_FILE)),
+            f"{PROTO_FILE} not found under {proto_root}")
+    cmd = ["protoc", "-I", proto_root, f"--python_out={out_dir}", f"--grpc_out={out_dir}",
+           f"--plugin=protoc-gen-grpc={GRPC_PYTHON_PLUGIN}", PROTO_FILE]
+    run = subprocess.run(cmd, capture_output=True, text=True)
+    require(run.returncode == 0, f"protoc failed ({run.returncode}): {run.stderr.strip()}")
+    # Regular packages, so that an unrelated 'meshsmooth' elsewhere on sys.path cannot shadow them.
+    for pkg in ("meshsmooth", os.path.join("meshsmooth", "v1")):
+        init = os.path.join(out_dir, pkg, "__init__.py")
+        if not os.path.exists(init):
+            open(init, "w").close()
+    sys.path.insert(0, out_dir)
+    importlib.invalidate_caches()
+    pb2 = importlib.import_module("meshsmooth.v1.smoothing_pb2")
+    pb2_grpc = importlib.import_module("meshsmooth.v1.smoothing_pb2_grpc")
+    require(hasattr(pb2_grpc, "MeshSmootherStub"), "generated stubs have no MeshSmootherStub")
+    return pb2, pb2_grpc
+
+
+# ----------------------------------------------------------------------------------------------
+# Server process
+
+
+class Server:
+    def __init__(self, path):
+        self.path = path
+        self.proc = None
+        self.port = None
+        self._lines = queue.Queue()
+        self._reader = None
+
+    def start(self):
+        require(os.path.isfile(self.path) and os.access(self.path, os.X_OK),
+                f"server binary {self.path} not found or not executable")
+        self.proc = subprocess.Popen(
+            [self.path, "--listen", "127.0.0.1:0", "--workers", "2"],
+            stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=None,
+            text=True, bufsize=1)
+        # A thread drains stdout for the whole run, so a chatty server never blocks on the pipe.
+        self._reader = threading.Thread(target=self._read_stdout, daemon=True)
+        self._reader.start()
+        seen = []
+        while True:
+            try:
+                line = self._lines.get(timeout=READY_TIMEOUT_S)
+            except queue.Empty:
+                raise CheckFailed(f"no ready line within {READY_TIMEOUT_S:.0f} s; stdout so far: "
+                                  f"{seen!r}") from None
+            if line is None:
+                raise CheckFailed(f"server exited (code {self.proc.wait()}) before its ready "
+                                  f"line; stdout: {seen!r}")
+            seen.append(line)
+            m = READY_RE.match(line)
+            if m:
+                self.port = int(m.group(1))
+                require(0 < self.port < 65536, f"bad port in {line!r}")
+                return self.port
+
+    def _read_stdout(self):
+        ready = False
+        for raw in self.proc.stdout:
+            line = raw.rstrip("\r\n")
+            if ready:
+                print(f"[meshsmoothd stdout] {line}", file=sys.stderr, flush=True)
+            else:
+                self._lines.put(line)
+                ready = READY_RE.match(line) is not None
+        self._lines.put(None)
+
+    def stop(self):
+        """SIGTERM, up to 10 s, then SIGKILL. Returns the exit code and whether it was killed."""
+        if self.proc is None:
+            return None, False
+        if self.proc.poll() is not None:
+            return self.proc.returncode, False
+        self.proc.send_signal(signal.SIGTERM)
+        try:
+            return self.proc.wait(timeout=10), False
+        except subprocess.TimeoutExpired:
+            self.proc.kill()
+            return self.proc.wait(), True
+
+
+# ----------------------------------------------------------------------------------------------
+# Test mesh
+
+
+def icosphere(subdivisions):
+    """Unit icosphere, outward-oriented faces; 10 * 4^s + 2 vertices, 20 * 4^s faces."""
+    t = (1.0 + 5.0 ** 0.5) / 2.0
+    verts = [(-1, t, 0), (1, t, 0), (-1, -t, 0), (1, -t, 0),
+             (0, -1, t), (0, 1, t), (0, -1, -t), (0, 1, -t),
+             (t, 0, -1), (t, 0, 1), (-t, 0, -1), (-t, 0, 1)]
+    verts = [np.array(v, dtype=np.float64) / np.linalg.norm(v) for v in verts]
+    faces = [(0, 11, 5), (0, 5, 1), (0, 1, 7), (0, 7, 10), (0, 10, 11),
+             (1, 5, 9), (5, 11, 4), (11, 10, 2), (10, 7, 6), (7, 1, 8),
+             (3, 9, 4), (3, 4, 2), (3, 2, 6), (3, 6, 8), (3, 8, 9),
+             (4, 9, 5), (2, 4, 11), (6, 2, 10), (8, 6, 7), (9, 8, 1)]
+    for _ in range(subdivisions):
+        cache = {}
+
+        def midpoint(a, b):
+            key = (min(a, b), max(a, b))
+            if key not in cache:
+                m = verts[a] + verts[b]
+                verts.append(m / np.linalg.norm(m))
+                cache[key] = len(verts) - 1
+            return cache[key]
+
+        new_faces = []
+        for a, b, c in faces:
+            ab, bc, ca = midpoint(a, b), midpoint(b, c), midpoint(c, a)
+            new_faces += [(a, ab, ca), (b, bc, ab), (c, ca, bc), (ab, bc, ca)]
+        faces = new_faces
+    return np.array(verts), np.array(faces, dtype=np.int64)
+
+
+def signed_volume(verts, faces):
+    a, b, c = verts[faces[:, 0]], verts[faces[:, 1]], verts[faces[:, 2]]
+    return float(np.einsum("ij,ij->i", a, np.cross(b, c)).sum() / 6.0)
+
+
+def write_ascii_ply(path, verts, faces):
+    with open(path, "w") as f:
+        f.write("ply\nformat ascii 1.0\n")
+        f.write(f"element vertex {len(verts)}\n")
+        f.write("property float x\nproperty float y\nproperty float z\n")
+        f.write(f"element face {len(faces)}\n")
+        f.write("property list uchar int vertex_indices\nend_header\n")
+        for x, y, z in verts:  # float32 values, 9 significant digits: exact round trip
+            f.write(f"{x:.9g} {y:.9g} {z:.9g}\n")
+        for i, j, k in faces:
+            f.write(f"3 {i} {j} {k}\n")
+
+
+def make_test_mesh(work_dir):
+    """Noisy icosphere as ASCII PLY, then Draco via draco_encoder. Returns the .drc bytes."""
+    verts, faces = icosphere(3)
+    require(len(verts) == ICOSPHERE_VERTICES and len(faces) == ICOSPHERE_FACES,
+            f"icosphere has {len(verts)} vertices / {len(faces)} faces")
+    rng = np.random.default_rng(1)
+    verts = (verts + rng.uniform(-0.02, 0.02, size=verts.shape)).astype(np.float32)
+    require(signed_volume(verts.astype(np.float64), faces) > 0, "icosphere is inside out")
+    ply = os.path.join(work_dir, "mesh.ply")
+    drc = os.path.join(work_dir, "mesh.drc")
+    write_ascii_ply(ply, verts, faces)
+    run = subprocess.run(["draco_encoder", "-i", ply, "-o", drc, "-qp", "0", "-cl", "0"],
+                         capture_output=True, text=True)
+    require(run.returncode == 0 and os.path.isfile(drc),
+            f"draco_encoder failed ({run.returncode}): {run.stdout.strip()} {run.stderr.strip()}")
+    with open(drc, "rb") as f:
+        data = f.read()
+    require(len(data) > 2 * CHUNK_BYTES, f"mesh.drc is only {len(data)} bytes: too few chunks")
+    return data
+
+
+def ply_header_counts(path):
+    """Reads an ASCII or binary PLY header; returns {element name: count} and the format."""
+    with open(path, "rb") as f:
+        require(f.readline().strip() == b"ply", f"{path} is not a PLY file")
+        counts, fmt = {}, None
+        while True:
+            line = f.readline()
+            require(line != b"", f"{path}: no end_header")
+            words = line.decode("ascii", "replace").split()
+            if not words:
+                continue
+            if words[0] == "end_header":
+                return counts, fmt
+            if words[0] == "format":
+                fmt = words[1] if len(words) > 1 else None
+            elif words[0] == "element" and len(words) >= 3:
+                counts[words[1]] = int(words[2])
+
+
+def decode_counts(work_dir, name, data):
+    """Writes data to NAME.drc, decodes it with draco_decoder to NAME.ply; returns (v, f)."""
+    drc = os.path.join(work_dir, f"{name}.drc")
+    ply = os.path.join(work_dir, f"{name}.ply")
+    with open(drc, "wb") as f:
+        f.write(data)
+    run = subprocess.run(["draco_decoder", "-i", drc, "-o", ply], capture_output=True, text=True)
+    require(run.returncode == 0 and os.path.isfile(ply),
+            f"draco_decoder failed ({run.returncode}): {run.stdout.strip()} {run.stderr.strip()}")
+    counts, _ = ply_header_counts(ply)
+    return counts.get("vertex"), counts.get("face")
+
+
+# ----------------------------------------------------------------------------------------------
+# Checks
+
+
+def chunked(data, size):
+    for i in range(0, len(data), size):
+        yield data[i:i + size]
+
+
+def check_list_flows(stub, pb2):
+    reply = stub.ListFlows(pb2.ListFlowsRequest(), timeout=10)
+    names = [f.name for f in reply.flows]
+    missing = EXPECTED_FLOWS - set(names)
+    require(not missing, f"missing flows {sorted(missing)}; got {names}")
+    for flow in reply.flows:
+        described = [p.name for p in flow.parameters if p.description.strip()]
+        require(described, f"flow {flow.name!r} has no parameter with a description "
+                           f"({len(flow.parameters)} parameters)")
+    return names
+
+
+def run_smooth(stub, pb2, spec, data):
+    """Streams spec + data in CHUNK_BYTES chunks; returns (responses, code, details, error)."""
+    def requests():
+        yield pb2.SmoothRequest(spec=spec)
+        for chunk in chunked(data, CHUNK_BYTES):
+            yield pb2.SmoothRequest(mesh_chunk=chunk)
+
+    call = stub.Smooth(requests(), timeout=SMOOTH_DEADLINE_S)
+    responses, error = [], None
+    try:
+        for response in call:
+            responses.append(response)
+    except Exception as e:  # grpc.RpcError; the call object still reports code/details
+        error = e
+    return responses, call.code(), call.details(), error
+
+
+def check_smooth_status(result, grpc):
+    _, code, details, _ = result
+    require(code == grpc.StatusCode.OK, f"status {code} {details!r}")
+
+
+def check_smooth_order(responses):
+    kinds = [r.WhichOneof("kind") for r in responses]
+    letters = "".join({"accepted": "A", "progress": "P", "result_chunk": "R",
+                       "summary": "S"}.get(k, "?") for k in kinds)
+    require(responses, "no responses")
+    require(re.fullmatch(r"AP*R+S", letters),
+            f"order is not accepted, progress*, result_chunk+, summary: {letters!r}")
+    return letters
+
+
+def check_accepted(responses):
+    require(responses and responses[0].WhichOneof("kind") == "accepted",
+            "first response is not accepted")
+    acc = responses[0].accepted
+    require(acc.job_id, "empty job_id")
+    rep = acc.input
+    require(rep.vertices == ICOSPHERE_VERTICES, f"input.vertices {rep.vertices}")
+    require(rep.faces == ICOSPHERE_FACES, f"input.faces {rep.faces}")
+    require(rep.closed, "input.closed is false")
+
+
+def check_progress(responses):
+    progress = [r.progress for r in responses if r.WhichOneof("kind") == "progress"]
+    for p in progress:
+        require(p.total == 10, f"progress.total {p.total}, expected 10")
+        require(p.iteration <= p.total, f"progress.iteration {p.iteration} > total {p.total}")
+    return len(progress)
+
+
+def result_bytes_of(responses):
+    return b"".join(r.result_chunk for r in responses if r.WhichOneof("kind") == "result_chunk")
+
+
+def check_summary(responses):
+    require(responses and responses[-1].WhichOneof("kind") == "summary",
+            "last response is not summary")
+    s = responses[-1].summary
+    nsummaries = sum(1 for r in responses if r.WhichOneof("kind") == "summary")
+    require(nsummaries == 1, f"{nsummaries} summaries")
+    require(s.parameters.flow == "median", f"parameters.flow {s.parameters.flow!r}")
+    require(s.parameters.iterations_run == 10,
+            f"parameters.iterations_run {s.parameters.iterations_run}")
+    require(s.after.signed_volume > 0, f"after.signed_volume {s.after.signed_volume}")
+    total = len(result_bytes_of(responses))
+    require(total > 0, "no result bytes")
+    require(s.result_bytes == total, f"summary.result_bytes {s.result_bytes} != {total} received")
+
+
+def check_result_decodes(work_dir, responses):
+    data = result_bytes_of(responses)
+    require(data, "no result bytes")
+    v, f = decode_counts(work_dir, "result", data)
+    require(v == ICOSPHERE_VERTICES and f == ICOSPHERE_FACES,
+            f"result.ply has {v} vertices / {f} faces")
+
+
+def expect_error(stub, grpc, messages, code_name, words):
+    """Sends messages; the call must end with status code_name and a message naming words."""
+    call = stub.Smooth(iter(messages), timeout=ERROR_DEADLINE_S)
+    try:
+        for _ in call:
+            pass
+    except grpc.RpcError:
+        pass
+    code, details = call.code(), call.details() or ""
+    expected = getattr(grpc.StatusCode, code_name)
+    require(code == expected, f"status {code} {details!r}, expected {code_name}")
+    for word in words:
+        require(word.lower() in details.lower(), f"message {details!r} does not name {word!r}")
+    return details
+
+
+# ----------------------------------------------------------------------------------------------
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--server", required=True, help="path to meshsmoothd")
+    parser.add_argument("--proto-root", required=True, help="folder holding meshsmooth/v1/")
+    parser.add_argument("--shared", help="the shared/ folder (optional point-cloud case)")
+    args = parser.parse_args()
+
+    report = Report()
+    with tempfile.TemporaryDirectory(prefix="meshsmooth-e2e-") as tmp:
+        try:
+            run_all(args, report, tmp)
+        except Exception as e:  # noqa: BLE001 - a bug in the harness is a failure too
+            report.fail("test harness", f"{type(e).__name__}: {e}")
+            traceback.print_exc(file=sys.stderr)
+    print(report.summary_line(), flush=True)
+    return 1 if report.failed else 0
+
+
+def run_all(args, report, tmp):
+    stub_dir = os.path.join(tmp, "stubs")
+    work_dir = os.path.join(tmp, "work")
+    os.makedirs(stub_dir)
+    os.makedirs(work_dir)
+
+    stubs = report.check("python stubs generated from the proto", generate_stubs,
+                         args.proto_root, stub_dir)
+    if stubs is None:
+        return
+    pb2, pb2_grpc = stubs
+    import grpc  # after the stubs, so a missing python3-grpcio shows up as that check failing
+
+    mesh = report.check("test mesh: noisy icosphere (642 v, 1280 f) encoded by draco_encoder",
+                        make_test_mesh, work_dir)
+    if mesh is not None:
+        report.check("test mesh decodes back to 642 v / 1280 f with draco_decoder",
+                     lambda: require(decode_counts(work_dir, "input", mesh)
+                                     == (ICOSPHERE_VERTICES, ICOSPHERE_FACES),
+                                     "draco_decoder counts differ"))
+
+    server = Server(args.server)
+    channel = None
+    try:
+        port = report.check("server starts and prints its ready line", server.start)
+        if port is None:
+            return
+        channel = grpc.insecure_channel(f"127.0.0.1:{port}")
+        ready = report.check("gRPC channel ready within 10 s",
+                             lambda: grpc.channel_ready_future(channel).result(timeout=10) or True)
+        if ready is None:
+            return
+        stub = pb2_grpc.MeshSmootherStub(channel)
+
+        report.check("ListFlows names all six flows, each with a described parameter",
+                     check_list_flows, stub, pb2)
+
+        if mesh is not None:
+            spec = pb2.JobSpec(flow="median", iterations=10)
+            result = report.check("Smooth call made (median, 10 iterations, 4 KiB chunks)",
+                                  run_smooth, stub, pb2, spec, mesh)
+            if result is not None:
+                responses = result[0]
+                report.check("Smooth ends with status OK", check_smooth_status, result, grpc)
+                report.check("Smooth response order accepted, progress*, result_chunk+, "
+                             "summary", check_smooth_order, responses)
+                report.check("accepted: job_id, 642 vertices, 1280 faces, closed",
+                             check_accepted, responses)
+                report.check("progress: iteration <= total == 10", check_progress, responses)
+                report.check("summary: median, 10 iterations run, positive volume, "
+                             "result_bytes matches", check_summary, responses)
+                report.check("result decodes with draco_decoder to 642 v / 1280 f",
+                             check_result_decodes, work_dir, responses)
+
+        spec_median = pb2.JobSpec(flow="median", iterations=10)
+        report.check("error: mesh_chunk first -> INVALID_ARGUMENT naming the spec",
+                     expect_error, stub, grpc,
+                     [pb2.SmoothRequest(mesh_chunk=mesh or b"\0" * 16)],
+                     "INVALID_ARGUMENT", ["spec"])
+        report.check("error: unknown flow -> INVALID_ARGUMENT naming it",
+                     expect_error, stub, grpc,
+                     [pb2.SmoothRequest(spec=pb2.JobSpec(flow="nope", iterations=10))]
+                     + [pb2.SmoothRequest(mesh_chunk=c) for c in chunked(mesh or b"", CHUNK_BYTES)],
+                     "INVALID_ARGUMENT", ["nope"])
+        report.check("error: garbage bytes -> INVALID_ARGUMENT naming draco",
+                     expect_error, stub, grpc,
+                     [pb2.SmoothRequest(spec=spec_median),
+                      pb2.SmoothRequest(mesh_chunk=b"not draco at all")],
+                     "INVALID_ARGUMENT", ["draco"])
+        report.check("error: two specs -> INVALID_ARGUMENT naming the spec",
+                     expect_error, stub, grpc,
+                     [pb2.SmoothRequest(spec=spec_median), pb2.SmoothRequest(spec=spec_median)],
+                     "INVALID_ARGUMENT", ["spec"])
+        cube_pc = os.path.join(args.shared, "data", "draco", "cube_pc.drc") if args.shared else None
+        if cube_pc and os.path.isfile(cube_pc):
+            with open(cube_pc, "rb") as f:
+                pc = f.read()
+            report.check("error: Draco point cloud -> INVALID_ARGUMENT naming it",
+                         expect_error, stub, grpc,
+                         [pb2.SmoothRequest(spec=spec_median)]
+                         + [pb2.SmoothRequest(mesh_chunk=c) for c in chunked(pc, CHUNK_BYTES)],
+                         "INVALID_ARGUMENT", ["point cloud"])
+        else:
+            print("skip: Draco point cloud case (no --shared or no data/draco/cube_pc.drc)",
+                  flush=True)
+    finally:
+        if channel is not None:
+            channel.close()
+        code, killed = server.stop()
+        if server.port is not None:
+            report.check("server exits cleanly on SIGTERM within 10 s",
+                         lambda: require(not killed and code == 0,
+                                         "killed after 10 s" if killed else f"exit code {code}"))
+
+
+if __name__ == "__main__":
+    sys.exit(main())
