@@ -1,0 +1,33 @@
+// The client side of meshsmooth.v1.MeshSmoother.Smooth: stream a spec and Draco bytes, collect
+// accepted, progress, the result and the summary. Used by the CLI and by the service tests.
+#pragma once
+
+#include <functional>
+#include <string>
+#include <string_view>
+
+#include "absl/status/statusor.h"
+#include "meshsmooth/v1/smoothing.grpc.pb.h"
+
+namespace meshsmooth::cli {
+
+struct SmoothOutcome {
+  v1::Accepted accepted;
+  std::string result;  // Draco bytes of the smoothed mesh
+  v1::Summary summary;
+  int progress_events = 0;
+};
+
+// Runs one Smooth call on `context` (set its deadline and metadata before; TryCancel() on it
+// from another thread cancels). Sends `draco` in chunks of `chunk_bytes` (<= 1 MiB). Returns
+// the server's status as an absl::Status (same codes and message) when the call fails, and
+// Internal when the server breaks the message order.
+absl::StatusOr<SmoothOutcome> CallSmooth(v1::MeshSmoother::StubInterface& stub, grpc::ClientContext& context,
+                                         const v1::JobSpec& spec, std::string_view draco,
+                                         const std::function<void(const v1::Progress&)>& on_progress = nullptr,
+                                         size_t chunk_bytes = 1 << 20);
+
+// gRPC status -> absl::Status (the codes share their numbers).
+absl::Status FromGrpc(const grpc::Status& status);
+
+}  // namespace meshsmooth::cli
