@@ -26,7 +26,7 @@ int HardwareThreads() { return std::max(1u, std::thread::hardware_concurrency())
 
 // One Smooth call. Reads the spec and the chunks, hands the job to the pool, then writes the
 // job's events back with one write in flight: accepted, the newest progress (older ones are
-// dropped), result chunks, summary, and Finish exactly once. Job events arrive on the worker
+// dropped while a write is in flight), result chunks, summary, and Finish exactly once. Job events arrive on the worker
 // thread; the job's own mutex is never taken while this reactor's mutex is held.
 class SmoothReactor final : public grpc::ServerBidiReactor<v1::SmoothRequest, v1::SmoothResponse>,
                             public JobSink {
@@ -142,7 +142,6 @@ class SmoothReactor final : public grpc::ServerBidiReactor<v1::SmoothRequest, v1
       result_ = std::move(draco_bytes);
       summary_ = summary;
       have_result_ = true;
-      pending_progress_.reset();
     }
     Pump();
   }
@@ -210,6 +209,9 @@ class SmoothReactor final : public grpc::ServerBidiReactor<v1::SmoothRequest, v1
     } else if (pending_) {
       out_ = std::move(*pending_);
       pending_.reset();
+    } else if (pending_progress_) {  // progress precedes the result it led to
+      out_ = std::move(*pending_progress_);
+      pending_progress_.reset();
     } else if (have_result_ && result_offset_ < result_.size()) {
       const size_t n = std::min<size_t>(kResultChunkBytes, result_.size() - result_offset_);
       out_.Clear();
@@ -220,9 +222,6 @@ class SmoothReactor final : public grpc::ServerBidiReactor<v1::SmoothRequest, v1
       *out_.mutable_summary() = std::move(*summary_);
       summary_.reset();
       std::string().swap(result_);
-    } else if (pending_progress_ && !have_result_) {
-      out_ = std::move(*pending_progress_);
-      pending_progress_.reset();
     } else if (have_result_) {
       finish = grpc::Status::OK;
     } else if (finish_status_) {

@@ -32,6 +32,7 @@ class MeshSmootherService final : public v1::MeshSmoother::CallbackService {
 
   // Calls open now (for tests and the shutdown drain).
   int active_calls() const { return active_.load(); }
+  int queued_jobs() { return pool_.queued(); }
 
  private:
   friend class SmoothReactor;

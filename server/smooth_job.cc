@@ -98,7 +98,7 @@ void SmoothJob::Run() {
   RunControl control;
   control.cancel = &cancel_;
   control.time_budget_seconds = options_.max_job_seconds;
-  Clock::time_point last_progress = Clock::time_point::min();
+  Clock::time_point last_progress = decoded - kProgressInterval;  // the first iteration is reported
   control.on_progress = [&](const Progress& p) {
     const Clock::time_point now = Clock::now();
     if (now - last_progress < kProgressInterval && p.iteration != p.total) return;

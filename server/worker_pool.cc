@@ -23,6 +23,11 @@ std::optional<int> WorkerPool::TrySubmit(std::function<void()> task) {
   return std::max(0, waiting);
 }
 
+int WorkerPool::queued() {
+  std::lock_guard<std::mutex> lock(mu_);
+  return static_cast<int>(queue_.size());
+}
+
 void WorkerPool::Stop() {
   std::deque<std::function<void()>> dropped;
   {

@@ -28,6 +28,8 @@ class WorkerPool {
   void Stop();
 
   int workers() const { return static_cast<int>(threads_.size()); }
+  // Tasks waiting for a worker now.
+  int queued();
 
  private:
   void Loop();

@@ -412,6 +412,24 @@ def main():
     return 1 if report.failed else 0
 
 
+def check_health(channel):
+    """grpc.health.v1.Health/Check with raw bytes: an empty request; SERVING is field 1 = 1."""
+    check = channel.unary_unary("/grpc.health.v1.Health/Check",
+                                request_serializer=lambda b: b, response_deserializer=lambda b: b)
+    reply = check(b"", timeout=10)
+    if reply != b"\x08\x01":
+        raise AssertionError(f"health reply {reply!r}, expected SERVING (b'\\x08\\x01')")
+
+
+def check_reflection(channel):
+    """grpc.reflection.v1alpha list_services (field 7, empty string) names our service."""
+    info = channel.stream_stream("/grpc.reflection.v1alpha.ServerReflection/ServerReflectionInfo",
+                                 request_serializer=lambda b: b, response_deserializer=lambda b: b)
+    replies = list(info(iter([b"\x3a\x00"]), timeout=10))
+    if not any(b"meshsmooth.v1.MeshSmoother" in r for r in replies):
+        raise AssertionError(f"reflection did not list meshsmooth.v1.MeshSmoother: {replies!r}")
+
+
 def run_all(args, report, tmp):
     stub_dir = os.path.join(tmp, "stubs")
     work_dir = os.path.join(tmp, "work")
@@ -446,6 +464,8 @@ def run_all(args, report, tmp):
             return
         stub = pb2_grpc.MeshSmootherStub(channel)
 
+        report.check("health service answers SERVING", check_health, channel)
+        report.check("server reflection lists meshsmooth.v1.MeshSmoother", check_reflection, channel)
         report.check("ListFlows names all six flows, each with a described parameter",
                      check_list_flows, stub, pb2)
 
