@@ -11,6 +11,7 @@ std::vector<std::pair<std::string, std::string>> BuiltinInputs() {
   return {
       {"noisy-sphere", "unit icosphere level 4 (2562 vertices), uniform noise 0.3 x mean edge, seed 1"},
       {"sphere", "unit icosphere level 4 (2562 vertices), no noise"},
+      {"noisy-sphere-large", "unit icosphere level 6 (40962 vertices), uniform noise 0.3 x mean edge, seed 1"},
       {"noisy-torus", "torus sampled at two rates (32 / 16 around the tube), uniform noise 0.3 x mean edge, seed 1"},
       {"noisy-plane", "two-rate plane patch 48 x 32 with a boundary, uniform noise 0.3 x mean edge, seed 1"},
   };
@@ -23,6 +24,8 @@ absl::StatusOr<Mesh> LoadInput(const std::string& spec) {
   Mesh mesh;
   if (name == "noisy-sphere" || name == "sphere") {
     mesh = Icosphere(4);
+  } else if (name == "noisy-sphere-large") {
+    mesh = Icosphere(6);
   } else if (name == "noisy-torus") {
     mesh = TwoRateTorus(32);
   } else if (name == "noisy-plane") {

@@ -432,3 +432,82 @@ TEST(ServiceTest, DracosOwnFilesKeepAttributesAndSeams) {
 
 }  // namespace
 }  // namespace meshsmooth
+
+namespace meshsmooth {
+namespace {
+
+// Server limits: concurrent calls, job time, and the client's own deadline.
+TEST(ServiceLimitsTest, ConcurrentCallsJobSecondsAndClientDeadline) {
+  ServerOptions o;
+  o.workers = 2;
+  o.max_concurrent_streams = 1;
+  o.max_job_seconds = 0.5;
+  auto server = StartServer(o);
+  LongJob long_job;
+  auto stub = v1::MeshSmoother::NewStub(server->InProcessChannel());
+  grpc::ClientContext a;
+  std::promise<void> started;
+  std::atomic<bool> signalled{false};
+  auto run_a = std::async(std::launch::async, [&] {
+    return CallSmooth(*stub, a, long_job.spec, long_job.draco, [&](const v1::Progress&) {
+      if (!signalled.exchange(true)) started.set_value();
+    });
+  });
+  ASSERT_EQ(started.get_future().wait_for(std::chrono::seconds(60)), std::future_status::ready);
+  const absl::Status second = Call(server->InProcessChannel(), Spec("median", 2), *EncodeDraco(Icosphere(2))).status();
+  EXPECT_EQ(second.code(), absl::StatusCode::kResourceExhausted) << second;
+  EXPECT_NE(second.message().find("concurrent"), std::string::npos) << second;
+  const absl::Status timed_out = run_a.get().status();  // A runs into --max-job-seconds
+  EXPECT_EQ(timed_out.code(), absl::StatusCode::kDeadlineExceeded) << timed_out;
+  EXPECT_NE(timed_out.message().find("time limit"), std::string::npos) << timed_out;
+
+  // The client's deadline cancels the job on the server, and the worker is free again.
+  ServerOptions p;
+  p.workers = 1;
+  auto s2 = StartServer(p);
+  auto stub2 = v1::MeshSmoother::NewStub(s2->InProcessChannel());
+  grpc::ClientContext ctx;
+  ctx.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(2));
+  const absl::Status late = CallSmooth(*stub2, ctx, long_job.spec, long_job.draco).status();
+  EXPECT_EQ(late.code(), absl::StatusCode::kDeadlineExceeded) << late;
+  absl::StatusOr<SmoothOutcome> next = Call(s2->InProcessChannel(), Spec("laplacian", 3), *EncodeDraco(Icosphere(2)));
+  ASSERT_TRUE(next.ok()) << next.status();
+  EXPECT_LT(next->summary.timings().queue_seconds(), 1.0);
+}
+
+// TLS with a self-signed certificate made at test time by the openssl CLI.
+TEST(ServiceTlsTest, TlsServerAcceptsTlsClientsOnly) {
+  const std::filesystem::path dir = std::filesystem::path(::testing::TempDir()) / "meshsmooth_tls";
+  std::filesystem::create_directories(dir);
+  const std::string key = (dir / "key.pem").string(), cert = (dir / "cert.pem").string();
+  const std::string cmd = "openssl req -x509 -newkey rsa:2048 -nodes -subj /CN=localhost -addext "
+                          "subjectAltName=DNS:localhost -days 1 -keyout " + key + " -out " + cert + " >/dev/null 2>&1";
+  if (std::system(cmd.c_str()) != 0) GTEST_SKIP() << "openssl CLI not available";
+  ServerOptions o;
+  o.tls_cert_file = cert;
+  o.tls_key_file = key;
+  auto server = StartServer(o, /*listen=*/true);
+  ASSERT_TRUE(server);
+  const std::string target = "localhost:" + std::to_string(server->port());
+  grpc::SslCredentialsOptions ssl;
+  ssl.pem_root_certs = ReadFile(cert);
+  auto tls = grpc::CreateChannel(target, grpc::SslCredentials(ssl));
+  absl::StatusOr<SmoothOutcome> out = Call(tls, Spec("median", 2), *EncodeDraco(Icosphere(2)));
+  EXPECT_TRUE(out.ok()) << out.status();
+  auto plain = grpc::CreateChannel(target, grpc::InsecureChannelCredentials());
+  auto stub = v1::MeshSmoother::NewStub(plain);
+  grpc::ClientContext ctx;
+  ctx.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(5));
+  v1::ListFlowsResponse flows;
+  EXPECT_FALSE(stub->ListFlows(&ctx, {}, &flows).ok());
+
+  ServerOptions half;
+  half.tls_cert_file = cert;
+  half.listen = "127.0.0.1:0";
+  const absl::Status s = Server::Start(half).status();
+  EXPECT_EQ(s.code(), absl::StatusCode::kFailedPrecondition);
+  EXPECT_NE(s.message().find("--tls-key"), std::string::npos) << s;
+}
+
+}  // namespace
+}  // namespace meshsmooth
