@@ -1,0 +1,340 @@
+// meshsmooth_bench: how fast the flows run, beside their peers, against the memory bandwidth,
+// and through the service. Prints Markdown; docs/performance.md is its output.
+//
+//   build/bench/meshsmooth_bench [--quick] [--runs 5] [--no-service] [--no-peers] [FILE ...]
+//
+// Meshes: noisy icospheres of 40,962 / 163,842 / 655,362 / 2,621,442 vertices (levels 6-9,
+// deterministic), plus any mesh file given. Every time is the median of --runs runs.
+#include <omp.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <functional>
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "bench/peers.h"
+#include "client/smooth_client.h"
+#include "core/draco_codec.h"
+#include "core/flows/flow.h"
+#include "core/io/mesh_io.h"
+#include "core/shapes.h"
+#include "core/topology.h"
+#include "server/server.h"
+
+namespace meshsmooth::bench {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double Ms(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double, std::milli>(b - a).count(); }
+
+double Median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v.empty() ? 0.0 : (v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]));
+}
+
+struct Options {
+  int runs = 5;
+  bool quick = false, service = true, peers = true;
+  std::vector<std::string> files;
+};
+
+// STREAM-like triad a = b + s c on three arrays of `bytes` each; GB/s counting 24 bytes per
+// element (two reads, one write), best of 5 as STREAM reports.
+double Triad(size_t bytes, int threads) {
+  const size_t n = bytes / sizeof(double);
+  std::vector<double> a(n), b(n), c(n);
+#pragma omp parallel for num_threads(threads) schedule(static)
+  for (size_t i = 0; i < n; ++i) {
+    a[i] = 0.0;
+    b[i] = 1.0;
+    c[i] = 2.0;
+  }
+  const int reps = std::max<int>(5, static_cast<int>((1 << 28) / std::max<size_t>(n, 1)));
+  double best = 0.0;
+  for (int r = 0; r < 5; ++r) {
+    const auto t0 = Clock::now();
+    for (int k = 0; k < reps; ++k) {
+      const double s = 1.0 + 1e-9 * k;
+#pragma omp parallel for num_threads(threads) schedule(static)
+      for (size_t i = 0; i < n; ++i) a[i] = b[i] + s * c[i];
+    }
+    const double sec = Ms(t0, Clock::now()) / 1000.0;
+    best = std::max(best, 24.0 * static_cast<double>(n) * reps / sec / 1e9);
+  }
+  if (a[n / 2] < 0) std::printf(" ");  // keep the loop observable
+  return best;
+}
+
+// Bytes one iteration must move in our layout (no write-allocate, as the triad counts): the
+// positions read (24), ring offsets (4), neighbour indices (4 x valence), role (1), positions
+// written (24); neighbour positions are assumed to hit cache. Taubin and bilaplacian make two
+// such passes; taubin also a displacement pass over the iteration start (48).
+double BytesPerVertex(const std::string& flow, double mean_valence) {
+  const double pass = 24 + 4 + 4 * mean_valence + 1 + 24;
+  if (flow == "taubin") return 2 * pass + 48;
+  if (flow == "bilaplacian") return 2 * pass;
+  return pass;
+}
+
+struct Variant {
+  std::string label;
+  FlowParams params;
+};
+
+std::vector<Variant> Variants() {
+  auto make = [](const std::string& flow) {
+    FlowParams p;
+    p.flow = flow;
+    return p;
+  };
+  FlowParams u1 = make("laplacian"), taubin_u1 = make("taubin");
+  u1.weights = taubin_u1.weights = UmbrellaWeights::kInverseDistance;
+  FlowParams adaptive = make("median");
+  adaptive.adaptive = AdaptiveMode::kRing2;
+  return {{"laplacian U0", make("laplacian")}, {"laplacian U1", u1},       {"taubin U0", make("taubin")},
+          {"taubin U1", taubin_u1},          {"bilaplacian", make("bilaplacian")}, {"mcf", make("mcf")},
+          {"mcf_tangential", make("mcf_tangential")}, {"median", make("median")},
+          {"median + adaptive ring2", adaptive}};
+}
+
+// Milliseconds per iteration of `p` on `mesh`: median of `runs` runs of `iterations`.
+double TimeOurs(const Mesh& mesh, const Topology& topo, FlowParams p, int iterations, int threads, int runs) {
+  p.iterations = iterations;
+  p.threads = threads;
+  std::vector<double> t;
+  for (int r = 0; r < runs; ++r) {
+    Mesh m = mesh;
+    const auto t0 = Clock::now();
+    absl::StatusOr<FlowResult> res = Smooth(m, topo, p);
+    const double ms = Ms(t0, Clock::now());
+    if (!res.ok()) {
+      std::fprintf(stderr, "bench: %s failed: %s\n", p.flow.c_str(), std::string(res.status().message()).c_str());
+      return -1.0;
+    }
+    t.push_back(ms / iterations);
+  }
+  return Median(t);
+}
+
+struct NamedMesh {
+  std::string name;
+  Mesh mesh;
+};
+
+Mesh NoisyIcosphere(int level) {
+  Mesh m = Icosphere(level);
+  AddUniformNoise(m, 0.3, 1);
+  return m;
+}
+
+int IterationsFor(int32_t n) { return std::clamp(static_cast<int>(40'000'000 / std::max(n, 1)), 3, 200); }
+
+// Peak resident memory of one job (upload bytes, decode, topology, smoothing, encoded result),
+// measured in a fresh process (this binary re-run with --peak-child, so no thread pool is
+// inherited across fork) from VmHWM after resetting it.
+double StatusKb(const char* key) {
+  std::ifstream in("/proc/self/status");
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.rfind(key, 0) == 0) return std::atof(line.c_str() + std::strlen(key));
+  }
+  return -1.0;
+}
+
+int PeakChild(const std::string& draco_path) {
+  std::string draco;
+  {
+    std::ifstream in(draco_path, std::ios::binary);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    draco = ss.str();
+  }
+  { std::ofstream("/proc/self/clear_refs") << "5"; }
+  const double base = StatusKb("VmRSS:");
+  std::string upload = draco;  // the job's own copy of the upload
+  std::string().swap(draco);
+  absl::StatusOr<DracoMesh> dm = DracoMesh::Decode(upload);
+  if (!dm.ok()) return 1;
+  std::string().swap(upload);
+  Mesh mesh = dm->welded();
+  const Topology topo = BuildTopology(mesh);
+  const Mesh input = mesh;  // the job keeps the input for the summary's displacement
+  FlowParams p;
+  p.flow = "median";
+  p.iterations = 5;
+  if (!Smooth(mesh, topo, p).ok()) return 1;
+  absl::StatusOr<std::string> out = dm->Encode(mesh);
+  if (!out.ok()) return 1;
+  std::printf("%f\n", (StatusKb("VmHWM:") - base) * 1024.0 / mesh.num_vertices());
+  return input.positions.empty() ? 1 : 0;
+}
+
+double PeakBytesPerVertex(const Mesh& mesh, const std::string& self) {
+  Mesh fm = mesh;
+  for (Vec3& p : fm.positions) p = RoundToFloat(p);
+  const std::string path = "/tmp/meshsmooth_bench_peak.drc";
+  {
+    const std::string bytes = *EncodeDraco(fm);
+    std::ofstream(path, std::ios::binary).write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  }
+  double value = -1.0;
+  if (std::FILE* f = popen((self + " --peak-child " + path).c_str(), "r")) {
+    if (std::fscanf(f, "%lf", &value) != 1) value = -1.0;
+    pclose(f);
+  }
+  std::remove(path.c_str());
+  return value;
+}
+
+void ServiceRow(const NamedMesh& nm, int iterations, int runs) {
+  Mesh mesh = nm.mesh;
+  for (Vec3& p : mesh.positions) p = RoundToFloat(p);
+  const std::string draco = *EncodeDraco(mesh);
+  // The floor: a bare Draco decode + encode of the same mesh.
+  std::vector<double> bare;
+  for (int r = 0; r < runs; ++r) {
+    const auto t0 = Clock::now();
+    absl::StatusOr<DracoMesh> dm = DracoMesh::Decode(draco);
+    absl::StatusOr<std::string> enc = dm->Encode(dm->welded());
+    bare.push_back(Ms(t0, Clock::now()));
+  }
+  server::ServerOptions o;
+  o.listen = "127.0.0.1:0";
+  o.log_jobs = false;
+  o.workers = 1;
+  auto server = server::Server::Start(o);
+  auto channel = grpc::CreateChannel("127.0.0.1:" + std::to_string((*server)->port()), grpc::InsecureChannelCredentials());
+  auto stub = v1::MeshSmoother::NewStub(channel);
+  v1::JobSpec spec;
+  spec.set_flow("laplacian");
+  spec.set_iterations(static_cast<uint32_t>(iterations));
+  std::vector<double> total, smooth, decode, encode, queue;
+  for (int r = 0; r < runs; ++r) {
+    grpc::ClientContext ctx;
+    const auto t0 = Clock::now();
+    absl::StatusOr<cli::SmoothOutcome> out = cli::CallSmooth(*stub, ctx, spec, draco);
+    const double ms = Ms(t0, Clock::now());
+    if (!out.ok()) {
+      std::printf("| %s | failed: %s |\n", nm.name.c_str(), std::string(out.status().message()).c_str());
+      return;
+    }
+    total.push_back(ms);
+    smooth.push_back(1000 * out->summary.timings().smooth_seconds());
+    decode.push_back(1000 * out->summary.timings().decode_seconds());
+    encode.push_back(1000 * out->summary.timings().encode_seconds());
+    queue.push_back(1000 * out->summary.timings().queue_seconds());
+  }
+  (*server)->Shutdown();
+  const double overhead = Median(total) - Median(smooth);
+  std::printf("| %s | %.1f MB | %.0f | %.0f | %.0f | %.0f | %.0f | %.0f | %.0f | %.2f |\n", nm.name.c_str(),
+              draco.size() / 1e6, Median(total), Median(decode), Median(queue), Median(smooth), Median(encode),
+              overhead, Median(bare), overhead / Median(bare));
+}
+
+}  // namespace
+}  // namespace meshsmooth::bench
+
+int main(int argc, char** argv) {
+  using namespace meshsmooth;
+  using namespace meshsmooth::bench;
+  Options opt;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--quick") opt.quick = true;
+    else if (a == "--runs" && i + 1 < argc) opt.runs = std::max(1, std::atoi(argv[++i]));
+    else if (a == "--no-service") opt.service = false;
+    else if (a == "--no-peers") opt.peers = false;
+    else if (a == "--peak-child" && i + 1 < argc) return PeakChild(argv[i + 1]);
+    else if (a == "--help" || a == "-h") {
+      std::printf("usage: %s [--quick] [--runs N] [--no-service] [--no-peers] [MESH_FILE ...]\n", argv[0]);
+      return 0;
+    } else opt.files.push_back(a);
+  }
+  std::setvbuf(stdout, nullptr, _IOLBF, 0);  // rows appear as they are measured
+  char self_buf[4096] = {};
+  const ssize_t self_len = readlink("/proc/self/exe", self_buf, sizeof self_buf - 1);
+  const std::string self = self_len > 0 ? std::string(self_buf, self_len) : std::string(argv[0]);
+  const int hw = omp_get_max_threads();
+  std::printf("# meshsmooth performance\n\nMachine: %d hardware threads. Command: `", hw);
+  for (int i = 0; i < argc; ++i) std::printf("%s%s", i ? " " : "", argv[i]);
+  std::printf("`. Times are medians of %d runs.\n", opt.runs);
+
+  std::printf("\n## Memory bandwidth (STREAM-like triad, 24 bytes per element)\n\n| arrays | 1 thread | 2 threads |\n|---|---|---|\n");
+  const double bw_cache1 = Triad(256 << 10, 1), bw_cache2 = Triad(256 << 10, std::min(2, hw));
+  std::printf("| 3 x 256 KiB (cache) | %.1f GB/s | %.1f GB/s |\n", bw_cache1, bw_cache2);
+  const size_t big = opt.quick ? (size_t{256} << 20) : (size_t{1} << 30);
+  const double bw1 = Triad(big, 1), bw2 = Triad(big, std::min(2, hw));
+  std::printf("| 3 x %zu MiB (DRAM) | %.1f GB/s | %.1f GB/s |\n", big >> 20, bw1, bw2);
+
+  std::vector<NamedMesh> meshes;
+  for (int level : opt.quick ? std::vector<int>{6, 7} : std::vector<int>{6, 7, 8, 9}) {
+    Mesh m = NoisyIcosphere(level);
+    meshes.push_back({"noisy icosphere " + std::to_string(m.num_vertices()), std::move(m)});
+  }
+  for (const std::string& f : opt.files) {
+    absl::StatusOr<Mesh> m = ReadMesh(f);
+    if (!m.ok()) {
+      std::fprintf(stderr, "bench: %s\n", std::string(m.status().message()).c_str());
+      return 1;
+    }
+    meshes.push_back({f.substr(f.rfind('/') + 1), *std::move(m)});
+  }
+
+  std::vector<Peer> peers;
+  if (opt.peers) {
+    for (auto&& list : {OpenMeshPeers(), Open3dPeers(), CgalPeers()}) peers.insert(peers.end(), list.begin(), list.end());
+  }
+  std::map<std::string, std::map<std::string, double>> ours_1t;  // mesh -> variant -> ms
+  for (const NamedMesh& nm : meshes) {
+    const Topology topo = BuildTopology(nm.mesh);
+    const int32_t n = nm.mesh.num_vertices();
+    const int iterations = IterationsFor(n);
+    const double valence = static_cast<double>(topo.ring.size()) / std::max(n, 1);
+    std::printf("\n## %s (%d vertices, %d iterations per run)\n\n", nm.name.c_str(), n, iterations);
+    std::printf("| flow | ms/iteration, 1 thread | 2 threads | speed-up | Mvertex-it/s (2 threads) | bytes/vertex | share of DRAM bound (2 threads) |\n|---|---|---|---|---|---|---|\n");
+    double u0_ms = 0.0;
+    for (const Variant& v : Variants()) {
+      const double t1 = TimeOurs(nm.mesh, topo, v.params, iterations, 1, opt.runs);
+      const double t2 = TimeOurs(nm.mesh, topo, v.params, iterations, std::min(2, hw), opt.runs);
+      ours_1t[nm.name][v.label] = t1;
+      if (v.label == "laplacian U0") u0_ms = t1;
+      const double bytes = BytesPerVertex(v.params.flow, valence);
+      const double gbs = bytes * n / (t2 / 1000.0) / 1e9;
+      std::printf("| %s | %.2f | %.2f | %.2fx | %.0f | %.0f | %.0f%% |\n", v.label.c_str(), t1, t2, t1 / t2,
+                  n / (t2 / 1000.0) / 1e6, bytes, 100.0 * gbs / bw2);
+    }
+    std::printf("\nCotangent flows against laplacian U0 (1 thread): mcf %.2fx, mcf_tangential %.2fx, median %.2fx.\n",
+                ours_1t[nm.name]["mcf"] / u0_ms, ours_1t[nm.name]["mcf_tangential"] / u0_ms,
+                ours_1t[nm.name]["median"] / u0_ms);
+    if (!peers.empty()) {
+      std::printf("\n| peer (1 thread) | ms/iteration | ours | ours ms/iteration | peer / ours |\n|---|---|---|---|---|\n");
+      for (const Peer& peer : peers) {
+        std::vector<double> t;
+        const int peer_iterations = std::max(1, iterations / 4);
+        for (int r = 0; r < opt.runs; ++r) t.push_back(peer.run(nm.mesh, peer_iterations) / peer_iterations);
+        const double theirs = Median(t), ours = ours_1t[nm.name][peer.ours];
+        std::printf("| %s | %.2f | %s | %.2f | %.1fx |\n", peer.name.c_str(), theirs, peer.ours.c_str(), ours,
+                    theirs / ours);
+      }
+    }
+    const double peak = PeakBytesPerVertex(nm.mesh, self);
+    std::printf("\nPeak memory of a job (median, 5 iterations; upload, decode, topology, smoothing, encoded result): %.0f bytes/vertex.\n", peak);
+  }
+  if (opt.service) {
+    std::printf("\n## Through the service (loopback TCP, laplacian U0, 10 iterations, lossless sequential Draco)\n\n");
+    std::printf("| mesh | upload | total ms | decode+validate | queue | smooth | encode | overhead (total - smooth) | bare Draco decode+encode | overhead / bare |\n|---|---|---|---|---|---|---|---|---|---|\n");
+    for (const NamedMesh& nm : meshes) {
+      if (nm.mesh.num_vertices() < 600'000) continue;
+      ServiceRow(nm, 10, opt.runs);
+    }
+  }
+  return 0;
+}

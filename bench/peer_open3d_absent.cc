@@ -1,0 +1,6 @@
+// Built when CMake does not find Open3D: no Open3D rows in the benchmark.
+#include "bench/peers.h"
+
+namespace meshsmooth::bench {
+std::vector<Peer> Open3dPeers() { return {}; }
+}  // namespace meshsmooth::bench
