@@ -32,8 +32,12 @@ void RingThresholds(const StepContext& c, const Vec3* pos, int32_t n, int rings,
         }
       }
       if (rings == 2) {
-        std::sort(near.begin(), near.end());
-        near.erase(std::unique(near.begin(), near.end()), near.end());
+        // Unique, in the order met (rings keep their order under reordering, ids do not).
+        size_t kept = 0;
+        for (size_t i = 0; i < near.size(); ++i) {
+          if (std::find(near.begin(), near.begin() + kept, near[i]) == near.begin() + kept) near[kept++] = near[i];
+        }
+        near.resize(kept);
       }
       double sum = 0.0;
       int count = 0;

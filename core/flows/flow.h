@@ -83,6 +83,9 @@ struct FlowParams {
   double tolerance = 0.0;
 
   int threads = 0;  // worker threads for the per-vertex loops; 0 = all hardware threads
+  // Large meshes (>= 100k vertices) run on a Morton-ordered copy of the vertices, undone on
+  // return: neighbours then sit close in memory. Positions are identical either way.
+  bool reorder = true;
 };
 
 inline constexpr int kMaxIterations = 100000;

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <utility>
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
@@ -149,12 +150,12 @@ absl::StatusOr<FlowResult> Smooth(Mesh& mesh, const FlowParams& p, const RunCont
   return Smooth(mesh, topo, p, control);
 }
 
-absl::StatusOr<FlowResult> Smooth(Mesh& mesh, const Topology& topo, const FlowParams& p, const RunControl& control) {
+namespace {
+
+// The iterations themselves, on a mesh whose vertices may have been reordered by Smooth().
+absl::StatusOr<FlowResult> Run(Mesh& mesh, const Topology& topo, const FlowParams& p, const RunControl& control,
+                               double h) {
   const int32_t n = mesh.num_vertices();
-  if (absl::Status s = ValidateFlowParams(p, n); !s.ok()) return s;
-  if (topo.num_vertices() != n) {
-    return absl::InvalidArgumentError("the topology was built for another mesh");
-  }
   Vec3 lo{std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
           std::numeric_limits<double>::infinity()};
   Vec3 hi = -lo;
@@ -173,7 +174,6 @@ absl::StatusOr<FlowResult> Smooth(Mesh& mesh, const Topology& topo, const FlowPa
     return absl::InvalidArgumentError(
         absl::StrCat("the mesh has ", non_finite, " vertices with NaN or infinite coordinates"));
   }
-  const double h = MeanEdgeLength(mesh, topo);
   if (!(h > 0.0) || !std::isfinite(h)) {
     return absl::InvalidArgumentError("the mesh has no edge of non-zero length to smooth");
   }
@@ -302,6 +302,103 @@ absl::StatusOr<FlowResult> Smooth(Mesh& mesh, const Topology& topo, const FlowPa
     }
   }
   mesh.positions = std::move(cur);
+  return result;
+}
+
+// Spreads the low 21 bits of x so that two zero bits follow each one (for Morton codes).
+uint64_t Spread3(uint64_t x) {
+  x &= 0x1fffff;
+  x = (x | x << 32) & 0x1f00000000ffffULL;
+  x = (x | x << 16) & 0x1f0000ff0000ffULL;
+  x = (x | x << 8) & 0x100f00f00f00f00fULL;
+  x = (x | x << 4) & 0x10c30c30c30c30c3ULL;
+  x = (x | x << 2) & 0x1249249249249249ULL;
+  return x;
+}
+
+// Vertices in Morton (Z-order) of their positions, so that a vertex's neighbours sit close to
+// it in memory: new -> old. Keys pack a 39-bit Morton code (13 bits per axis) above a 25-bit
+// vertex index and are sorted by three 13-bit LSD radix passes.
+std::vector<int32_t> MortonOrder(const std::vector<Vec3>& pos) {
+  const int32_t n = static_cast<int32_t>(pos.size());
+  Vec3 lo = pos[0], hi = pos[0];
+  for (const Vec3& q : pos) {
+    if (!IsFinite(q)) continue;
+    lo = {std::min(lo.x, q.x), std::min(lo.y, q.y), std::min(lo.z, q.z)};
+    hi = {std::max(hi.x, q.x), std::max(hi.y, q.y), std::max(hi.z, q.z)};
+  }
+  const double extent = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z, 1e-300});
+  const double scale = 8191.0 / extent;
+  auto cell = [&](double v, double origin) {
+    const double c = (v - origin) * scale;
+    return static_cast<uint64_t>(std::clamp(std::isfinite(c) ? c : 0.0, 0.0, 8191.0));
+  };
+  std::vector<uint64_t> keys(n), tmp(n);
+  for (int32_t i = 0; i < n; ++i) {
+    const uint64_t code = Spread3(cell(pos[i].x, lo.x)) | Spread3(cell(pos[i].y, lo.y)) << 1 |
+                          Spread3(cell(pos[i].z, lo.z)) << 2;
+    keys[i] = code << 25 | static_cast<uint64_t>(i);
+  }
+  std::vector<uint32_t> count(1 << 13);
+  for (int shift = 25; shift < 64; shift += 13) {
+    std::fill(count.begin(), count.end(), 0u);
+    for (uint64_t k : keys) ++count[(k >> shift) & 0x1fff];
+    uint32_t sum = 0;
+    for (uint32_t& c : count) sum += std::exchange(c, sum);
+    for (uint64_t k : keys) tmp[count[(k >> shift) & 0x1fff]++] = k;
+    keys.swap(tmp);
+  }
+  std::vector<int32_t> order(n);
+  for (int32_t i = 0; i < n; ++i) order[i] = static_cast<int32_t>(keys[i] & 0x1ffffff);
+  return order;
+}
+
+// Reordering pays off once the positions outgrow the caches; below this it is skipped.
+constexpr int32_t kReorderThreshold = 100000;
+// Morton keys hold 25 bits of vertex index.
+constexpr int32_t kReorderMaxVertices = 1 << 25;
+
+}  // namespace
+
+// Validates, then runs the iterations, on a Morton-reordered copy for large meshes (undone on
+// return, so indices stay stable). Each ring keeps its order and h is taken in the caller's
+// order, so every vertex sums the same terms in the same order: reordering changes no position
+// (only the summation order of the reported mean displacement).
+absl::StatusOr<FlowResult> Smooth(Mesh& mesh, const Topology& topo, const FlowParams& p, const RunControl& control) {
+  const int32_t n = mesh.num_vertices();
+  if (absl::Status s = ValidateFlowParams(p, n); !s.ok()) return s;
+  if (topo.num_vertices() != n) {
+    return absl::InvalidArgumentError("the topology was built for another mesh");
+  }
+  // h from the caller's order: the same value whatever the internal order.
+  const double h = MeanEdgeLength(mesh, topo);
+  if (!p.reorder || n < kReorderThreshold || n > kReorderMaxVertices) return Run(mesh, topo, p, control, h);
+
+  const std::vector<int32_t> order = MortonOrder(mesh.positions);  // new -> old
+  std::vector<int32_t> rank(n);                                    // old -> new
+  for (int32_t i = 0; i < n; ++i) rank[order[i]] = i;
+  Mesh local;
+  local.positions.resize(n);
+  Topology t;
+  t.kind.resize(n);
+  t.ring_offsets.resize(static_cast<size_t>(n) + 1);
+  t.ring.resize(topo.ring.size());
+  FlowParams q = p;
+  if (!p.locked.empty()) q.locked.resize(n);
+  t.ring_offsets[0] = 0;
+  for (int32_t i = 0; i < n; ++i) {
+    const int32_t old = order[i];
+    local.positions[i] = mesh.positions[old];
+    t.kind[i] = topo.kind[old];
+    if (!p.locked.empty()) q.locked[i] = p.locked[old];
+    const int32_t b = topo.ring_offsets[old], e = topo.ring_offsets[old + 1];
+    int32_t out = t.ring_offsets[i];
+    for (int32_t k = b; k < e; ++k) t.ring[out++] = rank[topo.ring[k]];
+    t.ring_offsets[i + 1] = out;
+  }
+  absl::StatusOr<FlowResult> result = Run(local, t, q, control, h);
+  // The positions as Run left them (the last good iteration on failure), in the caller's order.
+  for (int32_t i = 0; i < n; ++i) mesh.positions[order[i]] = local.positions[i];
   return result;
 }
 
