@@ -84,6 +84,19 @@ TEST(ServiceTest, EveryFlowEqualsTheCoreBitForBit) {
   }
 }
 
+// However fast the iterations run, at most ~10 progress events a second reach the client.
+TEST(ServiceTest, ProgressIsThrottled) {
+  auto server = StartServer();
+  const std::string draco = *EncodeDraco(FloatMesh(NoisySphere(3)));
+  const auto t0 = std::chrono::steady_clock::now();
+  absl::StatusOr<SmoothOutcome> out = Call(server->InProcessChannel(), Spec("taubin", 5000), draco);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  ASSERT_TRUE(out.ok()) << out.status();
+  EXPECT_GE(out->progress_events, 1);
+  EXPECT_LE(out->progress_events, 10.0 * seconds + 3.0) << seconds << " s";
+  EXPECT_LT(out->progress_events, 5000 / 10);
+}
+
 TEST(ServiceTest, MeshAbove20MiBGoesThrough) {
   Mesh big = TwoRatePlane(1000, 760);  // 762,761 vertices
   AddUniformNoise(big, 0.3, 3);
@@ -403,6 +416,30 @@ TEST(ServiceTest, DracosOwnFilesKeepAttributesAndSeams) {
         pa->ConvertValue<double>(pa->mapped_index(draco::PointIndex(p)), pa->num_components(), va.data());
         pb->ConvertValue<double>(pb->mapped_index(draco::PointIndex(p)), pb->num_components(), vb.data());
         ASSERT_EQ(va, vb) << draco::GeometryAttribute::TypeToString(pa->attribute_type()) << " point " << p;
+      }
+    }
+    // Normals are recomputed from the smoothed positions: each normal value of the upload is
+    // the normalised sum of the area-weighted normals of the faces of the points that use it
+    // (grouped by the upload's normal values: the re-encoded file may merge equal values).
+    const draco::PointAttribute* na = a.GetNamedAttribute(draco::GeometryAttribute::NORMAL);
+    if (const draco::PointAttribute* nb = b.GetNamedAttribute(draco::GeometryAttribute::NORMAL); nb && na) {
+      const draco::PointAttribute* pb = b.GetNamedAttribute(draco::GeometryAttribute::POSITION);
+      auto get = [](const draco::PointAttribute* att, draco::PointIndex p) {
+        std::array<double, 3> v{};
+        att->ConvertValue<double>(att->mapped_index(p), 3, v.data());
+        return Vec3{v[0], v[1], v[2]};
+      };
+      std::map<uint32_t, Vec3> sums;
+      for (uint32_t f = 0; f < b.num_faces(); ++f) {
+        const draco::Mesh::Face& face = b.face(draco::FaceIndex(f));
+        const Vec3 fa = get(pb, face[0]), fb = get(pb, face[1]), fc = get(pb, face[2]);
+        for (int k = 0; k < 3; ++k) sums[na->mapped_index(face[k]).value()] += Cross(fb - fa, fc - fa);
+      }
+      for (uint32_t p = 0; p < b.num_points(); ++p) {
+        const Vec3 sum = sums[na->mapped_index(draco::PointIndex(p)).value()];
+        if (!(Norm(sum) > 1e-12)) continue;
+        const Vec3 expected = sum * (1.0 / Norm(sum)), got = get(nb, draco::PointIndex(p));
+        ASSERT_LT(Norm(got - expected), 1e-4) << "normal of point " << p;
       }
     }
     // Seams: points that shared a position still do (no crack); positions stay finite.
