@@ -21,13 +21,6 @@ Mesh FloatNoisySphere(int level) {
   return m;
 }
 
-std::string ReadFile(const std::filesystem::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
 TEST(DracoCodecTest, LosslessSequentialKeepsOrderAndExactFloats) {
   const Mesh m = FloatNoisySphere(3);
   absl::StatusOr<std::string> bytes = EncodeDraco(m);
@@ -163,7 +156,7 @@ TEST(DracoCodecTest, DecodesDracosOwnTestFiles) {
   };
   for (const Expect& e : meshes) {
     SCOPED_TRACE(e.file);
-    absl::StatusOr<Mesh> m = DecodeDraco(ReadFile(testing::SharedData("draco") / e.file));
+    absl::StatusOr<Mesh> m = DecodeDraco(testing::ReadFileBytes(testing::SharedData("draco") / e.file));
     ASSERT_TRUE(m.ok()) << m.status();
     EXPECT_GE(m->positions.size(), e.vertices_min);
     EXPECT_LE(m->positions.size(), e.vertices_max);
@@ -173,7 +166,7 @@ TEST(DracoCodecTest, DecodesDracosOwnTestFiles) {
     EXPECT_EQ(r.non_finite_vertices, 0);
   }
   for (const char* pc : {"cube_pc.drc", "pc_color.drc", "pc_kd_color.drc", "point_cloud_no_qp.drc"}) {
-    const absl::Status s = DecodeDraco(ReadFile(testing::SharedData("draco") / pc)).status();
+    const absl::Status s = DecodeDraco(testing::ReadFileBytes(testing::SharedData("draco") / pc)).status();
     EXPECT_EQ(s.code(), absl::StatusCode::kInvalidArgument) << pc;
     EXPECT_NE(s.message().find("point cloud"), std::string::npos) << pc << ": " << s;
   }

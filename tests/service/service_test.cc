@@ -116,6 +116,21 @@ TEST(ServiceTest, MeshAbove20MiBGoesThrough) {
 struct LongJob {
   std::string draco = *EncodeDraco(FloatMesh(NoisySphere(6)));
   v1::JobSpec spec = Spec("median", 10000);  // the server's default limit; ~20 s on one core
+
+  // Starts the call on `ctx` and returns once its first progress event arrived (the job is
+  // running on a worker), or after 60 s.
+  std::future<absl::StatusOr<SmoothOutcome>> Start(v1::MeshSmoother::Stub& stub, grpc::ClientContext& ctx) {
+    auto started = std::make_shared<std::promise<void>>();
+    auto signalled = std::make_shared<std::atomic<bool>>(false);
+    std::future<void> running = started->get_future();
+    auto call = std::async(std::launch::async, [this, &stub, &ctx, started, signalled] {
+      return CallSmooth(stub, ctx, spec, draco, [started, signalled](const v1::Progress&) {
+        if (!signalled->exchange(true)) started->set_value();
+      });
+    });
+    EXPECT_EQ(running.wait_for(std::chrono::seconds(60)), std::future_status::ready) << "the long job never started";
+    return call;
+  }
 };
 
 TEST(ServiceTest, CancellingMidJobFreesTheWorker) {
@@ -125,14 +140,7 @@ TEST(ServiceTest, CancellingMidJobFreesTheWorker) {
   LongJob long_job;
   auto stub = v1::MeshSmoother::NewStub(server->InProcessChannel());
   grpc::ClientContext ctx;
-  std::promise<void> started;
-  std::atomic<bool> signalled{false};
-  auto running = std::async(std::launch::async, [&] {
-    return CallSmooth(*stub, ctx, long_job.spec, long_job.draco, [&](const v1::Progress&) {
-      if (!signalled.exchange(true)) started.set_value();
-    });
-  });
-  ASSERT_EQ(started.get_future().wait_for(std::chrono::seconds(60)), std::future_status::ready);
+  auto running = long_job.Start(*stub, ctx);
   ctx.TryCancel();
   const absl::Status cancelled = running.get().status();
   EXPECT_EQ(cancelled.code(), absl::StatusCode::kCancelled) << cancelled;
@@ -152,14 +160,7 @@ TEST(ServiceTest, FullQueueIsRefusedAtOnce) {
   LongJob long_job;
   auto stub = v1::MeshSmoother::NewStub(server->InProcessChannel());
   grpc::ClientContext a, b;
-  std::promise<void> started;
-  std::atomic<bool> signalled{false};
-  auto run_a = std::async(std::launch::async, [&] {
-    return CallSmooth(*stub, a, long_job.spec, long_job.draco, [&](const v1::Progress&) {
-      if (!signalled.exchange(true)) started.set_value();
-    });
-  });
-  ASSERT_EQ(started.get_future().wait_for(std::chrono::seconds(60)), std::future_status::ready);
+  auto run_a = long_job.Start(*stub, a);
   auto run_b = std::async(std::launch::async, [&] { return CallSmooth(*stub, b, long_job.spec, long_job.draco); });
   // B waits in the queue; C finds it full.
   for (int i = 0; i < 600 && server->service().queued_jobs() < 1; ++i) {
@@ -342,27 +343,13 @@ TEST(ServiceTest, GracefulShutdownLetsRunningJobsFinishThenCancels) {
   LongJob long_job;
   auto stub = v1::MeshSmoother::NewStub(server->InProcessChannel());
   grpc::ClientContext ctx;
-  std::promise<void> started;
-  std::atomic<bool> signalled{false};
-  auto running = std::async(std::launch::async, [&] {
-    return CallSmooth(*stub, ctx, long_job.spec, long_job.draco, [&](const v1::Progress&) {
-      if (!signalled.exchange(true)) started.set_value();
-    });
-  });
-  ASSERT_EQ(started.get_future().wait_for(std::chrono::seconds(60)), std::future_status::ready);
+  auto running = long_job.Start(*stub, ctx);
   const auto t0 = std::chrono::steady_clock::now();
   server->Shutdown();
   EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 10.0);
   const absl::Status s = running.get().status();
   EXPECT_EQ(s.code(), absl::StatusCode::kUnavailable) << s;
   EXPECT_NE(s.message().find("shut down"), std::string::npos) << s;
-}
-
-std::string ReadFile(const std::filesystem::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
 }
 
 // Draco's own bitstreams (0.9-2.2, Edgebreaker and sequential, attributes, non-manifold)
@@ -375,7 +362,7 @@ TEST(ServiceTest, DracosOwnFilesKeepAttributesAndSeams) {
     if (entry.path().extension() != ".drc") continue;
     const std::string name = entry.path().filename().string();
     SCOPED_TRACE(name);
-    const std::string bytes = ReadFile(entry.path());
+    const std::string bytes = ReadFileBytes(entry.path());
     draco::DecoderBuffer buf;
     buf.Init(bytes.data(), bytes.size());
     const bool is_cloud = draco::Decoder::GetEncodedGeometryType(&buf).value() == draco::POINT_CLOUD;
@@ -483,14 +470,7 @@ TEST(ServiceLimitsTest, ConcurrentCallsJobSecondsAndClientDeadline) {
   LongJob long_job;
   auto stub = v1::MeshSmoother::NewStub(server->InProcessChannel());
   grpc::ClientContext a;
-  std::promise<void> started;
-  std::atomic<bool> signalled{false};
-  auto run_a = std::async(std::launch::async, [&] {
-    return CallSmooth(*stub, a, long_job.spec, long_job.draco, [&](const v1::Progress&) {
-      if (!signalled.exchange(true)) started.set_value();
-    });
-  });
-  ASSERT_EQ(started.get_future().wait_for(std::chrono::seconds(60)), std::future_status::ready);
+  auto run_a = long_job.Start(*stub, a);
   const absl::Status second = Call(server->InProcessChannel(), Spec("median", 2), *EncodeDraco(Icosphere(2))).status();
   EXPECT_EQ(second.code(), absl::StatusCode::kResourceExhausted) << second;
   EXPECT_NE(second.message().find("concurrent"), std::string::npos) << second;
@@ -527,7 +507,7 @@ TEST(ServiceTlsTest, TlsServerAcceptsTlsClientsOnly) {
   ASSERT_TRUE(server);
   const std::string target = "localhost:" + std::to_string(server->port());
   grpc::SslCredentialsOptions ssl;
-  ssl.pem_root_certs = ReadFile(cert);
+  ssl.pem_root_certs = ReadFileBytes(cert);
   auto tls = grpc::CreateChannel(target, grpc::SslCredentials(ssl));
   absl::StatusOr<SmoothOutcome> out = Call(tls, Spec("median", 2), *EncodeDraco(Icosphere(2)));
   EXPECT_TRUE(out.ok()) << out.status();
