@@ -11,9 +11,6 @@
 namespace meshsmooth {
 namespace {
 
-// Angle between u and v; atan2 stays finite (0) for zero-length vectors.
-double Angle(const Vec3& u, const Vec3& v) { return std::atan2(Norm(Cross(u, v)), Dot(u, v)); }
-
 template <typename Fn>
 void ForEachEdge(const Topology& topo, Fn&& fn) {
   for (int32_t v = 0; v < topo.num_vertices(); ++v) {
@@ -48,18 +45,25 @@ MeshMetrics ComputeMetrics(const Mesh& mesh, const Topology& topo) {
 
   double min_angle = std::numeric_limits<double>::infinity(), sum_min_angle = 0.0;
   int64_t below10 = 0;
-  constexpr double kTenDeg = 10.0 * std::numbers::pi / 180.0;
+  const double tan10 = std::tan(10.0 * std::numbers::pi / 180.0);
   for (int32_t f : topo.faces) {
     const Triangle& t = mesh.triangles[f];
     const Vec3 a = mesh.positions[t[0]] - centroid, b = mesh.positions[t[1]] - centroid,
                c = mesh.positions[t[2]] - centroid;
-    m.area += 0.5 * Norm(Cross(b - a, c - a));
+    const Vec3 ab = b - a, bc = c - b, ca = a - c;
+    const double cross = Norm(Cross(ab, -ca));  // twice the area, shared by the three angles
+    m.area += 0.5 * cross;
     m.signed_volume += Dot(a, Cross(b, c)) / 6.0;
-    const double angles[3] = {Angle(b - a, c - a), Angle(a - b, c - b), Angle(a - c, b - c)};
-    const double face_min = std::min({angles[0], angles[1], angles[2]});
+    // Angle at a corner = atan2(cross, dot of its two edges); below 10 degrees exactly when the
+    // dot is positive and cross < tan(10 deg) dot (or the corner is degenerate: atan2(0, 0) = 0).
+    const double dots[3] = {-Dot(ab, ca), -Dot(bc, ab), -Dot(ca, bc)};  // at a, b, c
+    for (double d : dots) below10 += (d > 0.0 && cross < tan10 * d) || (d == 0.0 && cross == 0.0);
+    // The smallest angle is opposite the shortest edge: one atan2 per face.
+    const double lab = SquaredNorm(ab), lbc = SquaredNorm(bc), lca = SquaredNorm(ca);
+    const double d = lbc <= lab && lbc <= lca ? dots[0] : (lca <= lab ? dots[1] : dots[2]);
+    const double face_min = std::atan2(cross, d);
     min_angle = std::min(min_angle, face_min);
     sum_min_angle += face_min;
-    for (double ang : angles) below10 += ang < kTenDeg;
   }
   const double nf = static_cast<double>(topo.faces.size());
   if (!topo.faces.empty()) {
