@@ -3,11 +3,11 @@
 #include <exception>
 #include <memory>
 
-#include "absl/container/flat_hash_map.h"
 #include "absl/strings/str_cat.h"
 #include "draco/compression/decode.h"
 #include "draco/compression/encode.h"
 #include "draco/mesh/mesh.h"
+#include "core/weld.h"
 
 namespace meshsmooth {
 namespace {
@@ -128,15 +128,6 @@ absl::StatusOr<std::string> EncodeWithOptions(const draco::Mesh& dm, const Draco
   return std::string(out.data(), out.size());
 }
 
-struct PositionKey {
-  double x, y, z;
-  bool operator==(const PositionKey& o) const { return x == o.x && y == o.y && z == o.z; }
-  template <typename H>
-  friend H AbslHashValue(H h, const PositionKey& k) {
-    return H::combine(std::move(h), k.x + 0.0, k.y + 0.0, k.z + 0.0);
-  }
-};
-
 }  // namespace
 
 absl::StatusOr<Mesh> DecodeDraco(std::string_view bytes) {
@@ -165,18 +156,9 @@ absl::StatusOr<DracoMesh> DracoMesh::Decode(std::string_view bytes) {
   auto impl = std::make_unique<Impl>();
   impl->draco = std::move(dm).value();
   impl->point_to_vertex.resize(points->positions.size());
-  absl::flat_hash_map<PositionKey, int32_t> index;
-  index.reserve(points->positions.size());
-  for (size_t p = 0; p < points->positions.size(); ++p) {
-    const Vec3& q = points->positions[p];
-    auto [it, inserted] = index.try_emplace(PositionKey{q.x, q.y, q.z}, impl->welded.num_vertices());
-    if (inserted) {
-      impl->welded.positions.push_back(q);
-    } else {
-      ++impl->seam_points;
-    }
-    impl->point_to_vertex[p] = it->second;
-  }
+  PositionWelder welder(impl->welded.positions, points->positions.size());
+  for (size_t p = 0; p < points->positions.size(); ++p) impl->point_to_vertex[p] = welder.Add(points->positions[p]);
+  impl->seam_points = welder.merged();
   impl->welded.triangles = std::move(points->triangles);
   for (Triangle& t : impl->welded.triangles) {
     for (int32_t& v : t) v = v >= 0 ? impl->point_to_vertex[v] : -1;

@@ -126,18 +126,15 @@ Topology BuildTopology(const Mesh& mesh, ValidationReport* report) {
   }
 
   // Coordinates: non-finite count and the bounding box of the finite ones.
-  Vec3 lo{std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
-          std::numeric_limits<double>::infinity()};
-  Vec3 hi = -lo;
+  BoundingBox box;
   for (const Vec3& p : mesh.positions) {
     if (!IsFinite(p)) {
       ++r.non_finite_vertices;
       continue;
     }
-    lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
-    hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
+    box.Add(p);
   }
-  const double diag2 = r.non_finite_vertices < n ? SquaredNorm(hi - lo) : 0.0;
+  const double diag2 = box.diagonal() * box.diagonal();
   for (int32_t f : topo.faces) {
     const Triangle& t = mesh.triangles[f];
     const Vec3& p0 = mesh.positions[t[0]];

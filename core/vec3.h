@@ -30,6 +30,20 @@ inline bool IsFinite(const Vec3& a) {
   return std::isfinite(a.x) && std::isfinite(a.y) && std::isfinite(a.z);
 }
 
+// Axis-aligned bounding box of the points added to it; empty (lo > hi) until the first one.
+struct BoundingBox {
+  Vec3 lo{HUGE_VAL, HUGE_VAL, HUGE_VAL};
+  Vec3 hi{-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+
+  void Add(const Vec3& p) {
+    lo = {std::fmin(lo.x, p.x), std::fmin(lo.y, p.y), std::fmin(lo.z, p.z)};
+    hi = {std::fmax(hi.x, p.x), std::fmax(hi.y, p.y), std::fmax(hi.z, p.z)};
+  }
+  bool empty() const { return !(lo.x <= hi.x); }
+  double diagonal() const { return empty() ? 0.0 : Norm(hi - lo); }
+  double max_extent() const { return empty() ? 0.0 : std::fmax(hi.x - lo.x, std::fmax(hi.y - lo.y, hi.z - lo.z)); }
+};
+
 // The float32 value nearest to each coordinate (what binary PLY, STL and Draco store).
 // Through a volatile because g++ 12.2 at -O2 miscompiles the plain
 // `p = {float(p.x), float(p.y), float(p.z)}`: its SLP vectoriser drops the double -> float ->

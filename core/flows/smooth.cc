@@ -156,9 +156,7 @@ namespace {
 absl::StatusOr<FlowResult> Run(Mesh& mesh, const Topology& topo, const FlowParams& p, const RunControl& control,
                                double h) {
   const int32_t n = mesh.num_vertices();
-  Vec3 lo{std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
-          std::numeric_limits<double>::infinity()};
-  Vec3 hi = -lo;
+  BoundingBox box;
   int64_t non_finite = 0;
   for (int32_t v = 0; v < n; ++v) {
     if (topo.kind[v] == VertexKind::kIsolated) continue;
@@ -167,8 +165,7 @@ absl::StatusOr<FlowResult> Run(Mesh& mesh, const Topology& topo, const FlowParam
       ++non_finite;
       continue;
     }
-    lo = {std::min(lo.x, q.x), std::min(lo.y, q.y), std::min(lo.z, q.z)};
-    hi = {std::max(hi.x, q.x), std::max(hi.y, q.y), std::max(hi.z, q.z)};
+    box.Add(q);
   }
   if (non_finite > 0) {
     return absl::InvalidArgumentError(
@@ -177,7 +174,7 @@ absl::StatusOr<FlowResult> Run(Mesh& mesh, const Topology& topo, const FlowParam
   if (!(h > 0.0) || !std::isfinite(h)) {
     return absl::InvalidArgumentError("the mesh has no edge of non-zero length to smooth");
   }
-  const double diagonal = Norm(hi - lo);
+  const double diagonal = box.diagonal();
 
   FlowResult result;
   result.mean_edge_length = h;
@@ -321,13 +318,12 @@ uint64_t Spread3(uint64_t x) {
 // vertex index and are sorted by three 13-bit LSD radix passes.
 std::vector<int32_t> MortonOrder(const std::vector<Vec3>& pos) {
   const int32_t n = static_cast<int32_t>(pos.size());
-  Vec3 lo = pos[0], hi = pos[0];
+  BoundingBox box;
   for (const Vec3& q : pos) {
-    if (!IsFinite(q)) continue;
-    lo = {std::min(lo.x, q.x), std::min(lo.y, q.y), std::min(lo.z, q.z)};
-    hi = {std::max(hi.x, q.x), std::max(hi.y, q.y), std::max(hi.z, q.z)};
+    if (IsFinite(q)) box.Add(q);
   }
-  const double extent = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z, 1e-300});
+  const Vec3 lo = box.lo;
+  const double extent = std::max(box.max_extent(), 1e-300);
   const double scale = 8191.0 / extent;
   auto cell = [&](double v, double origin) {
     const double c = (v - origin) * scale;

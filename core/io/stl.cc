@@ -1,44 +1,11 @@
 #include <cstring>
-#include <unordered_map>
 
-#include "absl/hash/hash.h"
 #include "absl/strings/str_cat.h"
 #include "core/io/formats.h"
+#include "core/weld.h"
 
 namespace meshsmooth::io {
 namespace {
-
-struct PositionKey {
-  double x, y, z;
-  bool operator==(const PositionKey& o) const { return x == o.x && y == o.y && z == o.z; }
-  template <typename H>
-  friend H AbslHashValue(H h, const PositionKey& k) {
-    return H::combine(std::move(h), k.x, k.y, k.z);
-  }
-};
-
-// STL is a triangle soup: corners with the same position become one vertex, numbered in order
-// of first appearance.
-class Welder {
- public:
-  explicit Welder(Mesh& mesh, ReadInfo& info) : mesh_(mesh), info_(info) {}
-  int32_t Add(const Vec3& p) {
-    // +0.0 and -0.0 compare equal but hash differently: normalise before hashing.
-    const PositionKey key{p.x + 0.0, p.y + 0.0, p.z + 0.0};
-    auto [it, inserted] = index_.try_emplace(key, mesh_.num_vertices());
-    if (inserted) {
-      mesh_.positions.push_back(p);
-    } else {
-      ++info_.welded_corners;
-    }
-    return it->second;
-  }
-
- private:
-  Mesh& mesh_;
-  ReadInfo& info_;
-  std::unordered_map<PositionKey, int32_t, absl::Hash<PositionKey>> index_;
-};
 
 bool LooksBinary(std::string_view data) {
   if (data.size() < 84) return false;
@@ -51,7 +18,8 @@ bool LooksBinary(std::string_view data) {
 
 absl::StatusOr<Mesh> ParseStl(std::string_view data, ReadInfo& info) {
   Mesh mesh;
-  Welder welder(mesh, info);
+  // A triangle soup: corners at the same position become one vertex, in order of first appearance.
+  PositionWelder welder(mesh.positions);
   if (LooksBinary(data)) {
     uint32_t n = 0;
     std::memcpy(&n, data.data() + 80, 4);
@@ -66,6 +34,7 @@ absl::StatusOr<Mesh> ParseStl(std::string_view data, ReadInfo& info) {
       }
       mesh.triangles.push_back(t);
     }
+    info.welded_corners = welder.merged();
     return mesh;
   }
   std::string_view rest = data;
@@ -93,6 +62,7 @@ absl::StatusOr<Mesh> ParseStl(std::string_view data, ReadInfo& info) {
       corner = 0;
     }
   }
+  info.welded_corners = welder.merged();
   return mesh;
 }
 
