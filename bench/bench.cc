@@ -1,7 +1,11 @@
 // meshsmooth_bench: how fast the flows run, beside their peers, against the memory bandwidth,
 // and through the service. Prints Markdown; docs/performance.md is its output.
 //
-//   build/bench/meshsmooth_bench [--quick] [--runs 5] [--no-service] [--no-peers] [FILE ...]
+//   build/bench/meshsmooth_bench [--quick] [--runs 5] [--no-service] [--no-peers]
+//                                [--levels 6,7,8,9] [--only LABEL,...] [FILE ...]
+//
+// --levels picks the icosphere levels (none: "--levels ''"); --only keeps the flows whose
+// label contains one of the given words (e.g. --only "U0,mcf") and the peers compared with them.
 //
 // Meshes: noisy icospheres of 40,962 / 163,842 / 655,362 / 2,621,442 vertices (levels 6-9,
 // deterministic), plus any mesh file given. Every time is the median of --runs runs.
@@ -43,8 +47,27 @@ double Median(std::vector<double> v) {
 struct Options {
   int runs = 5;
   bool quick = false, service = true, peers = true;
+  std::vector<int> levels = {6, 7, 8, 9};
+  std::vector<std::string> only;  // empty: every flow
   std::vector<std::string> files;
+
+  bool Wanted(const std::string& label) const {
+    if (only.empty()) return true;
+    for (const std::string& w : only) {
+      if (label.find(w) != std::string::npos) return true;
+    }
+    return false;
+  }
 };
+
+std::vector<std::string> SplitCommas(const std::string& s) {
+  std::vector<std::string> out;
+  std::stringstream in(s);
+  for (std::string part; std::getline(in, part, ',');) {
+    if (!part.empty()) out.push_back(part);
+  }
+  return out;
+}
 
 // STREAM-like triad a = b + s c on three arrays of `bytes` each; GB/s counting 24 bytes per
 // element (two reads, one write), best of 5 as STREAM reports.
@@ -260,13 +283,19 @@ int main(int argc, char** argv) {
   Options opt;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
-    if (a == "--quick") opt.quick = true;
+    if (a == "--quick") {
+      opt.quick = true;
+      opt.levels = {6, 7};
+    } else if (a == "--levels" && i + 1 < argc) {
+      opt.levels.clear();
+      for (const std::string& l : SplitCommas(argv[++i])) opt.levels.push_back(std::atoi(l.c_str()));
+    } else if (a == "--only" && i + 1 < argc) opt.only = SplitCommas(argv[++i]);
     else if (a == "--runs" && i + 1 < argc) opt.runs = std::max(1, std::atoi(argv[++i]));
     else if (a == "--no-service") opt.service = false;
     else if (a == "--no-peers") opt.peers = false;
     else if (a == "--peak-child" && i + 1 < argc) return PeakChild(argv[i + 1]);
     else if (a == "--help" || a == "-h") {
-      std::printf("usage: %s [--quick] [--runs N] [--no-service] [--no-peers] [MESH_FILE ...]\n", argv[0]);
+      std::printf("usage: %s [--quick] [--runs N] [--no-service] [--no-peers] [--levels 6,7,8,9] [--only LABEL,...] [MESH_FILE ...]\n", argv[0]);
       return 0;
     } else opt.files.push_back(a);
   }
@@ -287,7 +316,7 @@ int main(int argc, char** argv) {
   std::printf("| 3 x %zu MiB (DRAM) | %.1f GB/s | %.1f GB/s |\n", big >> 20, bw1, bw2);
 
   std::vector<NamedMesh> meshes;
-  for (int level : opt.quick ? std::vector<int>{6, 7} : std::vector<int>{6, 7, 8, 9}) {
+  for (int level : opt.levels) {
     Mesh m = NoisyIcosphere(level);
     meshes.push_back({"noisy icosphere " + std::to_string(m.num_vertices()), std::move(m)});
   }
@@ -314,6 +343,7 @@ int main(int argc, char** argv) {
     std::printf("| flow | ms/iteration, 1 thread | 2 threads | speed-up | Mvertex-it/s (2 threads) | bytes/vertex | share of DRAM bound (2 threads) | set-up ms (1 thread) |\n|---|---|---|---|---|---|---|---|\n");
     double u0_ms = 0.0;
     for (const Variant& v : Variants()) {
+      if (!opt.Wanted(v.label) && v.label != "laplacian U0") continue;  // U0 is every ratio's base
       const OurTiming one = TimeOurs(nm.mesh, topo, v.params, iterations, 1, opt.runs);
       const OurTiming two = TimeOurs(nm.mesh, topo, v.params, iterations, std::min(2, hw), opt.runs);
       const double t1 = one.per_iteration_ms, t2 = two.per_iteration_ms;
@@ -324,12 +354,16 @@ int main(int argc, char** argv) {
       std::printf("| %s | %.2f | %.2f | %.2fx | %.0f | %.0f | %.0f%% | %.1f |\n", v.label.c_str(), t1, t2, t1 / t2,
                   n / (t2 / 1000.0) / 1e6, bytes, 100.0 * gbs / bw2, one.setup_ms);
     }
-    std::printf("\nCotangent flows against laplacian U0 (1 thread): mcf %.2fx, mcf_tangential %.2fx, median %.2fx.\n",
-                ours_1t[nm.name]["mcf"] / u0_ms, ours_1t[nm.name]["mcf_tangential"] / u0_ms,
-                ours_1t[nm.name]["median"] / u0_ms);
+    std::printf("\nCotangent flows against laplacian U0 (1 thread):");
+    for (const char* flow : {"mcf", "mcf_tangential", "median"}) {
+      const auto it = ours_1t[nm.name].find(flow);
+      if (it != ours_1t[nm.name].end()) std::printf(" %s %.2fx", flow, it->second / u0_ms);
+    }
+    std::printf(".\n");
     if (!peers.empty()) {
       std::printf("\n| peer (1 thread) | ms/iteration | ours | ours ms/iteration | peer / ours |\n|---|---|---|---|---|\n");
       for (const Peer& peer : peers) {
+        if (!ours_1t[nm.name].count(peer.ours)) continue;
         std::vector<double> t;
         const int peer_iterations = std::max(1, iterations / 4);
         for (int r = 0; r < opt.runs; ++r) t.push_back(peer.run(nm.mesh, peer_iterations) / peer_iterations);

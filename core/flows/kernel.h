@@ -14,6 +14,9 @@
 
 namespace meshsmooth::flows {
 
+// Loops over vertices run in fixed blocks of this many vertices (see ForBlocks).
+inline constexpr int32_t kBlock = 4096;
+
 // What a vertex does in an iteration.
 enum Role : uint8_t {
   kFixed = 0,  // copies its position
@@ -26,6 +29,7 @@ struct StepContext {
   const int32_t* offsets = nullptr;  // Topology::ring_offsets
   const int32_t* ring = nullptr;     // Topology::ring
   const uint8_t* role = nullptr;
+  const uint8_t* all_free = nullptr;  // per block of kBlock vertices: 1 when every role is kFree
   const VertexKind* kind = nullptr;  // Topology::kind
   double lambda = 0.0;          // effective step of this pass (negative for taubin's mu pass)
   double curve_lambda = 0.0;    // step of the boundary-curve umbrella in this pass
@@ -50,11 +54,18 @@ struct BlockStats {
 // Cotangents of needle triangles are clamped to this magnitude (NOTES.md, degenerate places).
 inline constexpr double kCotMax = 1e3;
 
+// U0, eq. (3). Two running sums halve the chain of dependent additions (the loads of the
+// neighbours then overlap); the order is fixed, so results do not depend on threads.
 inline Vec3 UmbrellaU0(const StepContext& c, const Vec3* pos, int32_t v) {
   const int32_t b = c.offsets[v], e = c.offsets[v + 1];
-  Vec3 sum;
-  for (int32_t i = b; i < e; ++i) sum += pos[c.ring[i]];
-  return sum * (1.0 / (e - b)) - pos[v];
+  Vec3 even, odd;
+  int32_t i = b;
+  for (; i + 1 < e; i += 2) {
+    even += pos[c.ring[i]];
+    odd += pos[c.ring[i + 1]];
+  }
+  if (i < e) even += pos[c.ring[i]];
+  return (even + odd) * (1.0 / (e - b)) - pos[v];
 }
 
 // U1, eq. (4): weights 1/|P - Q|, with coincident neighbours given the weight of a 1e-9 h edge.
@@ -128,13 +139,16 @@ inline Vec3 Threshold(const Vec3& f, double t) {
 
 // The fused Jacobi step over vertices [begin, end): next = cur + lambda F for free vertices,
 // the boundary-curve umbrella for curve vertices, a copy for fixed ones, with the block's
-// displacement statistics.
-template <typename SpeedFn>
-inline BlockStats ApplyStep(const StepContext& c, const Vec3* cur, Vec3* next, int32_t begin, int32_t end,
+// displacement statistics. kAllFree: every vertex of the range is free (most blocks of a
+// closed mesh), so the role branch goes. Non-finite results are caught once per block: a NaN
+// or infinite position makes its step, hence the block's displacement sum, non-finite (the
+// positions going in are finite).
+template <bool kAllFree, typename SpeedFn>
+inline BlockStats StepRange(const StepContext& c, const Vec3* cur, Vec3* next, int32_t begin, int32_t end,
                             SpeedFn&& speed) {
   BlockStats s;
   for (int32_t v = begin; v < end; ++v) {
-    const uint8_t role = c.role[v];
+    const uint8_t role = kAllFree ? uint8_t{kFree} : c.role[v];
     if (role == kFixed) {
       next[v] = cur[v];
       continue;
@@ -152,16 +166,23 @@ inline BlockStats ApplyStep(const StepContext& c, const Vec3* cur, Vec3* next, i
     } else {
       step = CurveUmbrella(c, cur, v) * c.curve_lambda;
     }
-    const Vec3 p = cur[v] + step;
-    next[v] = p;
+    next[v] = cur[v] + step;
     const double d2 = SquaredNorm(step);
     s.max_sq = std::max(s.max_sq, d2);
     s.sum += std::sqrt(d2);
     s.moved += d2 > 0.0;
-    ++s.movable;
-    s.non_finite |= !IsFinite(p);
+    if (!kAllFree) ++s.movable;
   }
+  if (kAllFree) s.movable = end - begin;
+  s.non_finite = !std::isfinite(s.sum);
   return s;
+}
+
+template <typename SpeedFn>
+inline BlockStats ApplyStep(const StepContext& c, const Vec3* cur, Vec3* next, int32_t begin, int32_t end,
+                            SpeedFn&& speed) {
+  if (c.all_free != nullptr && c.all_free[begin / kBlock]) return StepRange<true>(c, cur, next, begin, end, speed);
+  return StepRange<false>(c, cur, next, begin, end, speed);
 }
 
 // One flow: how one pass moves the vertices of a block. Flow files implement it.
@@ -192,7 +213,6 @@ void RingThresholds(const StepContext& c, const Vec3* pos, int32_t n, int rings,
 // Runs fn(block, begin, end) over [0, n) in fixed blocks of kBlock vertices on up to
 // `threads` threads. Block boundaries do not depend on the thread count, so per-block results
 // reduced in block order are deterministic.
-inline constexpr int32_t kBlock = 4096;
 
 template <typename Fn>
 void ForBlocks(int32_t n, int threads, Fn&& fn) {

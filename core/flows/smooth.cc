@@ -199,11 +199,18 @@ absl::StatusOr<FlowResult> Run(Mesh& mesh, const Topology& topo, const FlowParam
     movable += role[v] != flows::kFixed;
   }
 
+  const int32_t blocks = (n + flows::kBlock - 1) / flows::kBlock;
+  std::vector<uint8_t> all_free(blocks, 1);
+  for (int32_t v = 0; v < n; ++v) {
+    if (role[v] != flows::kFree) all_free[v / flows::kBlock] = 0;
+  }
+
   const int threads = n < kParallelThreshold ? 1 : (p.threads > 0 ? p.threads : omp_get_max_threads());
   StepContext ctx;
   ctx.offsets = topo.ring_offsets.data();
   ctx.ring = topo.ring.data();
   ctx.role = role.data();
+  ctx.all_free = all_free.data();
   ctx.kind = topo.kind.data();
   ctx.h = h;
   ctx.inv_h2 = 1.0 / (h * h);
@@ -221,7 +228,6 @@ absl::StatusOr<FlowResult> Run(Mesh& mesh, const Topology& topo, const FlowParam
   std::vector<Vec3> cur = mesh.positions, next(n), start;
   const int passes = (*kernel)->passes();
   if (passes > 1) start.resize(n);
-  const int32_t blocks = (n + flows::kBlock - 1) / flows::kBlock;
   std::vector<BlockStats> stats(blocks);
   const auto t0 = std::chrono::steady_clock::now();
   int capped_run = 0;  // consecutive iterations with more than kCappedSharePersistent capped
