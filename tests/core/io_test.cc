@@ -134,11 +134,14 @@ TEST(IoTest, MalformedFilesGiveClearErrors) {
 
 TEST(IoTest, TruncatedFilesNeverCrash) {
   Mesh m = Icosphere(1);
+  m.colors.assign(m.positions.size(), Rgb{10, 20, 30});  // PLY's colour path too
   for (MeshFormat f : {MeshFormat::kObj, MeshFormat::kPly, MeshFormat::kOff, MeshFormat::kStl}) {
     const std::string full = *SerializeMesh(m, f);
     for (size_t len = 0; len < full.size(); len += 7) {
       absl::StatusOr<Mesh> part = ParseMesh(std::string_view(full).substr(0, len), f);
-      if (part.ok()) Validate(*part);  // whatever was read must be safe to validate
+      if (!part.ok()) continue;
+      Validate(*part);  // whatever was read must be safe to validate
+      EXPECT_TRUE(part->colors.empty() || part->colors.size() == part->positions.size());
     }
   }
 }
