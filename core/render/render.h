@@ -30,7 +30,7 @@ struct View {
 absl::StatusOr<View> ParseView(std::string_view spec);
 
 enum class Shading {
-  kFlat,     // one normal per face: facets visible
+  kFlat,     // one normal per face: facets visible (vertex colours are still interpolated)
   kGouraud,  // area-weighted vertex normals, lighting interpolated over each face
 };
 
