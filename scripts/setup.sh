@@ -9,7 +9,7 @@ packages=(
   build-essential cmake ninja-build pkgconf
   libgrpc++-dev libgrpc-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler grpc-proto
   libdraco-dev draco libopenmesh-dev libabsl-dev libgtest-dev libgmock-dev
-  libcli11-dev libeigen3-dev libbenchmark-dev
+  libcli11-dev libeigen3-dev libbenchmark-dev libpng-dev
   python3-grpcio python3-protobuf python3-numpy python3-scipy openssl
 )
 missing=()

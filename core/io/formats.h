@@ -18,7 +18,8 @@ absl::StatusOr<Mesh> ParseOff(std::string_view data, ReadInfo& info);
 absl::StatusOr<Mesh> ParseStl(std::string_view data, ReadInfo& info);
 
 std::string WriteObj(const Mesh& mesh);
-std::string WritePly(const Mesh& mesh, bool binary);
+// InvalidArgument when the mesh has colours but not one per vertex.
+absl::StatusOr<std::string> WritePly(const Mesh& mesh, bool binary);
 std::string WriteOff(const Mesh& mesh);
 std::string WriteStl(const Mesh& mesh);
 

@@ -12,6 +12,9 @@
 //   DRC (Edgebreaker)                Draco reorders vertices and faces; see draco_codec.h.
 // Text formats are written with the shortest decimal form that reads back to the same
 // double; binary PLY and STL store float32, so float inputs round-trip exactly.
+// Vertex colours (Mesh::colors) are read from and written to PLY only (`red green blue`
+// uchar properties; float channels in 0..1 are scaled on reading, alpha is ignored); the other
+// formats neither read nor write them.
 #pragma once
 
 #include <cstdint>
@@ -48,7 +51,8 @@ struct WriteOptions {
   DracoOptions draco;      // for .drc
 };
 
-// Serialises to bytes in `format`.
+// Serialises to bytes in `format`. InvalidArgument for PLY when the mesh has colours but not
+// one per vertex.
 absl::StatusOr<std::string> SerializeMesh(const Mesh& mesh, MeshFormat format,
                                           const WriteOptions& options = {});
 

@@ -111,6 +111,14 @@ int FindProperty(const Element& e, std::string_view name) {
   return -1;
 }
 
+// One colour channel as 0..255: integer types are taken as 0..255 (clamped), float types as
+// 0..1 (the two conventions found in PLY files in the wild).
+uint8_t ColorChannel(PlyType t, double value) {
+  if (t == PlyType::kF32 || t == PlyType::kF64) value *= 255.0;
+  if (!(value > 0.0)) return 0;  // also NaN
+  return value >= 255.0 ? 255 : static_cast<uint8_t>(std::lround(value));
+}
+
 }  // namespace
 
 absl::StatusOr<Mesh> ParsePly(std::string_view data, ReadInfo& info) {
@@ -167,6 +175,7 @@ absl::StatusOr<Mesh> ParsePly(std::string_view data, ReadInfo& info) {
     const bool is_vertex = e.name == "vertex";
     const bool is_face = e.name == "face";
     int ix = -1, iy = -1, iz = -1, iface = -1;
+    int ired = -1, igreen = -1, iblue = -1;
     if (is_vertex) {
       ix = FindProperty(e, "x");
       iy = FindProperty(e, "y");
@@ -179,6 +188,17 @@ absl::StatusOr<Mesh> ParsePly(std::string_view data, ReadInfo& info) {
       // allocate gigabytes.
       if (static_cast<size_t>(e.count) > reader.remaining()) return error("vertex count exceeds the file size");
       mesh.positions.resize(e.count);
+      ired = FindProperty(e, "red");
+      igreen = FindProperty(e, "green");
+      iblue = FindProperty(e, "blue");
+      if (ired >= 0 && igreen >= 0 && iblue >= 0) {
+        for (int i : {ired, igreen, iblue}) {
+          if (e.props[i].is_list) return error("red, green, blue must be scalar properties");
+        }
+        mesh.colors.resize(e.count);
+      } else {
+        ired = igreen = iblue = -1;  // a partial colour is no colour
+      }
       have_vertices = true;
     } else if (is_face) {
       iface = FindProperty(e, "vertex_indices");
@@ -197,9 +217,13 @@ absl::StatusOr<Mesh> ParsePly(std::string_view data, ReadInfo& info) {
           }
           if (is_vertex) {
             Vec3& pos = mesh.positions[r];
-            if (static_cast<int>(pi) == ix) pos.x = value;
-            else if (static_cast<int>(pi) == iy) pos.y = value;
-            else if (static_cast<int>(pi) == iz) pos.z = value;
+            const int i = static_cast<int>(pi);
+            if (i == ix) pos.x = value;
+            else if (i == iy) pos.y = value;
+            else if (i == iz) pos.z = value;
+            else if (i == ired) mesh.colors[r].r = ColorChannel(p.type, value);
+            else if (i == igreen) mesh.colors[r].g = ColorChannel(p.type, value);
+            else if (i == iblue) mesh.colors[r].b = ColorChannel(p.type, value);
           }
           continue;
         }
@@ -234,17 +258,30 @@ absl::StatusOr<Mesh> ParsePly(std::string_view data, ReadInfo& info) {
   return mesh;
 }
 
-std::string WritePly(const Mesh& mesh, bool binary) {
+absl::StatusOr<std::string> WritePly(const Mesh& mesh, bool binary) {
+  const bool with_colors = !mesh.colors.empty();
+  if (with_colors && mesh.colors.size() != mesh.positions.size()) {
+    return absl::InvalidArgumentError(absl::StrCat("PLY: the mesh has ", mesh.colors.size(), " colours for ",
+                                                   mesh.positions.size(), " vertices (want one per vertex or none)"));
+  }
   std::string out = absl::StrCat("ply\nformat ", binary ? "binary_little_endian" : "ascii",
                                  " 1.0\ncomment written by meshsmooth\nelement vertex ", mesh.positions.size(),
-                                 "\nproperty float x\nproperty float y\nproperty float z\nelement face ",
-                                 mesh.triangles.size(), "\nproperty list uchar int vertex_indices\nend_header\n");
+                                 "\nproperty float x\nproperty float y\nproperty float z\n",
+                                 with_colors ? "property uchar red\nproperty uchar green\nproperty uchar blue\n" : "",
+                                 "element face ", mesh.triangles.size(),
+                                 "\nproperty list uchar int vertex_indices\nend_header\n");
   if (binary) {
     static_assert(std::endian::native == std::endian::little, "binary PLY writer assumes little endian");
-    out.reserve(out.size() + mesh.positions.size() * 12 + mesh.triangles.size() * 13);
-    for (const Vec3& p : mesh.positions) {
+    out.reserve(out.size() + mesh.positions.size() * (with_colors ? 15 : 12) + mesh.triangles.size() * 13);
+    for (size_t i = 0; i < mesh.positions.size(); ++i) {
+      const Vec3& p = mesh.positions[i];
       const float xyz[3] = {static_cast<float>(p.x), static_cast<float>(p.y), static_cast<float>(p.z)};
       out.append(reinterpret_cast<const char*>(xyz), sizeof xyz);
+      if (with_colors) {
+        const Rgb& c = mesh.colors[i];
+        const char rgb[3] = {static_cast<char>(c.r), static_cast<char>(c.g), static_cast<char>(c.b)};
+        out.append(rgb, 3);
+      }
     }
     for (const Triangle& t : mesh.triangles) {
       out += static_cast<char>(3);
@@ -252,13 +289,18 @@ std::string WritePly(const Mesh& mesh, bool binary) {
     }
     return out;
   }
-  for (const Vec3& p : mesh.positions) {
+  for (size_t i = 0; i < mesh.positions.size(); ++i) {
+    const Vec3& p = mesh.positions[i];
     // Declared float: print the float's own shortest form so it reads back bit-exactly.
     for (double c : {p.x, p.y, p.z}) {
       char buf[32];
       auto [ptr, ec] = std::to_chars(buf, buf + sizeof buf, static_cast<float>(c));
       out.append(buf, ec == std::errc() ? ptr : buf);
       out += ' ';
+    }
+    if (with_colors) {
+      const Rgb& c = mesh.colors[i];
+      absl::StrAppend(&out, int{c.r}, " ", int{c.g}, " ", int{c.b}, " ");
     }
     out.back() = '\n';
   }

@@ -134,12 +134,100 @@ TEST(IoTest, MalformedFilesGiveClearErrors) {
 
 TEST(IoTest, TruncatedFilesNeverCrash) {
   Mesh m = Icosphere(1);
+  m.colors.assign(m.positions.size(), Rgb{10, 20, 30});  // PLY's colour path too
   for (MeshFormat f : {MeshFormat::kObj, MeshFormat::kPly, MeshFormat::kOff, MeshFormat::kStl}) {
     const std::string full = *SerializeMesh(m, f);
     for (size_t len = 0; len < full.size(); len += 7) {
       absl::StatusOr<Mesh> part = ParseMesh(std::string_view(full).substr(0, len), f);
-      if (part.ok()) Validate(*part);  // whatever was read must be safe to validate
+      if (!part.ok()) continue;
+      Validate(*part);  // whatever was read must be safe to validate
+      EXPECT_TRUE(part->colors.empty() || part->colors.size() == part->positions.size());
     }
+  }
+}
+
+TEST(IoTest, PlyColoursRoundTripInAsciiAndBinary) {
+  Mesh m = Icosphere(2);
+  for (Vec3& p : m.positions) p = RoundToFloat(p);
+  for (int32_t i = 0; i < m.num_vertices(); ++i) {
+    m.colors.push_back({static_cast<uint8_t>(i), static_cast<uint8_t>(255 - i % 256), static_cast<uint8_t>(i * 7)});
+  }
+  for (bool binary : {false, true}) {
+    WriteOptions options;
+    options.ply_binary = binary;
+    absl::StatusOr<std::string> bytes = SerializeMesh(m, MeshFormat::kPly, options);
+    ASSERT_TRUE(bytes.ok()) << bytes.status();
+    EXPECT_NE(bytes->find("property uchar red\nproperty uchar green\nproperty uchar blue\n"), std::string::npos);
+    absl::StatusOr<Mesh> back = ParseMesh(*bytes, MeshFormat::kPly);
+    ASSERT_TRUE(back.ok()) << back.status();
+    EXPECT_EQ(back->positions, m.positions) << "binary " << binary;
+    EXPECT_EQ(back->triangles, m.triangles) << "binary " << binary;
+    EXPECT_EQ(back->colors, m.colors) << "binary " << binary;
+  }
+  // Without colours nothing colour-related is written and none is read back.
+  m.colors.clear();
+  const std::string plain = *SerializeMesh(m, MeshFormat::kPly);
+  EXPECT_EQ(plain.find("red"), std::string::npos);
+  EXPECT_TRUE(ParseMesh(plain, MeshFormat::kPly)->colors.empty());
+}
+
+TEST(IoTest, PlyColoursAmongOtherProperties) {
+  // Colours in the middle of other vertex properties (normals, alpha, a float quality), a face
+  // element with an extra property, and an extra element: the colours are found by name.
+  const std::string ascii =
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+      "property float nx\nproperty float ny\nproperty float nz\nproperty uchar red\nproperty uchar green\n"
+      "property uchar blue\nproperty uchar alpha\nproperty float quality\n"
+      "element face 1\nproperty list uchar int vertex_indices\nproperty uchar flags\n"
+      "element edge 1\nproperty int vertex1\nproperty int vertex2\nend_header\n"
+      "0 0 0 0 0 1 255 0 0 128 0.5\n1 0 0 0 0 1 0 255 0 128 0.5\n0 1 0 0 0 1 10 20 30 128 0.5\n"
+      "3 0 1 2 7\n0 1\n";
+  absl::StatusOr<Mesh> m = ParseMesh(ascii, MeshFormat::kPly);
+  ASSERT_TRUE(m.ok()) << m.status();
+  ASSERT_EQ(m->positions.size(), 3u);
+  EXPECT_EQ(m->positions[1], (Vec3{1, 0, 0}));
+  EXPECT_EQ(m->triangles, (std::vector<Triangle>{{0, 1, 2}}));
+  EXPECT_EQ(m->colors, (std::vector<Rgb>{{255, 0, 0}, {0, 255, 0}, {10, 20, 30}}));
+
+  // The same in binary, with the colour before the position and a double property between.
+  std::string bin =
+      "ply\nformat binary_little_endian 1.0\nelement vertex 2\nproperty uchar red\nproperty uchar green\n"
+      "property uchar blue\nproperty double confidence\nproperty float x\nproperty float y\nproperty float z\n"
+      "element face 0\nproperty list uchar int vertex_indices\nend_header\n";
+  for (int v = 0; v < 2; ++v) {
+    const unsigned char rgb[3] = {static_cast<unsigned char>(200 + v), 100, 50};
+    bin.append(reinterpret_cast<const char*>(rgb), 3);
+    const double confidence = 0.25;
+    bin.append(reinterpret_cast<const char*>(&confidence), sizeof confidence);
+    const float xyz[3] = {static_cast<float>(v), 2, 3};
+    bin.append(reinterpret_cast<const char*>(xyz), sizeof xyz);
+  }
+  m = ParseMesh(bin, MeshFormat::kPly);
+  ASSERT_TRUE(m.ok()) << m.status();
+  EXPECT_EQ(m->positions, (std::vector<Vec3>{{0, 2, 3}, {1, 2, 3}}));
+  EXPECT_EQ(m->colors, (std::vector<Rgb>{{200, 100, 50}, {201, 100, 50}}));
+}
+
+TEST(IoTest, ColoursOfTheWrongCountAreRefusedForPlyAndIgnoredElsewhere) {
+  Mesh m = Icosphere(1);
+  m.colors.assign(m.positions.size() - 1, Rgb{1, 2, 3});
+  for (bool binary : {false, true}) {
+    WriteOptions options;
+    options.ply_binary = binary;
+    absl::StatusOr<std::string> bytes = SerializeMesh(m, MeshFormat::kPly, options);
+    ASSERT_FALSE(bytes.ok());
+    EXPECT_EQ(bytes.status().code(), absl::StatusCode::kInvalidArgument);
+    EXPECT_NE(bytes.status().message().find("colours"), std::string::npos) << bytes.status();
+  }
+  EXPECT_EQ(WriteMesh((fs::path(::testing::TempDir()) / "bad-colours.ply").string(), m).code(),
+            absl::StatusCode::kInvalidArgument);
+  // Formats without colours write the geometry and drop them, whatever their count.
+  for (MeshFormat f : {MeshFormat::kObj, MeshFormat::kOff, MeshFormat::kStl, MeshFormat::kDraco}) {
+    absl::StatusOr<std::string> bytes = SerializeMesh(m, f);
+    ASSERT_TRUE(bytes.ok()) << bytes.status();
+    absl::StatusOr<Mesh> back = ParseMesh(*bytes, f);
+    ASSERT_TRUE(back.ok()) << back.status();
+    EXPECT_TRUE(back->colors.empty());
   }
 }
 
