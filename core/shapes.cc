@@ -48,6 +48,28 @@ void AddQuad(Mesh& m, int32_t a, int32_t b, int32_t c, int32_t d) {
   m.triangles.push_back({a, c, d});
 }
 
+// Triangulates `rows` rows of `columns` vertices each (vertex (r, c) = r * columns + c) in
+// which odd rows sit half a column step further along than even rows: every cell between two
+// rows becomes one triangle with its base on each row, so equal steps give equilateral
+// triangles. Counter-clockwise in (column, row) coordinates unless `flip`. With `periodic`
+// the last column is joined to the first (a cylinder); otherwise the side edges are jagged.
+void AddOffsetRowStrips(Mesh& m, int rows, int columns, bool periodic, bool flip) {
+  auto add = [&](int32_t a, int32_t b, int32_t c) {
+    if (flip) std::swap(b, c);
+    m.triangles.push_back({a, b, c});
+  };
+  for (int r = 0; r + 1 < rows; ++r) {
+    // The vertex of the next row that lies between columns c and c + 1 of this one is c + s.
+    const int s = r % 2;
+    auto a = [&](int c) { return static_cast<int32_t>(r * columns + (c + columns) % columns); };
+    auto b = [&](int c) { return static_cast<int32_t>((r + 1) * columns + (c + columns) % columns); };
+    for (int c = 0; c < columns; ++c) {
+      if (periodic || (c + 1 < columns && c + s < columns)) add(a(c), a(c + 1), b(c + s));
+      if (periodic || (c + s - 1 >= 0 && c + s < columns)) add(a(c), b(c + s), b(c + s - 1));
+    }
+  }
+}
+
 }  // namespace
 
 Mesh Icosphere(int level) {
@@ -154,6 +176,46 @@ Mesh TwoRatePlane(int nx, int ny, double ratio) {
   for (int j = 0; j < ny; ++j) {
     for (int i = 0; i < nx; ++i) AddQuad(m, id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
   }
+  return m;
+}
+
+Mesh Cylinder(double radius, double height, int around, int along) {
+  around = std::max(3, around);
+  along = std::max(2, along);
+  Mesh m;
+  const double step = 2.0 * std::numbers::pi / around;
+  for (int k = 0; k < along; ++k) {
+    const double z = height * k / (along - 1);
+    for (int j = 0; j < around; ++j) {
+      const double a = step * (j + 0.5 * (k % 2));
+      m.positions.push_back({radius * std::cos(a), radius * std::sin(a), z});
+    }
+  }
+  AddOffsetRowStrips(m, along, around, /*periodic=*/true, /*flip=*/false);
+  return m;
+}
+
+int CylinderRings(double radius, double height, int around) {
+  // Ring spacing sqrt(3)/2 of the chord between neighbours on a ring.
+  const double chord = 2.0 * radius * std::sin(std::numbers::pi / std::max(3, around));
+  return std::max(2, static_cast<int>(std::lround(height / (std::sqrt(3.0) / 2.0 * chord))) + 1);
+}
+
+Mesh CosineHeightField(double amplitude, int periods, int rows_per_period, int columns) {
+  periods = std::max(1, periods);
+  rows_per_period = std::max(4, rows_per_period);
+  columns = std::max(2, columns);
+  const int rows = periods * rows_per_period + 1;
+  const double dx = 2.0 * std::numbers::pi / rows_per_period, dy = 2.0 / std::sqrt(3.0) * dx;
+  Mesh m;
+  for (int i = 0; i < rows; ++i) {
+    const double x = dx * i;
+    for (int j = 0; j < columns; ++j) {
+      m.positions.push_back({x, dy * (j + 0.5 * (i % 2)), amplitude * std::cos(x)});
+    }
+  }
+  // Rows run along x, so (column, row) = (y, x) is clockwise seen from +z: flip for +z normals.
+  AddOffsetRowStrips(m, rows, columns, /*periodic=*/false, /*flip=*/true);
   return m;
 }
 

@@ -26,6 +26,23 @@ Mesh TwoRateTorus(int tube_segments = 32, double major_radius = 1.0, double mino
 // boundary loop. Normals point to +z.
 Mesh TwoRatePlane(int nx, int ny, double ratio = 3.0);
 
+// Open cylinder around the z axis: `along` (>= 2) rings of `around` (>= 3) vertices at
+// z = 0 .. height, every other ring turned by half a step, so the triangles are near
+// equilateral when height / (along - 1) is about sqrt(3)/2 * 2 pi radius / around (use
+// CylinderRings() for that count). Two boundary loops (the end rings); faces outward.
+Mesh Cylinder(double radius, double height, int around, int along);
+
+// The number of rings that makes Cylinder(radius, height, around, rings) near equilateral.
+int CylinderRings(double radius, double height, int around);
+
+// The cosine wave z = amplitude * cos(x) over x in [0, 2 pi periods]: rows of constant x,
+// `rows_per_period` (>= 4) of them per period (so the crests x = 2 k pi and, for an even
+// count, the troughs x = (2k+1) pi fall on rows), each with `columns` (>= 2) vertices along
+// y, every other row shifted by half a step in y, the y step 2/sqrt(3) times the x step: near
+// equilateral triangles in the xy plane. Vertex (row i, column j) has index i * columns + j.
+// Open: one boundary loop. Normals point to +z.
+Mesh CosineHeightField(double amplitude, int periods, int rows_per_period, int columns);
+
 // Adds to every coordinate of every vertex an independent uniform value in
 // [-fraction * h, fraction * h], with h the mesh's mean edge length (the paper's "uniform
 // noise"). Seeded: the same seed gives the same noise.

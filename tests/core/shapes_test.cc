@@ -62,6 +62,56 @@ TEST(ShapesTest, TwoRatePlaneHasOneBoundaryLoop) {
   EXPECT_EQ(interior, 47 * 31);
 }
 
+TEST(ShapesTest, CylinderIsAnOpenTubeOfNearEquilateralTriangles) {
+  const double r = 2.0, height = 6.0;
+  const int around = 64, along = CylinderRings(r, height, around);
+  const Mesh m = Cylinder(r, height, around, along);
+  ValidationReport rep;
+  const Topology t = BuildTopology(m, &rep);
+  EXPECT_EQ(m.num_vertices(), around * along);
+  EXPECT_EQ(rep.boundary_loops, 2);
+  EXPECT_TRUE(rep.manifold());
+  EXPECT_EQ(rep.euler_characteristic(), 0);
+  EXPECT_EQ(rep.inconsistently_oriented_edges, 0);
+  for (const Vec3& p : m.positions) ASSERT_NEAR(std::hypot(p.x, p.y), r, 1e-12);
+  const MeshMetrics mm = ComputeMetrics(m, t);
+  EXPECT_GT(mm.min_angle_deg, 55.0);
+  EXPECT_NEAR(mm.area, 2.0 * std::numbers::pi * r * height, 0.01 * 2.0 * std::numbers::pi * r * height);
+  for (const Triangle& tri : m.triangles) {  // outward: the face normal points away from the axis
+    const Vec3 a = m.positions[tri[0]], b = m.positions[tri[1]], c = m.positions[tri[2]];
+    const Vec3 centre = (a + b + c) * (1.0 / 3.0);
+    ASSERT_GT(Dot(Cross(b - a, c - a), Vec3{centre.x, centre.y, 0.0}), 0.0);
+  }
+}
+
+TEST(ShapesTest, CosineHeightFieldHasCrestsOnRowsAndUpwardFaces) {
+  const int periods = 2, rows_per_period = 24, columns = 10;
+  const Mesh m = CosineHeightField(0.5, periods, rows_per_period, columns);
+  ValidationReport rep;
+  const Topology t = BuildTopology(m, &rep);
+  EXPECT_EQ(m.num_vertices(), (periods * rows_per_period + 1) * columns);
+  EXPECT_EQ(rep.boundary_loops, 1);
+  EXPECT_TRUE(rep.manifold());
+  EXPECT_EQ(rep.euler_characteristic(), 1);
+  for (int32_t v = 0; v < m.num_vertices(); ++v) {
+    const Vec3& p = m.positions[v];
+    ASSERT_NEAR(p.z, 0.5 * std::cos(p.x), 1e-15);
+    const int row = v / columns;
+    const double on_line = row % rows_per_period == 0 ? 1.0 : (row % rows_per_period == rows_per_period / 2 ? -1.0 : 0.0);
+    if (on_line != 0.0) {
+      ASSERT_NEAR(std::cos(p.x), on_line, 1e-12) << v;  // crest and trough rows
+    }
+  }
+  for (const Triangle& tri : m.triangles) {
+    const Vec3 a = m.positions[tri[0]];
+    ASSERT_GT(Cross(m.positions[tri[1]] - a, m.positions[tri[2]] - a).z, 0.0);
+  }
+  // Equilateral in the xy plane: the projected angles are all 60 degrees.
+  Mesh flat = m;
+  for (Vec3& p : flat.positions) p.z = 0.0;
+  EXPECT_NEAR(ComputeMetrics(flat, t).min_angle_deg, 60.0, 1e-9);
+}
+
 TEST(ShapesTest, NoiseIsSeededAndBounded) {
   const Mesh clean = Icosphere(3);
   Mesh a = clean, b = clean, c = clean;

@@ -1,0 +1,83 @@
+#include "core/features/ridges.h"
+
+#include <cmath>
+
+namespace meshsmooth {
+namespace {
+
+constexpr int32_t kParallelMin = 4096;  // below this the OpenMP team costs more than the loop
+
+// True when values[v] * sign is strictly above its linear interpolation at both points where
+// the plane through P spanned by the normal and `dir` cuts the closed one-ring polygon.
+bool IsExtremumAlong(const Mesh& mesh, const Topology& topo, const CurvatureField& f, int32_t v, const Vec3& dir,
+                     const std::vector<double>& values, double sign) {
+  const int32_t* ring = topo.ring.data() + topo.ring_offsets[v];
+  const int32_t n = topo.valence(v);
+  const Vec3 p = mesh.positions[v];
+  const Vec3 side = Cross(f.normal[v], dir);  // normal of the cutting plane
+  // Nearest crossing ahead of P (along > 0) and behind it (along < 0).
+  double ahead_along = HUGE_VAL, behind_along = -HUGE_VAL, ahead_value = 0.0, behind_value = 0.0;
+  Vec3 e0 = mesh.positions[ring[n - 1]] - p;
+  double s0 = Dot(side, e0);
+  int32_t q0 = ring[n - 1];
+  for (int32_t k = 0; k < n; ++k) {
+    const int32_t q1 = ring[k];
+    const Vec3 e1 = mesh.positions[q1] - p;
+    const double s1 = Dot(side, e1);
+    if ((s0 >= 0.0) != (s1 >= 0.0)) {
+      const double t = s0 / (s0 - s1);  // the signs differ, so the denominator is not zero
+      const double along = Dot(dir, e0) + t * Dot(dir, e1 - e0);
+      const double value = values[q0] + t * (values[q1] - values[q0]);
+      if (along > 0.0 && along < ahead_along) {
+        ahead_along = along;
+        ahead_value = value;
+      } else if (along < 0.0 && along > behind_along) {
+        behind_along = along;
+        behind_value = value;
+      }
+    }
+    e0 = e1;
+    s0 = s1;
+    q0 = q1;
+  }
+  if (ahead_along == HUGE_VAL || behind_along == -HUGE_VAL) return false;
+  const double here = sign * values[v];
+  return here > sign * ahead_value && here > sign * behind_value;
+}
+
+FeatureLabel Classify(const Mesh& mesh, const Topology& topo, const CurvatureField& f, int32_t v,
+                      double threshold) {
+  if (!f.valid[v]) return FeatureLabel::kNone;
+  for (int32_t i = topo.ring_offsets[v]; i < topo.ring_offsets[v + 1]; ++i) {
+    if (!f.valid[topo.ring[i]]) return FeatureLabel::kNone;
+  }
+  const double kmax = f.kmax[v], kmin = f.kmin[v];
+  const bool ridge = kmax > 0.0 && kmax > threshold && IsExtremumAlong(mesh, topo, f, v, f.dir_max[v], f.kmax, 1.0);
+  const bool ravine =
+      kmin < 0.0 && -kmin > threshold && IsExtremumAlong(mesh, topo, f, v, f.dir_min[v], f.kmin, -1.0);
+  if (ridge && ravine) return kmax >= -kmin ? FeatureLabel::kRidge : FeatureLabel::kRavine;
+  if (ridge) return FeatureLabel::kRidge;
+  return ravine ? FeatureLabel::kRavine : FeatureLabel::kNone;
+}
+
+}  // namespace
+
+Features DetectFeatures(const Mesh& mesh, const Topology& topology, const FeatureOptions& options) {
+  Features out;
+  out.curvature = EstimateCurvature(mesh, topology);
+  const int32_t n = topology.num_vertices();
+  out.labels.assign(n, static_cast<uint8_t>(FeatureLabel::kNone));
+  const CurvatureField& f = out.curvature;
+  // Each vertex writes only its own label: the result does not depend on the thread count.
+#pragma omp parallel for schedule(static) if (n >= kParallelMin)
+  for (int32_t v = 0; v < n; ++v) {
+    out.labels[v] = static_cast<uint8_t>(Classify(mesh, topology, f, v, options.min_abs_curvature));
+  }
+  for (uint8_t l : out.labels) {
+    out.ridges += l == static_cast<uint8_t>(FeatureLabel::kRidge);
+    out.ravines += l == static_cast<uint8_t>(FeatureLabel::kRavine);
+  }
+  return out;
+}
+
+}  // namespace meshsmooth

@@ -1,0 +1,44 @@
+// Ridge and ravine vertices, Section 5 of ../shared/paper/polyhedral-surface-smoothing.md
+// (see also ../shared/paper/NOTES.md, "Ridges and ravines"): a ridge is where the maximal
+// principal curvature attains a positive maximum along its curvature line, a ravine where the
+// minimal principal curvature attains a negative minimum along its curvature line. The paper
+// smooths the mesh first (e.g. Smooth() with flow "median") and then detects.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "core/features/curvature.h"
+#include "core/mesh.h"
+#include "core/topology.h"
+
+namespace meshsmooth {
+
+enum class FeatureLabel : uint8_t { kNone = 0, kRidge = 1, kRavine = 2 };
+
+struct FeatureOptions {
+  // A vertex whose |kappa| (kmax for a ridge, kmin for a ravine) is at or below this is not a
+  // feature; absolute, in 1/mesh units. 0 keeps every strict extremum of the right sign.
+  double min_abs_curvature = 0.0;
+};
+
+struct Features {
+  CurvatureField curvature;     // EstimateCurvature() of the mesh
+  std::vector<uint8_t> labels;  // a FeatureLabel per vertex
+  int64_t ridges = 0, ravines = 0;
+};
+
+// Labels every vertex of `mesh` (`topology` = BuildTopology(mesh)), Section 5 of the paper.
+// With the curvatures of EstimateCurvature() (positive where the surface bends away from the
+// normal), a vertex P is a ridge vertex when kmax(P) > 0, kmax(P) > min_abs_curvature, and
+// kmax(P) exceeds its linear interpolation at both points where the plane through P spanned
+// by the normal and dir_max cuts the one-ring polygon (kmax interpolated along each crossed
+// ring edge; on each side of P the crossing nearest to P counts). A ravine vertex likewise
+// has kmin(P) < 0, -kmin(P) > min_abs_curvature and kmin(P) below its interpolations along
+// the plane of the normal and dir_min. A vertex that is both gets the label of the larger
+// |kappa|. Not classified (kNone): vertices that are not valid in the curvature field
+// (boundary, non-manifold, isolated, degenerate), vertices with an invalid neighbour (the
+// interpolation is undefined), and vertices whose plane misses one side of the ring.
+Features DetectFeatures(const Mesh& mesh, const Topology& topology, const FeatureOptions& options = {});
+
+}  // namespace meshsmooth
