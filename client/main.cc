@@ -4,6 +4,8 @@
 //                               [--server HOST:PORT]
 //   meshsmooth flows [--server HOST:PORT]
 //   meshsmooth info IN
+//   meshsmooth ridges IN -o OUT.ply [--threshold K]      (locally, no smoothing)
+//   meshsmooth render IN -o OUT.png [--view V] [--size WxH] [--shading flat|gouraud]
 //
 // Without --server, `smooth` and `flows` start the service in-process (the same code as
 // meshsmoothd, over an in-process channel), so the CLI works with nothing else running.
@@ -30,8 +32,11 @@
 #include "client/inputs.h"
 #include "client/smooth_client.h"
 #include "core/draco_codec.h"
+#include "core/features/ridges.h"
 #include "core/io/mesh_io.h"
 #include "core/metrics.h"
+#include "core/render/png.h"
+#include "core/render/render.h"
 #include "core/topology.h"
 #include "grpcpp/grpcpp.h"
 #include "server/server.h"
@@ -66,6 +71,8 @@ struct SmoothOptions {
   unsigned quantization_bits = 0;
   bool edgebreaker = false;
   bool quiet = false, json = false;
+  bool ridges = false;
+  double ridge_threshold = 0.0;
 };
 
 std::string ReadFile(const std::string& path, bool* ok) {
@@ -194,6 +201,12 @@ void PrintSummary(const v1::Summary& s) {
               100 * b.share_angles_below_10deg());
   std::printf("displacement RMS %.6g, max %.6g; flipped normals %lld\n", s.rms_displacement(), s.max_displacement(),
               static_cast<long long>(s.flipped_normals()));
+  if (s.has_features()) {
+    std::printf("features: %lld ridge and %lld ravine vertices of %lld classified (%.3fs)\n",
+                static_cast<long long>(s.features().ridge_vertices()),
+                static_cast<long long>(s.features().ravine_vertices()),
+                static_cast<long long>(s.features().classified_vertices()), s.features().detect_seconds());
+  }
   const v1::Timings& t = s.timings();
   std::printf("time: decode %.3fs, queue %.3fs, smooth %.3fs, encode %.3fs, total %.3fs; result %llu bytes\n",
               t.decode_seconds(), t.queue_seconds(), t.smooth_seconds(), t.encode_seconds(), t.total_seconds(),
@@ -221,6 +234,10 @@ absl::StatusOr<v1::JobSpec> SpecFrom(const SmoothOptions& o) {
   spec.set_tolerance(o.tolerance);
   spec.mutable_output()->set_quantization_bits(o.quantization_bits);
   spec.mutable_output()->set_edgebreaker(o.edgebreaker);
+  if (o.ridges) {
+    spec.mutable_features()->set_enabled(true);
+    spec.mutable_features()->set_min_abs_curvature(o.ridge_threshold);
+  }
   return spec;
 }
 
@@ -234,7 +251,12 @@ int RunSmooth(const SmoothOptions& o, const ConnectionOptions& c) {
 
   // Draco input goes as it is (all its attributes travel along); anything else is encoded
   // losslessly and sequentially, so vertex i of the result is vertex i of the input.
+  if (o.ridges && *out_format != MeshFormat::kPly && *out_format != MeshFormat::kDraco) {
+    std::cerr << "meshsmooth: warning: --ridges labels are kept only in .ply (vertex colours) and .drc "
+                 "(attributes) output; the summary still counts them\n";
+  }
   std::string draco;
+  std::vector<Rgb> input_colors;  // carried to PLY output (vertex i of the result is vertex i)
   const bool drc_input = FormatFromPath(o.input).ok() && *FormatFromPath(o.input) == MeshFormat::kDraco;
   if (drc_input) {
     bool ok = false;
@@ -251,6 +273,7 @@ int RunSmooth(const SmoothOptions& o, const ConnectionOptions& c) {
     absl::StatusOr<std::string> bytes = EncodeDraco(*mesh);
     if (!bytes.ok()) return err("", bytes.status());
     draco = std::move(*bytes);
+    input_colors = std::move(mesh->colors);
   }
   absl::StatusOr<v1::JobSpec> spec = SpecFrom(o);
   if (!spec.ok()) return err("", spec.status());
@@ -283,6 +306,13 @@ int RunSmooth(const SmoothOptions& o, const ConnectionOptions& c) {
   } else {
     absl::StatusOr<Mesh> result = DecodeDraco(outcome->result);
     if (!result.ok()) return err("the result: ", result.status());
+    if (o.ridges) {
+      absl::StatusOr<std::vector<float>> labels = DecodeDracoAttribute(outcome->result, kFeatureLabelAttribute);
+      if (!labels.ok()) return err("the result: ", labels.status());
+      result->colors = FeatureColors(std::vector<uint8_t>(labels->begin(), labels->end()));
+    } else if (input_colors.size() == result->positions.size()) {
+      result->colors = std::move(input_colors);
+    }
     if (absl::Status s = WriteMesh(o.output, *result); !s.ok()) return err("", s);
   }
   if (o.json) {
@@ -366,6 +396,80 @@ int RunInfo(const std::string& input) {
   return 0;
 }
 
+// Ridges and ravines of a mesh as it is (no smoothing), written as PLY vertex colours.
+int RunRidges(const std::string& input, const std::string& output, double threshold) {
+  absl::StatusOr<MeshFormat> format = FormatFromPath(output);
+  if (!format.ok() || *format != MeshFormat::kPly) {
+    std::cerr << "meshsmooth: ridges writes PLY (labels as vertex colours): give -o FILE.ply\n";
+    return kExitUsage;
+  }
+  if (!std::isfinite(threshold) || threshold < 0.0) {
+    std::cerr << "meshsmooth: --threshold must be finite and >= 0\n";
+    return kExitUsage;
+  }
+  absl::StatusOr<Mesh> mesh = LoadInput(input);
+  if (!mesh.ok()) {
+    std::cerr << "meshsmooth: " << mesh.status().message() << "\n";
+    return kExitFailure;
+  }
+  const Topology topo = BuildTopology(*mesh);
+  FeatureOptions options;
+  options.min_abs_curvature = threshold;
+  const Features features = DetectFeatures(*mesh, topo, options);
+  int64_t classified = 0;
+  for (uint8_t v : features.curvature.valid) classified += v != 0;
+  mesh->colors = FeatureColors(features.labels);
+  if (absl::Status s = WriteMesh(output, *mesh); !s.ok()) {
+    std::cerr << "meshsmooth: " << s.message() << "\n";
+    return kExitFailure;
+  }
+  std::printf("%lld ridge and %lld ravine vertices of %lld classified (%d vertices); wrote %s\n",
+              static_cast<long long>(features.ridges), static_cast<long long>(features.ravines),
+              static_cast<long long>(classified), mesh->num_vertices(), output.c_str());
+  return 0;
+}
+
+struct RenderCommand {
+  std::string input = "builtin:noisy-sphere", output, view = "30,20", size = "800x800", shading = "gouraud";
+};
+
+int RunRender(const RenderCommand& r) {
+  RenderOptions options;
+  absl::StatusOr<View> view = ParseView(r.view);
+  int w = 0, h = 0;
+  char tail = 0;
+  if (!view.ok()) {
+    std::cerr << "meshsmooth: --view: " << view.status().message() << "\n";
+    return kExitUsage;
+  }
+  if (std::sscanf(r.size.c_str(), "%dx%d%c", &w, &h, &tail) != 2 || w < kMinRenderSide || h < kMinRenderSide ||
+      w > kMaxRenderSide || h > kMaxRenderSide) {
+    std::cerr << "meshsmooth: --size must be WIDTHxHEIGHT with each side in " << kMinRenderSide << ".."
+              << kMaxRenderSide << ", e.g. 800x600, got '" << r.size << "'\n";
+    return kExitUsage;
+  }
+  options.view = *view;
+  options.width = w;
+  options.height = h;
+  options.shading = r.shading == "flat" ? Shading::kFlat : Shading::kGouraud;
+  absl::StatusOr<Mesh> mesh = LoadInput(r.input);
+  if (!mesh.ok()) {
+    std::cerr << "meshsmooth: " << mesh.status().message() << "\n";
+    return kExitFailure;
+  }
+  absl::StatusOr<Image> image = Render(*mesh, options);
+  if (!image.ok()) {
+    std::cerr << "meshsmooth: " << image.status().message() << "\n";
+    return kExitFailure;
+  }
+  if (absl::Status s = WritePng(r.output, *image); !s.ok()) {
+    std::cerr << "meshsmooth: " << s.message() << "\n";
+    return kExitFailure;
+  }
+  std::printf("wrote %s (%dx%d)\n", r.output.c_str(), image->width, image->height);
+  return 0;
+}
+
 void AddConnectionOptions(CLI::App* app, ConnectionOptions& c) {
   app->add_option("--server", c.server, "HOST:PORT of a meshsmoothd; default: an in-process server");
   app->add_option("--token-file", c.token_file, "file with the bearer token the server expects");
@@ -428,6 +532,12 @@ int main(int argc, char** argv) {
   smooth->add_flag("--edgebreaker", so.edgebreaker, "encode the result with Edgebreaker (reorders vertices)");
   smooth->add_flag("-q,--quiet", so.quiet, "print nothing but errors");
   smooth->add_flag("--json", so.json, "print the job summary as JSON on stdout (no progress)");
+  smooth->add_flag("--ridges", so.ridges,
+                   "detect ridge and ravine vertices after smoothing (paper Section 5); PLY output gets them as "
+                   "vertex colours (ridges black, ravines white, others grey), .drc output as attributes");
+  smooth->add_option("--ridge-threshold", so.ridge_threshold,
+                     "with --ridges: ignore features with |curvature| at or below this (1/mesh units)")
+      ->capture_default_str();
   AddConnectionOptions(smooth, sc);
 
   ConnectionOptions fc;
@@ -440,6 +550,27 @@ int main(int argc, char** argv) {
   CLI::App* info = app.add_subcommand("info", "Print a mesh's validation report and metrics (locally)");
   info->add_option("input", info_input, "mesh file (.obj .ply .off .stl .drc) or builtin:NAME")->capture_default_str();
 
+  std::string ridges_input, ridges_output;
+  double ridges_threshold = 0.0;
+  CLI::App* ridges = app.add_subcommand(
+      "ridges", "Detect ridge (black) and ravine (white) vertices of a mesh as it is, locally, into a PLY");
+  ridges->add_option("input", ridges_input, "mesh file or builtin:NAME")->required();
+  ridges->add_option("-o,--output", ridges_output, "output .ply (labels as vertex colours)")->required();
+  ridges->add_option("--threshold", ridges_threshold, "ignore features with |curvature| at or below this (1/mesh units)")
+      ->capture_default_str();
+
+  RenderCommand rc;
+  CLI::App* render = app.add_subcommand("render", "Render a mesh to a PNG picture (locally; vertex colours shown)");
+  render->add_option("input", rc.input, "mesh file or builtin:NAME")->capture_default_str();
+  render->add_option("-o,--output", rc.output, "output .png")->required();
+  render->add_option("--view", rc.view,
+                     "front | back | left | right | top | bottom | iso, or AZIMUTH,ELEVATION in degrees")
+      ->capture_default_str();
+  render->add_option("--size", rc.size, "WIDTHxHEIGHT in pixels (16..8192 each)")->capture_default_str();
+  render->add_option("--shading", rc.shading, "gouraud (smooth) | flat (one shade per face)")
+      ->check(CLI::IsMember({"gouraud", "flat"}))
+      ->capture_default_str();
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -448,5 +579,7 @@ int main(int argc, char** argv) {
   if (smooth->parsed()) return RunSmooth(so, sc);
   if (flows->parsed()) return RunFlows(fc, flows_json);
   if (info->parsed()) return RunInfo(info_input);
+  if (ridges->parsed()) return RunRidges(ridges_input, ridges_output, ridges_threshold);
+  if (render->parsed()) return RunRender(rc);
   return kExitUsage;
 }

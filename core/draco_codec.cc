@@ -2,11 +2,13 @@
 
 #include <exception>
 #include <memory>
+#include <variant>
 
 #include "absl/strings/str_cat.h"
 #include "draco/compression/decode.h"
 #include "draco/compression/encode.h"
 #include "draco/mesh/mesh.h"
+#include "draco/metadata/geometry_metadata.h"
 #include "core/weld.h"
 
 namespace meshsmooth {
@@ -105,6 +107,16 @@ absl::StatusOr<Mesh> PointMesh(const draco::Mesh& dm) {
   return mesh;
 }
 
+// The attribute whose metadata entry "name" is `name`, or -1.
+int NamedAttributeId(const draco::Mesh& dm, std::string_view name) {
+  for (int32_t i = 0; i < dm.num_attributes(); ++i) {
+    const draco::AttributeMetadata* md = dm.GetAttributeMetadataByAttributeId(i);
+    std::string value;
+    if (md != nullptr && md->GetEntryString("name", &value) && value == name) return i;
+  }
+  return -1;
+}
+
 absl::StatusOr<std::string> EncodeWithOptions(const draco::Mesh& dm, const DracoOptions& options) {
   if (options.quantization_bits < 0 || options.quantization_bits > 30) {
     return absl::InvalidArgumentError(
@@ -180,13 +192,56 @@ std::vector<std::string> DracoMesh::attribute_names() const {
   return names;
 }
 
-absl::StatusOr<std::string> DracoMesh::Encode(const Mesh& smoothed, const DracoOptions& options) {
+absl::StatusOr<std::vector<float>> DecodeDracoAttribute(std::string_view bytes, std::string_view name) {
+  absl::StatusOr<std::unique_ptr<draco::Mesh>> dm = DecodeToDraco(bytes);
+  if (!dm.ok()) return dm.status();
+  const int id = NamedAttributeId(**dm, name);
+  if (id < 0) return absl::NotFoundError(absl::StrCat("the Draco mesh has no attribute named '", std::string(name), "'"));
+  const draco::PointAttribute* a = (*dm)->attribute(id);
+  const uint32_t n = (*dm)->num_points();
+  std::vector<float> values(n);
+  for (uint32_t p = 0; p < n; ++p) {
+    const draco::AttributeValueIndex avi = a->mapped_index(draco::PointIndex(p));
+    if (avi.value() >= a->size() || !a->ConvertValue<float>(avi, 1, &values[p])) {
+      return absl::InvalidArgumentError(absl::StrCat("corrupt Draco mesh: no '", std::string(name), "' value for point ", p));
+    }
+  }
+  return values;
+}
+
+absl::StatusOr<std::string> DracoMesh::Encode(const Mesh& smoothed, const DracoOptions& options,
+                                              const std::vector<GenericAttribute>& extra) {
   if (smoothed.positions.size() != impl_->welded.positions.size()) {
     return absl::InvalidArgumentError(absl::StrCat("expected ", impl_->welded.positions.size(),
                                                    " positions, got ", smoothed.positions.size()));
   }
   draco::Mesh& dm = *impl_->draco;
   const uint32_t n = dm.num_points();
+  for (const GenericAttribute& g : extra) {
+    const size_t count = std::visit([](const auto& v) { return v.size(); }, g.values);
+    if (count != smoothed.positions.size()) {
+      return absl::InvalidArgumentError(absl::StrCat("attribute '", g.name, "' has ", count, " values for ",
+                                                     smoothed.positions.size(), " vertices"));
+    }
+    for (int id = NamedAttributeId(dm, g.name); id >= 0; id = NamedAttributeId(dm, g.name)) dm.DeleteAttribute(id);
+    const bool bytes = std::holds_alternative<std::vector<uint8_t>>(g.values);
+    draco::GeometryAttribute ga;
+    ga.Init(draco::GeometryAttribute::GENERIC, nullptr, 1, bytes ? draco::DT_UINT8 : draco::DT_FLOAT32, false,
+            bytes ? 1 : sizeof(float), 0);
+    const int id = dm.AddAttribute(ga, /*identity_mapping=*/true, n);
+    draco::PointAttribute* a = dm.attribute(id);
+    for (uint32_t p = 0; p < n; ++p) {
+      const int32_t v = impl_->point_to_vertex[p];
+      if (bytes) {
+        a->SetAttributeValue(draco::AttributeValueIndex(p), &std::get<std::vector<uint8_t>>(g.values)[v]);
+      } else {
+        a->SetAttributeValue(draco::AttributeValueIndex(p), &std::get<std::vector<float>>(g.values)[v]);
+      }
+    }
+    auto metadata = std::make_unique<draco::AttributeMetadata>();
+    metadata->AddEntryString("name", g.name);
+    dm.AddAttributeMetadata(id, std::move(metadata));
+  }
   draco::PointAttribute* pos = dm.attribute(dm.GetNamedAttributeId(draco::GeometryAttribute::POSITION));
   // A position attribute stored in another type (or with more components) is replaced by a
   // plain float32 xyz one with the same point mapping.

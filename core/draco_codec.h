@@ -10,6 +10,7 @@
 #include <memory>
 #include <string>
 #include <string_view>
+#include <variant>
 #include <vector>
 
 #include "absl/status/status.h"
@@ -33,6 +34,18 @@ absl::StatusOr<std::string> EncodeDraco(const Mesh& mesh, const DracoOptions& op
 // InvalidArgument with a clear message for corrupt bytes, a point cloud, an empty mesh or a
 // mesh without positions. Vertices are Draco's points (attribute seams stay split).
 absl::StatusOr<Mesh> DecodeDraco(std::string_view bytes);
+
+// Per-vertex values stored as a one-component Draco GENERIC attribute, named by the attribute
+// metadata entry "name" (how Draco files label generic data).
+struct GenericAttribute {
+  std::string name;
+  std::variant<std::vector<uint8_t>, std::vector<float>> values;  // one per vertex
+};
+
+// The values of the one-component attribute whose metadata "name" is `name`, converted to
+// float, one per point of DecodeDraco(bytes). NotFound when no attribute has that name;
+// InvalidArgument as DecodeDraco() for bad bytes.
+absl::StatusOr<std::vector<float>> DecodeDracoAttribute(std::string_view bytes, std::string_view name);
 
 // A decoded Draco mesh with every attribute it carries (normals, texture coordinates,
 // colours, generic attributes, metadata), for smoothing its positions in place.
@@ -61,8 +74,11 @@ class DracoMesh {
   // Sets the positions from `smoothed` (same vertex count as welded()), recomputes normals
   // from them (area-weighted over each point's faces, so hard edges split at seams stay hard),
   // keeps every other attribute unchanged, and encodes. Quantization applies to positions
-  // only; other attributes are stored losslessly.
-  absl::StatusOr<std::string> Encode(const Mesh& smoothed, const DracoOptions& options = {});
+  // only; other attributes are stored losslessly. `extra` attributes (one value per vertex of
+  // welded(), written to each of its points) are added, replacing any attribute of the same
+  // name; InvalidArgument when one has the wrong count.
+  absl::StatusOr<std::string> Encode(const Mesh& smoothed, const DracoOptions& options = {},
+                                     const std::vector<GenericAttribute>& extra = {});
 
  private:
   struct Impl;

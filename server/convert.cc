@@ -1,5 +1,7 @@
 #include "server/convert.h"
 
+#include <cmath>
+
 #include "absl/strings/str_cat.h"
 
 namespace meshsmooth::server {
@@ -40,6 +42,13 @@ absl::StatusOr<JobParams> FromProto(const v1::JobSpec& spec, int max_iterations)
   }
   j.output.quantization_bits = static_cast<int>(spec.output().quantization_bits());
   j.output.method = spec.output().edgebreaker() ? DracoMethod::kEdgebreaker : DracoMethod::kSequential;
+  j.detect_features = spec.features().enabled();
+  const double threshold = spec.features().min_abs_curvature();
+  if (!std::isfinite(threshold) || threshold < 0.0) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("features.min_abs_curvature must be finite and >= 0, got ", threshold));
+  }
+  j.features.min_abs_curvature = threshold;
   return j;
 }
 

@@ -3,6 +3,7 @@
 
 #include "absl/status/statusor.h"
 #include "core/draco_codec.h"
+#include "core/features/ridges.h"
 #include "core/flows/flow.h"
 #include "core/flows/flow_info.h"
 #include "core/metrics.h"
@@ -15,6 +16,8 @@ namespace meshsmooth::server {
 struct JobParams {
   FlowParams flow;
   DracoOptions output;
+  bool detect_features = false;
+  FeatureOptions features;
 };
 
 // InvalidArgument naming the field for anything out of range (iterations above

@@ -5,6 +5,7 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "core/draco_codec.h"
+#include "core/features/ridges.h"
 #include "core/flows/flow.h"
 #include "core/metrics.h"
 #include "core/topology.h"
@@ -119,7 +120,22 @@ void SmoothJob::Run() {
                 mesh.num_vertices(), result->iterations_run, decode_seconds, smooth_seconds);
   }
 
-  absl::StatusOr<std::string> encoded = draco->Encode(mesh, params_.output);
+  // Section 5 of the paper: ridges and ravines of the smoothed mesh (same connectivity, so
+  // the input's topology serves), sent as generic attributes.
+  v1::FeatureCounts counts;
+  std::vector<GenericAttribute> attributes;
+  if (params_.detect_features) {
+    const Clock::time_point t0 = Clock::now();
+    Features features = DetectFeatures(mesh, topo, params_.features);
+    counts.set_ridge_vertices(features.ridges);
+    counts.set_ravine_vertices(features.ravines);
+    int64_t classified = 0;
+    for (uint8_t v : features.curvature.valid) classified += v != 0;
+    counts.set_classified_vertices(classified);
+    attributes = FeatureAttributes(features);
+    counts.set_detect_seconds(Seconds(t0, Clock::now()));
+  }
+  absl::StatusOr<std::string> encoded = draco->Encode(mesh, params_.output, attributes);
   const Clock::time_point done = Clock::now();
   if (!encoded.ok()) {
     return fail(encoded.status(), mesh.num_vertices(), result->iterations_run, decode_seconds, smooth_seconds);
@@ -141,6 +157,7 @@ void SmoothJob::Run() {
   t->set_total_seconds(Seconds(received_, done));
   ToProto(params_, *result, summary.mutable_parameters());
   summary.set_result_bytes(encoded->size());
+  if (params_.detect_features) *summary.mutable_features() = counts;
   Log("OK", mesh.num_vertices(), result->iterations_run, decode_seconds, queue_seconds, smooth_seconds,
       Seconds(smoothed, done));
   Emit([&](JobSink& sink) { sink.OnResult(std::move(*encoded), summary); });

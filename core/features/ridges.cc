@@ -80,4 +80,23 @@ Features DetectFeatures(const Mesh& mesh, const Topology& topology, const Featur
   return out;
 }
 
+std::vector<GenericAttribute> FeatureAttributes(const Features& features) {
+  std::vector<float> kmax(features.curvature.kmax.begin(), features.curvature.kmax.end());
+  std::vector<float> kmin(features.curvature.kmin.begin(), features.curvature.kmin.end());
+  std::vector<GenericAttribute> out;
+  out.push_back({kFeatureLabelAttribute, features.labels});
+  out.push_back({kKmaxAttribute, std::move(kmax)});
+  out.push_back({kKminAttribute, std::move(kmin)});
+  return out;
+}
+
+std::vector<Rgb> FeatureColors(const std::vector<uint8_t>& labels) {
+  std::vector<Rgb> colors(labels.size(), Rgb{128, 128, 128});
+  for (size_t i = 0; i < labels.size(); ++i) {
+    if (labels[i] == static_cast<uint8_t>(FeatureLabel::kRidge)) colors[i] = Rgb{0, 0, 0};
+    if (labels[i] == static_cast<uint8_t>(FeatureLabel::kRavine)) colors[i] = Rgb{255, 255, 255};
+  }
+  return colors;
+}
+
 }  // namespace meshsmooth

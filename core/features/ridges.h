@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "core/draco_codec.h"
 #include "core/features/curvature.h"
 #include "core/mesh.h"
 #include "core/topology.h"
@@ -40,5 +41,17 @@ struct Features {
 // (boundary, non-manifold, isolated, degenerate), vertices with an invalid neighbour (the
 // interpolation is undefined), and vertices whose plane misses one side of the ring.
 Features DetectFeatures(const Mesh& mesh, const Topology& topology, const FeatureOptions& options = {});
+
+// Names of the generic Draco attributes a smoothing job with feature detection returns (part
+// of the meshsmooth.v1 contract, see FeatureDetection in proto/meshsmooth/v1/smoothing.proto).
+inline constexpr char kFeatureLabelAttribute[] = "feature_label";
+inline constexpr char kKmaxAttribute[] = "kmax";
+inline constexpr char kKminAttribute[] = "kmin";
+
+// The labels (uint8) and kmax, kmin (float32) as those three attributes.
+std::vector<GenericAttribute> FeatureAttributes(const Features& features);
+
+// Vertex colours of the paper's Fig. 11: ridges black, ravines white, everything else grey.
+std::vector<Rgb> FeatureColors(const std::vector<uint8_t>& labels);
 
 }  // namespace meshsmooth
