@@ -13,8 +13,6 @@
 namespace meshsmooth {
 namespace {
 
-Vec3 Normalized(const Vec3& v) { return v * (1.0 / Norm(v)); }
-
 // splitmix64: a tiny, well-mixed generator whose output is defined by this code alone (the
 // standard distributions are not bit-identical across library implementations).
 class SplitMix64 {

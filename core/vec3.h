@@ -26,6 +26,8 @@ constexpr Vec3 Cross(const Vec3& a, const Vec3& b) {
 }
 inline double Norm(const Vec3& a) { return std::sqrt(Dot(a, a)); }
 constexpr double SquaredNorm(const Vec3& a) { return Dot(a, a); }
+// a / |a|; not finite for the zero vector (callers check the norm first, or IsFinite after).
+inline Vec3 Normalized(const Vec3& a) { return a * (1.0 / Norm(a)); }
 inline bool IsFinite(const Vec3& a) {
   return std::isfinite(a.x) && std::isfinite(a.y) && std::isfinite(a.z);
 }

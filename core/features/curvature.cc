@@ -1,6 +1,7 @@
 #include "core/features/curvature.h"
 
 #include <cmath>
+#include <initializer_list>
 
 namespace meshsmooth {
 namespace {
@@ -10,11 +11,13 @@ namespace {
 constexpr double kTinyNormal = 1e-12;   // |sum of face cross products| vs sum of |edge|^2
 constexpr double kTinyEdge = 1e-24;     // |edge|^2 vs sum of |edge|^2
 constexpr double kTinyTangent = 1e-12;  // |tangent part|^2 vs |edge|^2
+// The least-squares fit's normal equations (weights summing to 1, unit directions: the
+// matrix has trace in [1, 1.5]) count as singular below this determinant: fewer than three
+// distinct directions modulo pi (the fit is then undetermined), or nearly so.
+constexpr double kTinyDeterminant = 1e-10;
 
 // Below this many vertices the OpenMP team costs more than the loop.
 constexpr int32_t kParallelMin = 4096;
-
-Vec3 Normalized(const Vec3& v) { return v * (1.0 / Norm(v)); }
 
 struct VertexEstimate {
   Vec3 normal, dir_max, dir_min;
@@ -57,8 +60,12 @@ VertexEstimate EstimateAt(const Mesh& mesh, const Topology& topo, int32_t v) {
   const Vec3 t1 = Vec3{0.0, 1.0, 0.0} - w * (2.0 * w.y);
   const Vec3 t2 = Vec3{0.0, 0.0, 1.0} - w * (2.0 * w.z);
 
-  // The tangent block of Q^T M Q, accumulated directly: (T.t1, T.t2) are T's coordinates.
-  double m11 = 0.0, m12 = 0.0, m22 = 0.0, weight_sum = 0.0;
+  // Weighted least squares for the tangent-plane tensor B = (b11 b12; b12 b22) in the basis
+  // (t1, t2): minimise sum_j w_j (T_j^T B T_j - kappa_j)^2 with T_j = (a, b), i.e.
+  // T_j^T B T_j = x_j . (b11, b12, b22) with x_j = (a^2, 2ab, b^2). Normal equations
+  // G beta = h with G = sum w x x^T (symmetric 3x3, upper triangle g..), h = sum w kappa x.
+  double g11 = 0.0, g12 = 0.0, g13 = 0.0, g22 = 0.0, g23 = 0.0, g33 = 0.0;
+  double h1 = 0.0, h2 = 0.0, h3 = 0.0, weight_sum = 0.0;
   int32_t used = 0;
   double area_prev = Norm(Cross(mesh.positions[ring[n - 1]] - p, mesh.positions[ring[0]] - p));
   for (int32_t k = 0; k < n; ++k) {
@@ -74,25 +81,38 @@ VertexEstimate EstimateAt(const Mesh& mesh, const Topology& topo, int32_t v) {
     const double kappa = -2.0 * Dot(normal, e) / len2;  // > 0 where the surface bends away from N
     const double inv_tan = 1.0 / std::sqrt(tan2);
     const double a = Dot(tangent, t1) * inv_tan, b = Dot(tangent, t2) * inv_tan;
-    const double wk = weight * kappa;
-    m11 += wk * a * a;
-    m12 += wk * a * b;
-    m22 += wk * b * b;
+    const double x1 = a * a, x2 = 2.0 * a * b, x3 = b * b;
+    g11 += weight * x1 * x1;
+    g12 += weight * x1 * x2;
+    g13 += weight * x1 * x3;
+    g22 += weight * x2 * x2;
+    g23 += weight * x2 * x3;
+    g33 += weight * x3 * x3;
+    h1 += weight * kappa * x1;
+    h2 += weight * kappa * x2;
+    h3 += weight * kappa * x3;
     weight_sum += weight;
     ++used;
   }
   if (used < 3 || !(weight_sum > 0.0)) return out;
-  m11 /= weight_sum;
-  m12 /= weight_sum;
-  m22 /= weight_sum;
+  const double inv_w = 1.0 / weight_sum;
+  for (double* x : {&g11, &g12, &g13, &g22, &g23, &g33, &h1, &h2, &h3}) *x *= inv_w;
 
-  // Symmetric 2x2 eigen-decomposition; the larger eigenvalue's vector is at angle theta.
-  const double mean = 0.5 * (m11 + m22), radius = std::hypot(0.5 * (m11 - m22), m12);
-  const double theta = 0.5 * std::atan2(2.0 * m12, m11 - m22);
-  // Taubin's relation between M's eigenvalues and the principal curvatures:
-  // kmax = 3 a - b, kmin = 3 b - a with a = mean + radius, b = mean - radius.
-  out.kmax = 2.0 * mean + 4.0 * radius;
-  out.kmin = 2.0 * mean - 4.0 * radius;
+  // Cramer's rule through the cofactors of the symmetric G.
+  const double c11 = g22 * g33 - g23 * g23, c12 = g13 * g23 - g12 * g33, c13 = g12 * g23 - g13 * g22;
+  const double c22 = g11 * g33 - g13 * g13, c23 = g12 * g13 - g11 * g23, c33 = g11 * g22 - g12 * g12;
+  const double det = g11 * c11 + g12 * c12 + g13 * c13;
+  if (!(det > kTinyDeterminant)) return out;  // G is positive semi-definite: det >= 0 up to rounding
+  const double inv_det = 1.0 / det;
+  const double b11 = (c11 * h1 + c12 * h2 + c13 * h3) * inv_det;
+  const double b12 = (c12 * h1 + c22 * h2 + c23 * h3) * inv_det;
+  const double b22 = (c13 * h1 + c23 * h2 + c33 * h3) * inv_det;
+
+  // Symmetric 2x2 eigen-decomposition of B: kmax = mean + radius along angle theta from t1.
+  const double mean = 0.5 * (b11 + b22), radius = std::hypot(0.5 * (b11 - b22), b12);
+  const double theta = 0.5 * std::atan2(2.0 * b12, b11 - b22);
+  out.kmax = mean + radius;
+  out.kmin = mean - radius;
   out.dir_max = t1 * std::cos(theta) + t2 * std::sin(theta);
   out.dir_min = Cross(normal, out.dir_max);
   out.valid = std::isfinite(out.kmax) && std::isfinite(out.kmin) && IsFinite(out.dir_max) &&
