@@ -91,7 +91,7 @@ std::vector<GenericAttribute> FeatureAttributes(const Features& features) {
 }
 
 std::vector<Rgb> FeatureColors(const std::vector<uint8_t>& labels) {
-  std::vector<Rgb> colors(labels.size(), Rgb{128, 128, 128});
+  std::vector<Rgb> colors(labels.size(), Rgb{200, 200, 200});
   for (size_t i = 0; i < labels.size(); ++i) {
     if (labels[i] == static_cast<uint8_t>(FeatureLabel::kRidge)) colors[i] = Rgb{0, 0, 0};
     if (labels[i] == static_cast<uint8_t>(FeatureLabel::kRavine)) colors[i] = Rgb{255, 255, 255};

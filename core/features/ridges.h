@@ -51,7 +51,8 @@ inline constexpr char kKminAttribute[] = "kmin";
 // The labels (uint8) and kmax, kmin (float32) as those three attributes.
 std::vector<GenericAttribute> FeatureAttributes(const Features& features);
 
-// Vertex colours of the paper's Fig. 11: ridges black, ravines white, everything else grey.
+// Vertex colours of the paper's Fig. 11: ridges black, ravines white, everything else light
+// grey (200, 200, 200; light enough that black lines stand out once shaded).
 std::vector<Rgb> FeatureColors(const std::vector<uint8_t>& labels);
 
 }  // namespace meshsmooth
