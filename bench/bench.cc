@@ -28,6 +28,7 @@
 #include "core/draco_codec.h"
 #include "core/flows/flow.h"
 #include "core/io/mesh_io.h"
+#include "core/metrics.h"
 #include "core/shapes.h"
 #include "core/topology.h"
 #include "server/server.h"
@@ -229,6 +230,47 @@ double PeakBytesPerVertex(const Mesh& mesh, const std::string& self) {
   return value;
 }
 
+// Where a job's time goes besides smoothing, step by step as smooth_job.cc runs them (medians).
+void ServiceBreakdown(const NamedMesh& nm, int runs) {
+  Mesh mesh = nm.mesh;
+  for (Vec3& p : mesh.positions) p = RoundToFloat(p);
+  const std::string draco = *EncodeDraco(mesh);
+  std::map<std::string, std::vector<double>> t;
+  for (int r = 0; r < runs; ++r) {
+    auto t0 = Clock::now();
+    absl::StatusOr<Mesh> plain = DecodeDraco(draco);
+    auto t1 = Clock::now();
+    absl::StatusOr<DracoMesh> dm = DracoMesh::Decode(draco);
+    auto t2 = Clock::now();
+    Mesh m = dm->welded();
+    ValidationReport report;
+    const Topology topo = BuildTopology(m, &report);
+    auto t3 = Clock::now();
+    const MeshMetrics before = ComputeMetrics(m, topo);
+    auto t4 = Clock::now();
+    const Mesh input = m;
+    auto t5 = Clock::now();
+    absl::StatusOr<Displacement> d = CompareMeshes(input, m);
+    auto t6 = Clock::now();
+    absl::StatusOr<std::string> enc = dm->Encode(m);
+    auto t7 = Clock::now();
+    t["Draco decode (points)"].push_back(Ms(t0, t1));
+    t["Draco decode + weld (DracoMesh::Decode)"].push_back(Ms(t1, t2));
+    t["copy welded + BuildTopology (validation)"].push_back(Ms(t2, t3));
+    t["ComputeMetrics (once; a job runs it twice)"].push_back(Ms(t3, t4));
+    t["copy of the input (for the displacement)"].push_back(Ms(t4, t5));
+    t["CompareMeshes"].push_back(Ms(t5, t6));
+    t["DracoMesh::Encode"].push_back(Ms(t6, t7));
+    if (!plain.ok() || !d.ok() || !enc.ok() || before.area < 0) std::printf(" ");
+  }
+  std::printf("\n### Service job steps, %s (medians of %d)\n\n| step | ms |\n|---|---|\n", nm.name.c_str(), runs);
+  for (const char* k : {"Draco decode (points)", "Draco decode + weld (DracoMesh::Decode)",
+                        "copy welded + BuildTopology (validation)", "ComputeMetrics (once; a job runs it twice)",
+                        "copy of the input (for the displacement)", "CompareMeshes", "DracoMesh::Encode"}) {
+    std::printf("| %s | %.1f |\n", k, Median(t[k]));
+  }
+}
+
 void ServiceRow(const NamedMesh& nm, int iterations, int runs) {
   Mesh mesh = nm.mesh;
   for (Vec3& p : mesh.positions) p = RoundToFloat(p);
@@ -381,6 +423,9 @@ int main(int argc, char** argv) {
     for (const NamedMesh& nm : meshes) {
       if (nm.mesh.num_vertices() < 600'000) continue;
       ServiceRow(nm, 10, opt.runs);
+    }
+    for (const NamedMesh& nm : meshes) {
+      if (nm.mesh.num_vertices() >= 600'000 && nm.mesh.num_vertices() < 1'000'000) ServiceBreakdown(nm, opt.runs);
     }
   }
   return 0;

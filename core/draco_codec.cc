@@ -1,5 +1,6 @@
 #include "core/draco_codec.h"
 
+#include <algorithm>
 #include <exception>
 #include <memory>
 #include <variant>
@@ -228,8 +229,19 @@ absl::StatusOr<std::string> DracoMesh::Encode(const Mesh& smoothed, const DracoO
     draco::GeometryAttribute ga;
     ga.Init(draco::GeometryAttribute::GENERIC, nullptr, 1, bytes ? draco::DT_UINT8 : draco::DT_FLOAT32, false,
             bytes ? 1 : sizeof(float), 0);
+    // Draco numbers a new attribute's unique id by its index, which after a deletion can be
+    // the id of an attribute still present (or of metadata left behind); the metadata would
+    // then name the wrong attribute. A fresh id above every id in use avoids that.
+    uint32_t fresh_id = 0;
+    for (int32_t i = 0; i < dm.num_attributes(); ++i) fresh_id = std::max(fresh_id, dm.attribute(i)->unique_id() + 1);
+    if (const draco::GeometryMetadata* md = dm.GetMetadata()) {
+      for (const auto& am : md->attribute_metadatas()) {
+        fresh_id = std::max(fresh_id, static_cast<uint32_t>(am->att_unique_id()) + 1);
+      }
+    }
     const int id = dm.AddAttribute(ga, /*identity_mapping=*/true, n);
     draco::PointAttribute* a = dm.attribute(id);
+    a->set_unique_id(fresh_id);
     for (uint32_t p = 0; p < n; ++p) {
       const int32_t v = impl_->point_to_vertex[p];
       if (bytes) {

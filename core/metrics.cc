@@ -5,30 +5,59 @@
 #include <limits>
 #include <numbers>
 #include <sstream>
+#include <utility>
+#include <vector>
 
 #include "absl/strings/str_cat.h"
 
 namespace meshsmooth {
 namespace {
 
+// Fixed blocks of this many items, reduced in block order: sums do not depend on threads.
+constexpr int64_t kMetricBlock = 16384;
+
+// fn(begin, end) -> Partial for each block of [0, n), on all cores when n is large; the
+// partials are merged in block order.
+template <typename Partial, typename Fn, typename Merge>
+Partial BlockReduce(int64_t n, Fn&& fn, Merge&& merge) {
+  const int64_t blocks = (n + kMetricBlock - 1) / kMetricBlock;
+  std::vector<Partial> parts(static_cast<size_t>(blocks));
+#pragma omp parallel for schedule(static) if (blocks > 4)
+  for (int64_t b = 0; b < blocks; ++b) parts[b] = fn(b * kMetricBlock, std::min(n, (b + 1) * kMetricBlock));
+  Partial total{};
+  for (const Partial& p : parts) merge(total, p);
+  return total;
+}
+
+// Sums fn(a, b) over the edges (a < b) of the vertices' rings, in fixed blocks of vertices.
 template <typename Fn>
-void ForEachEdge(const Topology& topo, Fn&& fn) {
-  for (int32_t v = 0; v < topo.num_vertices(); ++v) {
-    for (int32_t i = topo.ring_offsets[v]; i < topo.ring_offsets[v + 1]; ++i) {
-      if (v < topo.ring[i]) fn(v, topo.ring[i]);
-    }
-  }
+std::pair<double, int64_t> SumOverEdges(const Topology& topo, Fn&& fn) {
+  using Partial = std::pair<double, int64_t>;
+  return BlockReduce<Partial>(
+      topo.num_vertices(),
+      [&](int64_t begin, int64_t end) {
+        Partial p{0.0, 0};
+        for (int32_t v = static_cast<int32_t>(begin); v < end; ++v) {
+          for (int32_t i = topo.ring_offsets[v]; i < topo.ring_offsets[v + 1]; ++i) {
+            if (v < topo.ring[i]) {
+              p.first += fn(v, topo.ring[i]);
+              ++p.second;
+            }
+          }
+        }
+        return p;
+      },
+      [](Partial& t, const Partial& p) {
+        t.first += p.first;
+        t.second += p.second;
+      });
 }
 
 }  // namespace
 
 double MeanEdgeLength(const Mesh& mesh, const Topology& topo) {
-  double sum = 0.0;
-  int64_t count = 0;
-  ForEachEdge(topo, [&](int32_t a, int32_t b) {
-    sum += Norm(mesh.positions[a] - mesh.positions[b]);
-    ++count;
-  });
+  const auto [sum, count] =
+      SumOverEdges(topo, [&](int32_t a, int32_t b) { return Norm(mesh.positions[a] - mesh.positions[b]); });
   return count > 0 ? sum / static_cast<double>(count) : 0.0;
 }
 
@@ -43,28 +72,47 @@ MeshMetrics ComputeMetrics(const Mesh& mesh, const Topology& topo) {
   }
   if (referenced > 0) centroid *= 1.0 / static_cast<double>(referenced);
 
-  double min_angle = std::numeric_limits<double>::infinity(), sum_min_angle = 0.0;
-  int64_t below10 = 0;
+  struct FacePartial {
+    double area = 0.0, volume = 0.0, min_angle = std::numeric_limits<double>::infinity(), sum_min_angle = 0.0;
+    int64_t below10 = 0;
+  };
   const double tan10 = std::tan(10.0 * std::numbers::pi / 180.0);
-  for (int32_t f : topo.faces) {
-    const Triangle& t = mesh.triangles[f];
-    const Vec3 a = mesh.positions[t[0]] - centroid, b = mesh.positions[t[1]] - centroid,
-               c = mesh.positions[t[2]] - centroid;
-    const Vec3 ab = b - a, bc = c - b, ca = a - c;
-    const double cross = Norm(Cross(ab, -ca));  // twice the area, shared by the three angles
-    m.area += 0.5 * cross;
-    m.signed_volume += Dot(a, Cross(b, c)) / 6.0;
-    // Angle at a corner = atan2(cross, dot of its two edges); below 10 degrees exactly when the
-    // dot is positive and cross < tan(10 deg) dot (or the corner is degenerate: atan2(0, 0) = 0).
-    const double dots[3] = {-Dot(ab, ca), -Dot(bc, ab), -Dot(ca, bc)};  // at a, b, c
-    for (double d : dots) below10 += (d > 0.0 && cross < tan10 * d) || (d == 0.0 && cross == 0.0);
-    // The smallest angle is opposite the shortest edge: one atan2 per face.
-    const double lab = SquaredNorm(ab), lbc = SquaredNorm(bc), lca = SquaredNorm(ca);
-    const double d = lbc <= lab && lbc <= lca ? dots[0] : (lca <= lab ? dots[1] : dots[2]);
-    const double face_min = std::atan2(cross, d);
-    min_angle = std::min(min_angle, face_min);
-    sum_min_angle += face_min;
-  }
+  const FacePartial faces = BlockReduce<FacePartial>(
+      static_cast<int64_t>(topo.faces.size()),
+      [&](int64_t begin, int64_t end) {
+        FacePartial q;
+        for (int64_t i = begin; i < end; ++i) {
+          const Triangle& t = mesh.triangles[topo.faces[i]];
+          const Vec3 a = mesh.positions[t[0]] - centroid, b = mesh.positions[t[1]] - centroid,
+                     c = mesh.positions[t[2]] - centroid;
+          const Vec3 ab = b - a, bc = c - b, ca = a - c;
+          const double cross = Norm(Cross(ab, -ca));  // twice the area, shared by the three angles
+          q.area += 0.5 * cross;
+          q.volume += Dot(a, Cross(b, c)) / 6.0;
+          // Angle at a corner = atan2(cross, dot of its two edges); below 10 degrees exactly when
+          // the dot is positive and cross < tan(10 deg) dot (or the corner is degenerate).
+          const double dots[3] = {-Dot(ab, ca), -Dot(bc, ab), -Dot(ca, bc)};  // at a, b, c
+          for (double d : dots) q.below10 += (d > 0.0 && cross < tan10 * d) || (d == 0.0 && cross == 0.0);
+          // The smallest angle is opposite the shortest edge: one atan2 per face.
+          const double lab = SquaredNorm(ab), lbc = SquaredNorm(bc), lca = SquaredNorm(ca);
+          const double d = lbc <= lab && lbc <= lca ? dots[0] : (lca <= lab ? dots[1] : dots[2]);
+          const double face_min = std::atan2(cross, d);
+          q.min_angle = std::min(q.min_angle, face_min);
+          q.sum_min_angle += face_min;
+        }
+        return q;
+      },
+      [](FacePartial& t, const FacePartial& q) {
+        t.area += q.area;
+        t.volume += q.volume;
+        t.min_angle = std::min(t.min_angle, q.min_angle);
+        t.sum_min_angle += q.sum_min_angle;
+        t.below10 += q.below10;
+      });
+  m.area = faces.area;
+  m.signed_volume = faces.volume;
+  const double min_angle = faces.min_angle, sum_min_angle = faces.sum_min_angle;
+  const int64_t below10 = faces.below10;
   const double nf = static_cast<double>(topo.faces.size());
   if (!topo.faces.empty()) {
     m.min_angle_deg = min_angle * 180.0 / std::numbers::pi;
@@ -73,12 +121,9 @@ MeshMetrics ComputeMetrics(const Mesh& mesh, const Topology& topo) {
   }
 
   m.edge_length_mean = MeanEdgeLength(mesh, topo);
-  double sq = 0.0;
-  int64_t count = 0;
-  ForEachEdge(topo, [&](int32_t a, int32_t b) {
+  const auto [sq, count] = SumOverEdges(topo, [&](int32_t a, int32_t b) {
     const double d = Norm(mesh.positions[a] - mesh.positions[b]) - m.edge_length_mean;
-    sq += d * d;
-    ++count;
+    return d * d;
   });
   if (count > 0 && m.edge_length_mean > 0.0) {
     m.edge_length_cv = std::sqrt(sq / static_cast<double>(count)) / m.edge_length_mean;

@@ -1,5 +1,7 @@
 #include "core/topology.h"
 
+#include <omp.h>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -88,6 +90,105 @@ bool WalkFan(Scratch& s, int32_t start, int32_t start_face, bool closed, int32_t
   return static_cast<int32_t>(s.ring.size()) == distinct;
 }
 
+// What ProcessVertices finds in its range of vertices.
+struct RangeResult {
+  std::vector<int32_t> ring;                          // the range's rings, in vertex order
+  std::vector<std::pair<int32_t, int32_t>> boundary;  // boundary edges (v < w)
+  ValidationReport counts;                            // only the per-vertex counts are used
+};
+
+// Meshes below this build their topology on one thread.
+constexpr int32_t kParallelTopologyThreshold = 50000;
+
+// Fans, rings, kinds and edge counts of vertices [begin, end). Writes kind[v] and, relative to
+// the range's own ring, ring_offsets[v + 1]; each edge is counted at its smaller endpoint and
+// each set of duplicate faces at its smallest vertex, so ranges never count a thing twice.
+void ProcessVertices(const Mesh& mesh, const std::vector<int32_t>& vf_offsets, const std::vector<int32_t>& vf,
+                     int32_t begin, int32_t end, Topology& topo, RangeResult& out) {
+  ValidationReport& r = out.counts;
+  Scratch s;
+  std::vector<std::pair<int32_t, int32_t>> owned;  // (middle, largest) of faces whose smallest vertex is v
+  for (int32_t v = begin; v < end; ++v) {
+    s.faces.clear();
+    owned.clear();
+    for (int32_t i = vf_offsets[v]; i < vf_offsets[v + 1]; ++i) {
+      const Triangle& t = mesh.triangles[vf[i]];
+      const int32_t k = t[0] == v ? 0 : (t[1] == v ? 1 : 2);
+      const int32_t a = t[(k + 1) % 3], b = t[(k + 2) % 3];
+      s.faces.push_back({a, b});
+      if (v < a && v < b) owned.push_back(std::minmax(a, b));
+    }
+    std::sort(owned.begin(), owned.end());
+    for (size_t i = 1; i < owned.size(); ++i) r.duplicate_faces += owned[i] == owned[i - 1];
+    const int32_t nf = static_cast<int32_t>(s.faces.size());
+    if (nf == 0) {
+      ++r.unreferenced_vertices;
+      topo.ring_offsets[v + 1] = static_cast<int32_t>(out.ring.size());
+      continue;
+    }
+    s.inc.clear();
+    for (int32_t i = 0; i < nf; ++i) {
+      s.inc.push_back({s.faces[i].a, i});
+      s.inc.push_back({s.faces[i].b, i});
+    }
+    std::sort(s.inc.begin(), s.inc.end());
+    s.fan_parent.resize(nf);
+    std::iota(s.fan_parent.begin(), s.fan_parent.end(), 0);
+
+    int32_t distinct = 0, boundary_start = -1, boundary_start_face = -1;
+    bool has_nonmanifold_edge = false, has_boundary_edge = false;
+    for (size_t i = 0; i < s.inc.size();) {
+      size_t j = i;
+      while (j < s.inc.size() && s.inc[j].w == s.inc[i].w) ++j;
+      const int32_t w = s.inc[i].w;
+      const size_t count = j - i;
+      ++distinct;
+      if (count == 1) {
+        has_boundary_edge = true;
+        // Prefer the neighbour from which the fan runs in the faces' own orientation.
+        if (boundary_start < 0 || s.faces[s.inc[i].face].a == w) {
+          boundary_start = w;
+          boundary_start_face = s.inc[i].face;
+        }
+        if (v < w) {
+          ++r.boundary_edges;
+          out.boundary.emplace_back(v, w);
+        }
+      } else if (count == 2) {
+        const int32_t f0 = s.inc[i].face, f1 = s.inc[i + 1].face;
+        s.fan_parent[FanFind(s.fan_parent, f0)] = FanFind(s.fan_parent, f1);
+        if (v < w && (s.faces[f0].a == w) == (s.faces[f1].a == w)) {
+          ++r.inconsistently_oriented_edges;
+        }
+      } else {
+        has_nonmanifold_edge = true;
+        if (v < w) ++r.nonmanifold_edges;
+      }
+      if (v < w) ++r.edges;
+      i = j;
+    }
+    int32_t fans = 0;
+    for (int32_t i = 0; i < nf; ++i) fans += FanFind(s.fan_parent, i) == i;
+    if (fans > 1) ++r.nonmanifold_vertices;
+
+    bool walked = false;
+    if (fans == 1 && !has_nonmanifold_edge) {
+      walked = has_boundary_edge ? WalkFan(s, boundary_start, boundary_start_face, false, distinct)
+                                 : WalkFan(s, s.faces[0].a, 0, true, distinct);
+    }
+    if (walked) {
+      topo.kind[v] = has_boundary_edge ? VertexKind::kBoundary : VertexKind::kInterior;
+      out.ring.insert(out.ring.end(), s.ring.begin(), s.ring.end());
+    } else {
+      topo.kind[v] = VertexKind::kNonManifold;
+      for (size_t i = 0; i < s.inc.size(); ++i) {
+        if (i == 0 || s.inc[i].w != s.inc[i - 1].w) out.ring.push_back(s.inc[i].w);
+      }
+    }
+    topo.ring_offsets[v + 1] = static_cast<int32_t>(out.ring.size());
+  }
+}
+
 }  // namespace
 
 Topology BuildTopology(const Mesh& mesh, ValidationReport* report) {
@@ -142,84 +243,38 @@ Topology BuildTopology(const Mesh& mesh, ValidationReport* report) {
     if (area < 1e-12 * diag2) ++r.zero_area_faces;  // NaN areas compare false: not counted
   }
 
+  // The per-vertex work (fans, rings, edge counts) in contiguous vertex ranges, one per
+  // thread; rings are concatenated in range order, so the result does not depend on threads.
+  const int threads = n >= kParallelTopologyThreshold ? std::max(1, omp_get_max_threads()) : 1;
+  std::vector<RangeResult> parts(threads);
+#pragma omp parallel for schedule(static, 1) num_threads(threads) if (threads > 1)
+  for (int part = 0; part < threads; ++part) {
+    const int32_t begin = static_cast<int32_t>(int64_t{n} * part / threads);
+    const int32_t end = static_cast<int32_t>(int64_t{n} * (part + 1) / threads);
+    ProcessVertices(mesh, vf_offsets, vf, begin, end, topo, parts[part]);
+  }
+  topo.ring.reserve(vf.size() + 16);
   DisjointSets boundary_sets(n);
   std::vector<uint8_t> on_boundary(n, 0);
-  topo.ring.reserve(vf.size() + 16);
-  Scratch s;
-  for (int32_t v = 0; v < n; ++v) {
-    s.faces.clear();
-    for (int32_t i = vf_offsets[v]; i < vf_offsets[v + 1]; ++i) {
-      const Triangle& t = mesh.triangles[vf[i]];
-      const int32_t k = t[0] == v ? 0 : (t[1] == v ? 1 : 2);
-      s.faces.push_back({t[(k + 1) % 3], t[(k + 2) % 3]});
+  for (int part = 0; part < threads; ++part) {
+    RangeResult& q = parts[part];
+    const int32_t begin = static_cast<int32_t>(int64_t{n} * part / threads);
+    const int32_t end = static_cast<int32_t>(int64_t{n} * (part + 1) / threads);
+    const int32_t base = static_cast<int32_t>(topo.ring.size());
+    for (int32_t v = begin; v < end; ++v) topo.ring_offsets[v + 1] += base;
+    topo.ring.insert(topo.ring.end(), q.ring.begin(), q.ring.end());
+    std::vector<int32_t>().swap(q.ring);
+    for (const auto& [a, b] : q.boundary) {
+      boundary_sets.Union(a, b);
+      on_boundary[a] = on_boundary[b] = 1;
     }
-    const int32_t nf = static_cast<int32_t>(s.faces.size());
-    if (nf == 0) {
-      ++r.unreferenced_vertices;
-      topo.ring_offsets[v + 1] = static_cast<int32_t>(topo.ring.size());
-      continue;
-    }
-    s.inc.clear();
-    for (int32_t i = 0; i < nf; ++i) {
-      s.inc.push_back({s.faces[i].a, i});
-      s.inc.push_back({s.faces[i].b, i});
-    }
-    std::sort(s.inc.begin(), s.inc.end());
-    s.fan_parent.resize(nf);
-    std::iota(s.fan_parent.begin(), s.fan_parent.end(), 0);
-
-    int32_t distinct = 0, boundary_start = -1, boundary_start_face = -1;
-    bool has_nonmanifold_edge = false, has_boundary_edge = false;
-    for (size_t i = 0; i < s.inc.size();) {
-      size_t j = i;
-      while (j < s.inc.size() && s.inc[j].w == s.inc[i].w) ++j;
-      const int32_t w = s.inc[i].w;
-      const size_t count = j - i;
-      ++distinct;
-      if (count == 1) {
-        has_boundary_edge = true;
-        // Prefer the neighbour from which the fan runs in the faces' own orientation.
-        if (boundary_start < 0 || s.faces[s.inc[i].face].a == w) {
-          boundary_start = w;
-          boundary_start_face = s.inc[i].face;
-        }
-        if (v < w) {
-          ++r.boundary_edges;
-          boundary_sets.Union(v, w);
-          on_boundary[v] = on_boundary[w] = 1;
-        }
-      } else if (count == 2) {
-        const int32_t f0 = s.inc[i].face, f1 = s.inc[i + 1].face;
-        s.fan_parent[FanFind(s.fan_parent, f0)] = FanFind(s.fan_parent, f1);
-        if (v < w && (s.faces[f0].a == w) == (s.faces[f1].a == w)) {
-          ++r.inconsistently_oriented_edges;
-        }
-      } else {
-        has_nonmanifold_edge = true;
-        if (v < w) ++r.nonmanifold_edges;
-      }
-      if (v < w) ++r.edges;
-      i = j;
-    }
-    int32_t fans = 0;
-    for (int32_t i = 0; i < nf; ++i) fans += FanFind(s.fan_parent, i) == i;
-    if (fans > 1) ++r.nonmanifold_vertices;
-
-    bool walked = false;
-    if (fans == 1 && !has_nonmanifold_edge) {
-      walked = has_boundary_edge ? WalkFan(s, boundary_start, boundary_start_face, false, distinct)
-                                 : WalkFan(s, s.faces[0].a, 0, true, distinct);
-    }
-    if (walked) {
-      topo.kind[v] = has_boundary_edge ? VertexKind::kBoundary : VertexKind::kInterior;
-      topo.ring.insert(topo.ring.end(), s.ring.begin(), s.ring.end());
-    } else {
-      topo.kind[v] = VertexKind::kNonManifold;
-      for (size_t i = 0; i < s.inc.size(); ++i) {
-        if (i == 0 || s.inc[i].w != s.inc[i - 1].w) topo.ring.push_back(s.inc[i].w);
-      }
-    }
-    topo.ring_offsets[v + 1] = static_cast<int32_t>(topo.ring.size());
+    r.unreferenced_vertices += q.counts.unreferenced_vertices;
+    r.boundary_edges += q.counts.boundary_edges;
+    r.inconsistently_oriented_edges += q.counts.inconsistently_oriented_edges;
+    r.nonmanifold_edges += q.counts.nonmanifold_edges;
+    r.edges += q.counts.edges;
+    r.nonmanifold_vertices += q.counts.nonmanifold_vertices;
+    r.duplicate_faces += q.counts.duplicate_faces;
   }
 
   for (int32_t v = 0; v < n; ++v) {
@@ -234,15 +289,6 @@ Topology BuildTopology(const Mesh& mesh, ValidationReport* report) {
   for (int32_t v = 0; v < n; ++v) {
     if (topo.kind[v] != VertexKind::kIsolated && components.Find(v) == v) ++r.connected_components;
   }
-  std::vector<Triangle> sorted;
-  sorted.reserve(topo.faces.size());
-  for (int32_t f : topo.faces) {
-    Triangle t = mesh.triangles[f];
-    std::sort(t.begin(), t.end());
-    sorted.push_back(t);
-  }
-  std::sort(sorted.begin(), sorted.end());
-  for (size_t i = 1; i < sorted.size(); ++i) r.duplicate_faces += sorted[i] == sorted[i - 1];
 
   if (report != nullptr) *report = r;
   return topo;

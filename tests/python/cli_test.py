@@ -8,11 +8,14 @@ Prints one line per check and ends with 'N passed, M failed'.
 import argparse
 import json
 import os
+import re
 import signal
+import struct
 import subprocess
 import sys
 import tempfile
 import time
+import zlib
 
 passed, failed = 0, 0
 
@@ -46,6 +49,102 @@ def ply_counts(path):
         if len(parts) == 3 and parts[0] == "element":
             counts[parts[1]] = int(parts[2])
     return counts.get("vertex"), counts.get("face")
+
+
+def read_ply_colors(path):
+    """(vertex count, face count, [(r, g, b)] per vertex) of a PLY whose vertices are x y z float
+    followed by red green blue uchar (binary little endian or ASCII)."""
+    with open(path, "rb") as f:
+        data = f.read()
+    end = data.find(b"end_header\n")
+    if not data.startswith(b"ply\n") or end < 0:
+        raise AssertionError(f"{path}: not a PLY file")
+    header = data[:end].decode().splitlines()
+    body = data[end + len(b"end_header\n"):]
+    fmt, vertices, faces, props, element = None, None, None, [], None
+    for line in header:
+        parts = line.split()
+        if parts[:1] == ["format"]:
+            fmt = parts[1]
+        elif parts[:1] == ["element"]:
+            element = parts[1]
+            if element == "vertex":
+                vertices = int(parts[2])
+            elif element == "face":
+                faces = int(parts[2])
+        elif parts[:1] == ["property"] and element == "vertex":
+            props.append((parts[1], parts[2]))
+    want = [("float", "x"), ("float", "y"), ("float", "z"), ("uchar", "red"), ("uchar", "green"), ("uchar", "blue")]
+    assert props == want, f"{path}: vertex properties {props}, want {want}"
+    assert vertices is not None and faces is not None, header
+    if fmt == "binary_little_endian":
+        rec = struct.Struct("<3f3B")
+        assert len(body) >= vertices * rec.size + faces * 13, f"{path}: truncated body"
+        colors = [rec.unpack_from(body, i * rec.size)[3:] for i in range(vertices)]
+    elif fmt == "ascii":
+        lines = body.decode().splitlines()
+        colors = [tuple(int(x) for x in lines[i].split()[3:6]) for i in range(vertices)]
+    else:
+        raise AssertionError(f"{path}: unexpected PLY format {fmt}")
+    return vertices, faces, colors
+
+
+# FeatureColors() in core/features/ridges.h: ridges black, ravines white, the rest light grey.
+GREY, BLACK, WHITE = (200, 200, 200), (0, 0, 0), (255, 255, 255)
+
+
+def label_colour_counts(colors):
+    """(black, white) counts; fails when a vertex is neither black, white nor grey."""
+    others = [c for c in colors if c not in (GREY, BLACK, WHITE)]
+    assert not others, f"{len(others)} vertices neither grey, black nor white, e.g. {others[:3]}"
+    return colors.count(BLACK), colors.count(WHITE)
+
+
+def read_png(path):
+    """(width, height, rows of RGB tuples) of an 8-bit RGB, non-interlaced PNG."""
+    with open(path, "rb") as f:
+        data = f.read()
+    assert data[:8] == b"\x89PNG\r\n\x1a\n", f"{path}: no PNG signature: {data[:8]!r}"
+    assert data[12:16] == b"IHDR", f"{path}: the first chunk is {data[12:16]!r}, not IHDR"
+    width, height = struct.unpack(">II", data[16:24])
+    depth, colour_type, _, _, interlace = data[24:29]
+    assert (depth, colour_type, interlace) == (8, 2, 0), (depth, colour_type, interlace)
+    idat, pos = b"", 8
+    while pos < len(data):
+        (length,) = struct.unpack(">I", data[pos:pos + 4])
+        kind = data[pos + 4:pos + 8]
+        chunk = data[pos + 8:pos + 8 + length]
+        assert zlib.crc32(kind + chunk) == struct.unpack(">I", data[pos + 8 + length:pos + 12 + length])[0], kind
+        if kind == b"IDAT":
+            idat += chunk
+        pos += 12 + length
+        if kind == b"IEND":
+            break
+    raw = zlib.decompress(idat)
+    stride = 3 * width
+    assert len(raw) == height * (stride + 1), (len(raw), width, height)
+    rows, prev = [], bytearray(stride)
+    for y in range(height):
+        ftype, line = raw[y * (stride + 1)], bytearray(raw[y * (stride + 1) + 1:(y + 1) * (stride + 1)])
+        for i in range(stride):
+            a = line[i - 3] if i >= 3 else 0
+            b = prev[i]
+            c = prev[i - 3] if i >= 3 else 0
+            if ftype == 1:
+                line[i] = (line[i] + a) & 255
+            elif ftype == 2:
+                line[i] = (line[i] + b) & 255
+            elif ftype == 3:
+                line[i] = (line[i] + (a + b) // 2) & 255
+            elif ftype == 4:
+                p = a + b - c
+                pa, pb, pc = abs(p - a), abs(p - b), abs(p - c)
+                line[i] = (line[i] + (a if pa <= pb and pa <= pc else b if pb <= pc else c)) & 255
+            else:
+                assert ftype == 0, f"bad PNG filter type {ftype}"
+        rows.append([tuple(line[x * 3:x * 3 + 3]) for x in range(width)])
+        prev = line
+    return width, height, rows
 
 
 def main():
@@ -103,6 +202,97 @@ def main():
         r = run([cli, "smooth", "builtin:sphere", "-o", out_ply, "--server", "127.0.0.1:1", "--timeout", "5"])
         assert r.returncode == 3, (r.returncode, r.stderr)
     check("an unreachable server exits 3", unreachable)
+
+    ridges_ply = os.path.join(tmp, "ridges.ply")
+
+    def ridges_command():
+        r = run([cli, "ridges", "builtin:noisy-sphere", "-o", ridges_ply])
+        assert r.returncode == 0, (r.returncode, r.stderr)
+        m = re.search(r"(\d+) ridge and (\d+) ravine vertices of (\d+) classified \((\d+) vertices\); wrote (\S+)",
+                      r.stdout)
+        assert m, r.stdout
+        ridges, ravines, classified, vertices = (int(m.group(i)) for i in range(1, 5))
+        assert m.group(5) == ridges_ply, m.group(5)
+        n, faces, colors = read_ply_colors(ridges_ply)
+        assert (n, faces) == (2562, 5120), (n, faces)
+        assert vertices == n, (vertices, n)
+        assert 0 < classified <= n, classified
+        assert ridges > 0 and ravines > 0, (ridges, ravines)  # a noisy sphere has both
+        assert ridges + ravines <= classified, (ridges, ravines, classified)
+        assert label_colour_counts(colors) == (ridges, ravines), (label_colour_counts(colors), ridges, ravines)
+        # A threshold above every curvature leaves no feature: all grey.
+        r = run([cli, "ridges", "builtin:noisy-sphere", "-o", os.path.join(tmp, "none.ply"), "--threshold", "1e9"])
+        assert r.returncode == 0, r.stderr
+        assert r.stdout.startswith("0 ridge and 0 ravine vertices"), r.stdout
+        assert set(read_ply_colors(os.path.join(tmp, "none.ply"))[2]) == {GREY}
+    check("ridges writes black ridges and white ravines as counted, the rest grey", ridges_command)
+
+    def ridges_bad_usage():
+        obj = os.path.join(tmp, "ridges.obj")
+        r = run([cli, "ridges", "builtin:noisy-sphere", "-o", obj])
+        assert r.returncode == 2, (r.returncode, r.stderr)
+        assert ".ply" in r.stderr, r.stderr
+        assert not os.path.exists(obj)
+        r = run([cli, "ridges", "builtin:noisy-sphere", "-o", os.path.join(tmp, "neg.ply"), "--threshold", "-1"])
+        assert r.returncode == 2 and "--threshold" in r.stderr, (r.returncode, r.stderr)
+    check("ridges to a non-PLY file or with a negative threshold exits 2", ridges_bad_usage)
+
+    def smooth_with_ridges():
+        out = os.path.join(tmp, "smoothed_ridges.ply")
+        r = run([cli, "smooth", "builtin:noisy-sphere", "-o", out, "--ridges", "--iterations", "10"])
+        assert r.returncode == 0, (r.returncode, r.stderr)
+        m = re.search(r"^features: (\d+) ridge and (\d+) ravine vertices of (\d+) classified", r.stdout, re.M)
+        assert m, r.stdout
+        ridges, ravines, classified = (int(m.group(i)) for i in range(1, 4))
+        n, faces, colors = read_ply_colors(out)
+        assert (n, faces) == (2562, 5120), (n, faces)
+        assert 0 < classified <= n and ridges + ravines <= classified, (ridges, ravines, classified)
+        assert ridges > 0, ridges
+        assert label_colour_counts(colors) == (ridges, ravines), (label_colour_counts(colors), ridges, ravines)
+        # --json carries the same counts.
+        r = run([cli, "smooth", "builtin:noisy-sphere", "-o", out, "--ridges", "--iterations", "10", "--json"])
+        assert r.returncode == 0, r.stderr
+        f = json.loads(r.stdout)["features"]
+        assert (int(f.get("ridge_vertices", 0)), int(f.get("ravine_vertices", 0)),
+                int(f["classified_vertices"])) == (ridges, ravines, classified), f
+        # Without --ridges: no features line.
+        r = run([cli, "smooth", "builtin:noisy-sphere", "-o", os.path.join(tmp, "plain.ply"), "--iterations", "10"])
+        assert r.returncode == 0 and "features:" not in r.stdout, r.stdout
+    check("smooth --ridges prints the counts and colours the PLY to match", smooth_with_ridges)
+
+    def smooth_keeps_ply_colours():
+        # The coloured PLY of the ridges check goes in; its colours come out unchanged.
+        out = os.path.join(tmp, "recoloured.ply")
+        r = run([cli, "smooth", ridges_ply, "-o", out, "--iterations", "3"])
+        assert r.returncode == 0, (r.returncode, r.stderr)
+        _, _, before = read_ply_colors(ridges_ply)
+        n, _, after = read_ply_colors(out)
+        assert n == len(before) and after == before, "vertex colours changed"
+    check("smooth carries a PLY input's vertex colours to PLY output", smooth_keeps_ply_colours)
+
+    def render_png():
+        png = os.path.join(tmp, "sphere.png")
+        r = run([cli, "render", "builtin:noisy-sphere", "-o", png, "--size", "320x200"])
+        assert r.returncode == 0, (r.returncode, r.stderr)
+        assert f"wrote {png} (320x200)" in r.stdout, r.stdout
+        width, height, rows = read_png(png)
+        assert (width, height) == (320, 200), (width, height)
+        assert rows[0][0] == (255, 255, 255), f"corner {rows[0][0]} is not the white background"
+        assert rows[100][160] != (255, 255, 255), "nothing drawn at the centre"
+    check("render writes a PNG of the asked size with the mesh in the middle", render_png)
+
+    def render_bad_usage():
+        png = os.path.join(tmp, "bad.png")
+        for option, value in (("--size", "4x4"), ("--size", "320"), ("--view", "sideways")):
+            r = run([cli, "render", "builtin:noisy-sphere", "-o", png, option, value])
+            assert r.returncode == 2, (option, value, r.returncode, r.stderr)
+            assert option in r.stderr, (option, value, r.stderr)
+            assert not os.path.exists(png), (option, value)
+        r = run([cli, "render", "--help"])
+        assert r.returncode == 0, r.returncode
+        for word in ("--view", "--size", "--shading"):
+            assert word in r.stdout, f"'{word}' missing from render --help"
+    check("render with a bad --size or --view exits 2 naming the option; --help lists them", render_bad_usage)
 
     if a.shared and os.path.isdir(os.path.join(a.shared, "data", "meshes")):
         def info_beetle():

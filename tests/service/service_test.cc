@@ -1,13 +1,17 @@
 // The service end to end, in-process and over loopback TCP, through the same client code as
 // the CLI (CallSmooth).
+#include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <fstream>
+#include <limits>
 #include <future>
 #include <sstream>
 #include <thread>
 
 #include "client/smooth_client.h"
 #include "core/draco_codec.h"
+#include "core/features/ridges.h"
 #include "draco/compression/decode.h"
 #include "draco/compression/encode.h"
 #include "draco/mesh/mesh.h"
@@ -452,6 +456,237 @@ TEST(ServiceTest, DracosOwnFilesKeepAttributesAndSeams) {
   }
   EXPECT_GE(meshes, 20);
   EXPECT_EQ(clouds, 4);
+}
+
+// Ridges and ravines (the paper's Section 5) through the service.
+
+// The test shapes: a noisy icosphere (closed: every vertex classified) and a noisy cosine
+// height field (open: crests are ridges, troughs ravines, boundary vertices unclassified).
+std::vector<std::pair<std::string, Mesh>> FeatureShapes() {
+  Mesh wave = CosineHeightField(0.5, 2, 16, 14);
+  AddUniformNoise(wave, 0.1, 7);
+  return {{"noisy icosphere(3)", FloatMesh(NoisySphere(3))}, {"noisy cosine field", FloatMesh(std::move(wave))}};
+}
+
+v1::JobSpec FeatureSpec(uint32_t iterations, double min_abs_curvature) {
+  v1::JobSpec spec = Spec("median", iterations);
+  spec.mutable_features()->set_enabled(true);
+  spec.mutable_features()->set_min_abs_curvature(min_abs_curvature);
+  return spec;
+}
+
+// Ids of the attributes of a Draco mesh whose metadata entry "name" is `name`.
+std::vector<int> AttributesNamed(const draco::Mesh& dm, const std::string& name) {
+  std::vector<int> ids;
+  for (int32_t i = 0; i < dm.num_attributes(); ++i) {
+    const draco::AttributeMetadata* md = dm.GetAttributeMetadataByAttributeId(i);
+    std::string value;
+    if (md != nullptr && md->GetEntryString("name", &value) && value == name) ids.push_back(i);
+  }
+  return ids;
+}
+
+// "id:unique_id:type:name ..." of every attribute, for failure messages.
+std::string DescribeAttributes(const draco::Mesh& dm) {
+  std::string out;
+  for (int32_t i = 0; i < dm.num_attributes(); ++i) {
+    const draco::AttributeMetadata* md = dm.GetAttributeMetadataByAttributeId(i);
+    std::string name = "-";
+    if (md != nullptr) md->GetEntryString("name", &name);
+    out += std::to_string(i) + ":" + std::to_string(dm.attribute(i)->unique_id()) + ":" +
+           draco::GeometryAttribute::TypeToString(dm.attribute(i)->attribute_type()) + ":" + name + " ";
+  }
+  return out;
+}
+
+std::unique_ptr<draco::Mesh> DecodeDracoMesh(const std::string& bytes) {
+  draco::DecoderBuffer buf;
+  buf.Init(bytes.data(), bytes.size());
+  draco::Decoder decoder;
+  auto decoded = decoder.DecodeMeshFromBuffer(&buf);
+  EXPECT_TRUE(decoded.ok()) << decoded.status().error_msg_string();
+  return decoded.ok() ? std::move(decoded).value() : nullptr;
+}
+
+// The result's three attributes and the summary's counts equal DetectFeatures() on the core's
+// own smoothing of the same input, vertex for vertex (the service is bit-identical to the core).
+void ExpectFeaturesEqualTheCore(const absl::StatusOr<SmoothOutcome>& out, const Mesh& input, int iterations,
+                                double min_abs_curvature, Features* core_out = nullptr) {
+  ASSERT_TRUE(out.ok()) << out.status();
+  Mesh expected = input;
+  ASSERT_TRUE(Smooth(expected, Params("median", iterations)).ok());
+  FeatureOptions options;
+  options.min_abs_curvature = min_abs_curvature;
+  const Features core = DetectFeatures(expected, BuildTopology(expected), options);
+  const size_t n = expected.positions.size();
+  ASSERT_EQ(core.labels.size(), n);
+  int64_t classified = 0;
+  for (uint8_t v : core.curvature.valid) classified += v != 0;
+
+  ASSERT_TRUE(out->summary.has_features());
+  const v1::FeatureCounts& counts = out->summary.features();
+  EXPECT_EQ(counts.ridge_vertices(), core.ridges);
+  EXPECT_EQ(counts.ravine_vertices(), core.ravines);
+  EXPECT_EQ(counts.classified_vertices(), classified);
+  EXPECT_GE(counts.detect_seconds(), 0.0);
+
+  absl::StatusOr<Mesh> got = DecodeDraco(out->result);
+  ASSERT_TRUE(got.ok()) << got.status();
+  ASSERT_EQ(got->positions.size(), n);
+  for (size_t i = 0; i < n; ++i) ASSERT_EQ(got->positions[i], RoundToFloat(expected.positions[i])) << "vertex " << i;
+
+  absl::StatusOr<std::vector<float>> labels = DecodeDracoAttribute(out->result, kFeatureLabelAttribute);
+  absl::StatusOr<std::vector<float>> kmax = DecodeDracoAttribute(out->result, kKmaxAttribute);
+  absl::StatusOr<std::vector<float>> kmin = DecodeDracoAttribute(out->result, kKminAttribute);
+  ASSERT_TRUE(labels.ok()) << labels.status();
+  ASSERT_TRUE(kmax.ok()) << kmax.status();
+  ASSERT_TRUE(kmin.ok()) << kmin.status();
+  ASSERT_EQ(labels->size(), n);
+  ASSERT_EQ(kmax->size(), n);
+  ASSERT_EQ(kmin->size(), n);
+  int64_t ridges = 0, ravines = 0;
+  for (size_t i = 0; i < n; ++i) {
+    ASSERT_EQ((*labels)[i], static_cast<float>(core.labels[i])) << "label of vertex " << i;
+    ASSERT_EQ((*kmax)[i], static_cast<float>(core.curvature.kmax[i])) << "kmax of vertex " << i;
+    ASSERT_EQ((*kmin)[i], static_cast<float>(core.curvature.kmin[i])) << "kmin of vertex " << i;
+    ridges += (*labels)[i] == 1.0f;
+    ravines += (*labels)[i] == 2.0f;
+  }
+  EXPECT_EQ(ridges, counts.ridge_vertices());
+  EXPECT_EQ(ravines, counts.ravine_vertices());
+  EXPECT_EQ(ridges + ravines + std::count(labels->begin(), labels->end(), 0.0f), static_cast<int64_t>(n))
+      << "every label is 0, 1 or 2";
+
+  // The attribute types of the contract: uint8 labels, float32 curvatures, one component each.
+  std::unique_ptr<draco::Mesh> dm = DecodeDracoMesh(out->result);
+  ASSERT_TRUE(dm);
+  for (const auto& [name, type] : {std::pair<std::string, draco::DataType>{kFeatureLabelAttribute, draco::DT_UINT8},
+                                   {kKmaxAttribute, draco::DT_FLOAT32},
+                                   {kKminAttribute, draco::DT_FLOAT32}}) {
+    const std::vector<int> ids = AttributesNamed(*dm, name);
+    ASSERT_EQ(ids.size(), 1u) << name;
+    const draco::PointAttribute* a = dm->attribute(ids[0]);
+    EXPECT_EQ(a->attribute_type(), draco::GeometryAttribute::GENERIC) << name;
+    EXPECT_EQ(a->data_type(), type) << name;
+    EXPECT_EQ(a->num_components(), 1) << name;
+  }
+  if (core_out != nullptr) *core_out = core;
+}
+
+TEST(ServiceFeatureTest, CountsAndAttributesEqualTheCore) {
+  auto server = StartServer();
+  ASSERT_TRUE(server);
+  int64_t total_ridges = 0, total_ravines = 0;
+  for (const auto& [name, mesh] : FeatureShapes()) {
+    SCOPED_TRACE(name);
+    const std::string draco = *EncodeDraco(mesh);
+    Features unthresholded;
+    {
+      SCOPED_TRACE("min_abs_curvature 0");
+      ExpectFeaturesEqualTheCore(Call(server->InProcessChannel(), FeatureSpec(10, 0.0), draco), mesh, 10, 0.0,
+                                 &unthresholded);
+    }
+    if (::testing::Test::HasFatalFailure()) return;
+    total_ridges += unthresholded.ridges;
+    total_ravines += unthresholded.ravines;
+    if (name == "noisy icosphere(3)") {
+      int64_t valid = 0;
+      for (uint8_t v : unthresholded.curvature.valid) valid += v != 0;
+      EXPECT_EQ(valid, mesh.num_vertices()) << "every vertex of a closed, smooth sphere is classified";
+    }
+    // A threshold between the smallest and largest |kappa| of the features keeps only some.
+    std::vector<double> kappas;
+    for (size_t i = 0; i < unthresholded.labels.size(); ++i) {
+      if (unthresholded.labels[i] == 1) kappas.push_back(unthresholded.curvature.kmax[i]);
+      if (unthresholded.labels[i] == 2) kappas.push_back(-unthresholded.curvature.kmin[i]);
+    }
+    ASSERT_GE(kappas.size(), 2u);
+    std::sort(kappas.begin(), kappas.end());
+    const double threshold = kappas[kappas.size() / 2];
+    Features thresholded;
+    {
+      SCOPED_TRACE("min_abs_curvature " + std::to_string(threshold));
+      ExpectFeaturesEqualTheCore(Call(server->InProcessChannel(), FeatureSpec(10, threshold), draco), mesh, 10,
+                                 threshold, &thresholded);
+    }
+    if (::testing::Test::HasFatalFailure()) return;
+    EXPECT_LT(thresholded.ridges + thresholded.ravines, unthresholded.ridges + unthresholded.ravines);
+    EXPECT_GT(thresholded.ridges + thresholded.ravines, 0);
+  }
+  // The shapes have both kinds, so the comparison above is not one of empty label sets.
+  EXPECT_GT(total_ridges, 0);
+  EXPECT_GT(total_ravines, 0);
+}
+
+TEST(ServiceFeatureTest, WithoutFeaturesNoCountsAndNoAttributes) {
+  auto server = StartServer();
+  ASSERT_TRUE(server);
+  const Mesh mesh = FeatureShapes()[0].second;
+  const std::string draco = *EncodeDraco(mesh);
+  v1::JobSpec disabled = Spec("median", 5);
+  disabled.mutable_features()->set_enabled(false);  // present but off
+  disabled.mutable_features()->set_min_abs_curvature(0.5);
+  for (const v1::JobSpec& spec : {Spec("median", 5), disabled}) {
+    absl::StatusOr<SmoothOutcome> out = Call(server->InProcessChannel(), spec, draco);
+    ASSERT_TRUE(out.ok()) << out.status();
+    EXPECT_FALSE(out->summary.has_features());
+    for (const char* name : {kFeatureLabelAttribute, kKmaxAttribute, kKminAttribute}) {
+      const absl::Status s = DecodeDracoAttribute(out->result, name).status();
+      EXPECT_EQ(s.code(), absl::StatusCode::kNotFound) << name << ": " << s;
+    }
+    std::unique_ptr<draco::Mesh> dm = DecodeDracoMesh(out->result);
+    ASSERT_TRUE(dm);
+    EXPECT_EQ(dm->num_attributes(), 1) << "positions only";
+  }
+}
+
+TEST(ServiceFeatureTest, BadMinAbsCurvatureIsRefused) {
+  auto server = StartServer();
+  ASSERT_TRUE(server);
+  const std::string draco = *EncodeDraco(Icosphere(2));
+  for (double bad : {-0.5, -std::numeric_limits<double>::min(), std::numeric_limits<double>::quiet_NaN(),
+                     std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity()}) {
+    SCOPED_TRACE(bad);
+    const absl::Status s = Call(server->InProcessChannel(), FeatureSpec(3, bad), draco).status();
+    EXPECT_EQ(s.code(), absl::StatusCode::kInvalidArgument) << s;
+    EXPECT_NE(s.message().find("features.min_abs_curvature"), std::string::npos) << s;
+  }
+  // Valid thresholds (0 = none, positive) go through.
+  for (double ok : {0.0, 2.5}) {
+    EXPECT_TRUE(Call(server->InProcessChannel(), FeatureSpec(3, ok), draco).ok()) << ok;
+  }
+}
+
+// A result that already carries the attributes, smoothed again with features: the attributes
+// are replaced (one of each name, the new values), not added a second time.
+TEST(ServiceFeatureTest, ResmoothingReplacesTheFeatureAttributes) {
+  auto server = StartServer();
+  ASSERT_TRUE(server);
+  const Mesh mesh = FeatureShapes()[1].second;
+  absl::StatusOr<SmoothOutcome> first = Call(server->InProcessChannel(), FeatureSpec(5, 0.0), *EncodeDraco(mesh));
+  ASSERT_TRUE(first.ok()) << first.status();
+  absl::StatusOr<SmoothOutcome> second = Call(server->InProcessChannel(), FeatureSpec(5, 0.0), first->result);
+  ASSERT_TRUE(second.ok()) << second.status();
+  std::unique_ptr<draco::Mesh> a = DecodeDracoMesh(first->result), b = DecodeDracoMesh(second->result);
+  ASSERT_TRUE(a && b);
+  EXPECT_EQ(a->num_attributes(), 4);  // positions and the three
+  EXPECT_EQ(b->num_attributes(), a->num_attributes());
+  for (const char* name : {kFeatureLabelAttribute, kKmaxAttribute, kKminAttribute}) {
+    EXPECT_EQ(AttributesNamed(*b, name).size(), 1u)
+        << name << "; first result: " << DescribeAttributes(*a) << "; second: " << DescribeAttributes(*b);
+  }
+  // The values are those of the second smoothing: the core's median on the first result.
+  absl::StatusOr<Mesh> first_mesh = DecodeDraco(first->result);
+  ASSERT_TRUE(first_mesh.ok()) << first_mesh.status();
+  first_mesh->colors.clear();
+  ExpectFeaturesEqualTheCore(second, *first_mesh, 5, 0.0);
+  // And a third round keeps it at one of each.
+  absl::StatusOr<SmoothOutcome> third = Call(server->InProcessChannel(), FeatureSpec(2, 0.0), second->result);
+  ASSERT_TRUE(third.ok()) << third.status();
+  std::unique_ptr<draco::Mesh> c = DecodeDracoMesh(third->result);
+  ASSERT_TRUE(c);
+  EXPECT_EQ(c->num_attributes(), 4);
+  EXPECT_EQ(AttributesNamed(*c, kKmaxAttribute).size(), 1u);
 }
 
 }  // namespace
