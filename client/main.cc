@@ -300,9 +300,7 @@ int RunSmooth(const SmoothOptions& o, const ConnectionOptions& c) {
   if (!outcome.ok()) return err(std::string(absl::StatusCodeToString(outcome.status().code())) + ": ", outcome.status());
 
   if (*out_format == MeshFormat::kDraco) {
-    std::ofstream out(o.output, std::ios::binary | std::ios::trunc);
-    out.write(outcome->result.data(), static_cast<std::streamsize>(outcome->result.size()));
-    if (!out) return err("", absl::PermissionDeniedError("cannot write '" + o.output + "'"));
+    if (absl::Status s = WriteFileBytes(o.output, outcome->result); !s.ok()) return err("", s);
   } else {
     absl::StatusOr<Mesh> result = DecodeDraco(outcome->result);
     if (!result.ok()) return err("the result: ", result.status());
@@ -416,8 +414,6 @@ int RunRidges(const std::string& input, const std::string& output, double thresh
   FeatureOptions options;
   options.min_abs_curvature = threshold;
   const Features features = DetectFeatures(*mesh, topo, options);
-  int64_t classified = 0;
-  for (uint8_t v : features.curvature.valid) classified += v != 0;
   mesh->colors = FeatureColors(features.labels);
   if (absl::Status s = WriteMesh(output, *mesh); !s.ok()) {
     std::cerr << "meshsmooth: " << s.message() << "\n";
@@ -425,7 +421,7 @@ int RunRidges(const std::string& input, const std::string& output, double thresh
   }
   std::printf("%lld ridge and %lld ravine vertices of %lld classified (%d vertices); wrote %s\n",
               static_cast<long long>(features.ridges), static_cast<long long>(features.ravines),
-              static_cast<long long>(classified), mesh->num_vertices(), output.c_str());
+              static_cast<long long>(features.classified), mesh->num_vertices(), output.c_str());
   return 0;
 }
 

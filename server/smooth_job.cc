@@ -126,12 +126,10 @@ void SmoothJob::Run() {
   std::vector<GenericAttribute> attributes;
   if (params_.detect_features) {
     const Clock::time_point t0 = Clock::now();
-    Features features = DetectFeatures(mesh, topo, params_.features);
+    const Features features = DetectFeatures(mesh, topo, params_.features);
     counts.set_ridge_vertices(features.ridges);
     counts.set_ravine_vertices(features.ravines);
-    int64_t classified = 0;
-    for (uint8_t v : features.curvature.valid) classified += v != 0;
-    counts.set_classified_vertices(classified);
+    counts.set_classified_vertices(features.classified);
     attributes = FeatureAttributes(features);
     counts.set_detect_seconds(Seconds(t0, Clock::now()));
   }

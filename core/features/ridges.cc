@@ -73,6 +73,7 @@ Features DetectFeatures(const Mesh& mesh, const Topology& topology, const Featur
   for (int32_t v = 0; v < n; ++v) {
     out.labels[v] = static_cast<uint8_t>(Classify(mesh, topology, f, v, options.min_abs_curvature));
   }
+  for (uint8_t valid : f.valid) out.classified += valid != 0;
   for (uint8_t l : out.labels) {
     out.ridges += l == static_cast<uint8_t>(FeatureLabel::kRidge);
     out.ravines += l == static_cast<uint8_t>(FeatureLabel::kRavine);

@@ -27,6 +27,7 @@ struct Features {
   CurvatureField curvature;     // EstimateCurvature() of the mesh
   std::vector<uint8_t> labels;  // a FeatureLabel per vertex
   int64_t ridges = 0, ravines = 0;
+  int64_t classified = 0;       // vertices with a curvature estimate (valid)
 };
 
 // Labels every vertex of `mesh` (`topology` = BuildTopology(mesh)), Section 5 of the paper.

@@ -67,9 +67,13 @@ absl::Status WriteMesh(const std::string& path, const Mesh& mesh, const WriteOpt
   if (!format.ok()) return format.status();
   absl::StatusOr<std::string> bytes = SerializeMesh(mesh, *format, options);
   if (!bytes.ok()) return bytes.status();
+  return WriteFileBytes(path, *bytes);
+}
+
+absl::Status WriteFileBytes(const std::string& path, std::string_view bytes) {
   std::ofstream out(path, std::ios::binary | std::ios::trunc);
   if (!out) return absl::PermissionDeniedError(absl::StrCat("cannot write '", path, "'"));
-  out.write(bytes->data(), static_cast<std::streamsize>(bytes->size()));
+  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
   out.close();
   if (!out) return absl::DataLossError(absl::StrCat("writing '", path, "' failed"));
   return absl::OkStatus();

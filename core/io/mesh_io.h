@@ -56,6 +56,10 @@ struct WriteOptions {
 absl::StatusOr<std::string> SerializeMesh(const Mesh& mesh, MeshFormat format,
                                           const WriteOptions& options = {});
 
+// Writes `bytes` to `path` (created or truncated): PermissionDenied when it cannot be opened,
+// DataLoss when writing fails.
+absl::Status WriteFileBytes(const std::string& path, std::string_view bytes);
+
 // Writes a file in the format its extension names.
 absl::Status WriteMesh(const std::string& path, const Mesh& mesh, const WriteOptions& options = {});
 

@@ -2,9 +2,8 @@
 
 #include <png.h>
 
-#include <fstream>
-
 #include "absl/strings/str_cat.h"
+#include "core/io/mesh_io.h"
 
 namespace meshsmooth {
 
@@ -38,12 +37,7 @@ absl::StatusOr<std::string> EncodePng(const Image& image) {
 absl::Status WritePng(const std::string& path, const Image& image) {
   absl::StatusOr<std::string> bytes = EncodePng(image);
   if (!bytes.ok()) return bytes.status();
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  if (!out) return absl::PermissionDeniedError(absl::StrCat("cannot write '", path, "'"));
-  out.write(bytes->data(), static_cast<std::streamsize>(bytes->size()));
-  out.close();
-  if (!out) return absl::DataLossError(absl::StrCat("writing '", path, "' failed"));
-  return absl::OkStatus();
+  return WriteFileBytes(path, *bytes);
 }
 
 }  // namespace meshsmooth
