@@ -168,10 +168,10 @@ absl::StatusOr<DracoMesh> DracoMesh::Decode(std::string_view bytes) {
   if (!points.ok()) return points.status();
   auto impl = std::make_unique<Impl>();
   impl->draco = std::move(dm).value();
-  impl->point_to_vertex.resize(points->positions.size());
-  PositionWelder welder(impl->welded.positions, points->positions.size());
-  for (size_t p = 0; p < points->positions.size(); ++p) impl->point_to_vertex[p] = welder.Add(points->positions[p]);
-  impl->seam_points = welder.merged();
+  Welded welded = WeldPoints(points->positions);
+  impl->welded.positions = std::move(welded.positions);
+  impl->point_to_vertex = std::move(welded.point_to_vertex);
+  impl->seam_points = welded.merged;
   impl->welded.triangles = std::move(points->triangles);
   for (Triangle& t : impl->welded.triangles) {
     for (int32_t& v : t) v = v >= 0 ? impl->point_to_vertex[v] : -1;

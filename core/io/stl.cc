@@ -1,4 +1,5 @@
 #include <cstring>
+#include <vector>
 
 #include "absl/strings/str_cat.h"
 #include "core/io/formats.h"
@@ -14,56 +15,67 @@ bool LooksBinary(std::string_view data) {
   return data.size() == 84 + 50 * static_cast<uint64_t>(n);
 }
 
+// Facets of three consecutive corners, welded.
+Mesh FromCorners(const std::vector<Vec3>& corners, ReadInfo& info) {
+  Welded w = WeldPoints(corners);
+  Mesh mesh;
+  mesh.positions = std::move(w.positions);
+  mesh.triangles.resize(corners.size() / 3);
+  for (size_t f = 0; f < mesh.triangles.size(); ++f) {
+    for (int c = 0; c < 3; ++c) mesh.triangles[f][c] = w.point_to_vertex[3 * f + c];
+  }
+  info.welded_corners = w.merged;
+  return mesh;
+}
+
 }  // namespace
 
 absl::StatusOr<Mesh> ParseStl(std::string_view data, ReadInfo& info) {
-  Mesh mesh;
-  // A triangle soup: corners at the same position become one vertex, in order of first appearance.
-  PositionWelder welder(mesh.positions);
+  // A triangle soup: corners at the same position become one vertex, in order of first
+  // appearance (WeldPoints); the corners are read first, three per facet.
+  std::vector<Vec3> corners;
   if (LooksBinary(data)) {
     uint32_t n = 0;
     std::memcpy(&n, data.data() + 80, 4);
-    mesh.triangles.reserve(n);
+    corners.reserve(3 * static_cast<size_t>(n));
     for (uint32_t f = 0; f < n; ++f) {
       const char* rec = data.data() + 84 + 50 * static_cast<size_t>(f);
-      Triangle t;
       for (int c = 0; c < 3; ++c) {
         float xyz[3];
         std::memcpy(xyz, rec + 12 + 12 * c, sizeof xyz);
-        t[c] = welder.Add({xyz[0], xyz[1], xyz[2]});
+        corners.push_back({xyz[0], xyz[1], xyz[2]});
       }
-      mesh.triangles.push_back(t);
     }
-    info.welded_corners = welder.merged();
-    return mesh;
+    return FromCorners(corners, info);
   }
   std::string_view rest = data;
   if (NextToken(rest) != "solid") {
     return absl::InvalidArgumentError("STL: neither binary (size does not match the face count) nor ASCII (no 'solid')");
   }
-  Triangle t{};
   int corner = 0;
   for (std::string_view tok = NextToken(rest); !tok.empty(); tok = NextToken(rest)) {
     if (tok == "vertex") {
       Vec3 p;
       if (!ParseDouble(NextToken(rest), p.x) || !ParseDouble(NextToken(rest), p.y) ||
           !ParseDouble(NextToken(rest), p.z)) {
-        return absl::InvalidArgumentError(absl::StrCat("STL: bad vertex in facet ", mesh.triangles.size()));
+        return absl::InvalidArgumentError(absl::StrCat("STL: bad vertex in facet ", (corners.size() - corner) / 3));
       }
       if (corner == 3) {
-        return absl::InvalidArgumentError(absl::StrCat("STL: facet ", mesh.triangles.size(), " has more than 3 vertices"));
+        return absl::InvalidArgumentError(absl::StrCat("STL: facet ", (corners.size() - corner) / 3, " has more than 3 vertices"));
       }
-      t[corner++] = welder.Add(p);
+      corners.push_back(p);
+      ++corner;
     } else if (tok == "endloop") {
       if (corner != 3) {
-        return absl::InvalidArgumentError(absl::StrCat("STL: facet ", mesh.triangles.size(), " has ", corner, " vertices"));
+        return absl::InvalidArgumentError(absl::StrCat("STL: facet ", (corners.size() - corner) / 3, " has ", corner, " vertices"));
       }
-      mesh.triangles.push_back(t);
       corner = 0;
     }
   }
-  info.welded_corners = welder.merged();
-  return mesh;
+  if (corner != 0) {
+    return absl::InvalidArgumentError(absl::StrCat("STL: facet ", (corners.size() - corner) / 3, " has no 'endloop'"));
+  }
+  return FromCorners(corners, info);
 }
 
 std::string WriteStl(const Mesh& mesh) {

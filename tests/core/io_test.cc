@@ -120,6 +120,9 @@ TEST(IoTest, MalformedFilesGiveClearErrors) {
       {MeshFormat::kPly, "plx\n", "magic"},
       {MeshFormat::kOff, "OFF\n3 1 0\n0 0 0\n1 0 0\n", "expected 3 vertices"},
       {MeshFormat::kStl, "garbage", "neither binary"},
+      {MeshFormat::kStl, "solid s\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nendloop\nendfacet\n",
+       "facet 0 has 2 vertices"},
+      {MeshFormat::kStl, "solid s\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\n", "facet 0 has no 'endloop'"},
       {MeshFormat::kDraco, "DRACO garbage", "Draco"},
   };
   for (const Case& c : cases) {
