@@ -103,8 +103,8 @@ constexpr int32_t kParallelTopologyThreshold = 50000;
 // Fans, rings, kinds and edge counts of vertices [begin, end). Writes kind[v] and, relative to
 // the range's own ring, ring_offsets[v + 1]; each edge is counted at its smaller endpoint and
 // each set of duplicate faces at its smallest vertex, so ranges never count a thing twice.
-void ProcessVertices(const Mesh& mesh, const std::vector<int32_t>& vf_offsets, const std::vector<int32_t>& vf,
-                     int32_t begin, int32_t end, Topology& topo, RangeResult& out) {
+void ProcessVertices(const std::vector<int32_t>& vf_offsets, const std::vector<LocalFace>& vf, int32_t begin,
+                     int32_t end, Topology& topo, RangeResult& out) {
   ValidationReport& r = out.counts;
   Scratch s;
   std::vector<std::pair<int32_t, int32_t>> owned;  // (middle, largest) of faces whose smallest vertex is v
@@ -112,9 +112,7 @@ void ProcessVertices(const Mesh& mesh, const std::vector<int32_t>& vf_offsets, c
     s.faces.clear();
     owned.clear();
     for (int32_t i = vf_offsets[v]; i < vf_offsets[v + 1]; ++i) {
-      const Triangle& t = mesh.triangles[vf[i]];
-      const int32_t k = t[0] == v ? 0 : (t[1] == v ? 1 : 2);
-      const int32_t a = t[(k + 1) % 3], b = t[(k + 2) % 3];
+      const auto [a, b] = vf[i];
       s.faces.push_back({a, b});
       if (v < a && v < b) owned.push_back(std::minmax(a, b));
     }
@@ -212,17 +210,21 @@ Topology BuildTopology(const Mesh& mesh, ValidationReport* report) {
     }
   }
 
-  // Vertex -> incident usable faces, by counting sort.
+  // Vertex -> incident usable faces, each rotated to read (v, a, b), by counting sort: the
+  // per-vertex work then reads its faces contiguously instead of from the whole face array.
   std::vector<int32_t> vf_offsets(static_cast<size_t>(n) + 1, 0);
   for (int32_t f : topo.faces) {
     for (int32_t v : mesh.triangles[f]) ++vf_offsets[v + 1];
   }
   std::partial_sum(vf_offsets.begin(), vf_offsets.end(), vf_offsets.begin());
-  std::vector<int32_t> vf(vf_offsets.back());
+  std::vector<LocalFace> vf(vf_offsets.back());
   {
     std::vector<int32_t> fill(vf_offsets.begin(), vf_offsets.end() - 1);
     for (int32_t f : topo.faces) {
-      for (int32_t v : mesh.triangles[f]) vf[fill[v]++] = f;
+      const Triangle& t = mesh.triangles[f];
+      vf[fill[t[0]]++] = {t[1], t[2]};
+      vf[fill[t[1]]++] = {t[2], t[0]};
+      vf[fill[t[2]]++] = {t[0], t[1]};
     }
   }
 
@@ -236,12 +238,16 @@ Topology BuildTopology(const Mesh& mesh, ValidationReport* report) {
     box.Add(p);
   }
   const double diag2 = box.diagonal() * box.diagonal();
-  for (int32_t f : topo.faces) {
-    const Triangle& t = mesh.triangles[f];
+  const int64_t usable = static_cast<int64_t>(topo.faces.size());
+  int64_t zero_area = 0;
+#pragma omp parallel for schedule(static) reduction(+ : zero_area) if (n >= kParallelTopologyThreshold)
+  for (int64_t i = 0; i < usable; ++i) {
+    const Triangle& t = mesh.triangles[topo.faces[i]];
     const Vec3& p0 = mesh.positions[t[0]];
     const double area = 0.5 * Norm(Cross(mesh.positions[t[1]] - p0, mesh.positions[t[2]] - p0));
-    if (area < 1e-12 * diag2) ++r.zero_area_faces;  // NaN areas compare false: not counted
+    zero_area += area < 1e-12 * diag2;  // NaN areas compare false: not counted
   }
+  r.zero_area_faces = zero_area;
 
   // The per-vertex work (fans, rings, edge counts) in contiguous vertex ranges, one per
   // thread; rings are concatenated in range order, so the result does not depend on threads.
@@ -251,7 +257,7 @@ Topology BuildTopology(const Mesh& mesh, ValidationReport* report) {
   for (int part = 0; part < threads; ++part) {
     const int32_t begin = static_cast<int32_t>(int64_t{n} * part / threads);
     const int32_t end = static_cast<int32_t>(int64_t{n} * (part + 1) / threads);
-    ProcessVertices(mesh, vf_offsets, vf, begin, end, topo, parts[part]);
+    ProcessVertices(vf_offsets, vf, begin, end, topo, parts[part]);
   }
   topo.ring.reserve(vf.size() + 16);
   DisjointSets boundary_sets(n);
