@@ -54,6 +54,11 @@ struct BlockStats {
 // Cotangents of needle triangles are clamped to this magnitude (NOTES.md, degenerate places).
 inline constexpr double kCotMax = 1e3;
 
+// Two doubles in one SSE2 register (GCC vector extension): the arithmetic-bound loops below
+// take two ring neighbours or two triangles at a time. SSE2 is the x86-64 baseline, so every
+// build computes the same bits and nothing needs dispatching.
+using Lanes = double __attribute__((vector_size(16)));
+
 // U0, eq. (3). Two running sums halve the chain of dependent additions (the loads of the
 // neighbours then overlap); the order is fixed, so results do not depend on threads.
 inline Vec3 UmbrellaU0(const StepContext& c, const Vec3* pos, int32_t v) {
@@ -69,19 +74,23 @@ inline Vec3 UmbrellaU0(const StepContext& c, const Vec3* pos, int32_t v) {
 }
 
 // U1, eq. (4): weights 1/|P - Q|, with coincident neighbours given the weight of a 1e-9 h edge.
-inline Vec3 UmbrellaU1(const StepContext& c, const Vec3* pos, int32_t v) {
+// Two neighbours at a time: one sqrtpd and one divpd per pair.
+__attribute__((always_inline)) inline Vec3 UmbrellaU1(const StepContext& c, const Vec3* pos, int32_t v) {
   const int32_t b = c.offsets[v], e = c.offsets[v + 1];
   const Vec3 p = pos[v];
-  const double floor = 1e-9 * c.h;
-  Vec3 sum;
-  double wsum = 0.0;
-  for (int32_t i = b; i < e; ++i) {
-    const Vec3 q = pos[c.ring[i]];
-    const double w = 1.0 / std::max(Norm(q - p), floor);
-    sum += q * w;
+  const Lanes floor = Lanes{} + 1e-9 * c.h;
+  Lanes sx{}, sy{}, sz{}, wsum{};
+  for (int32_t i = b; i < e; i += 2) {
+    const Vec3 d0 = pos[c.ring[i]] - p;
+    const Vec3 d1 = i + 1 < e ? pos[c.ring[i + 1]] - p : Vec3{};
+    const Lanes dx{d0.x, d1.x}, dy{d0.y, d1.y}, dz{d0.z, d1.z};
+    const Lanes len = __builtin_ia32_maxpd(__builtin_ia32_sqrtpd(dx * dx + dy * dy + dz * dz), floor);
+    const Lanes live{1.0, i + 1 < e ? 1.0 : 0.0};  // the padding lane weighs nothing
+    const Lanes w = live / len;
+    sx += dx * w, sy += dy * w, sz += dz * w;
     wsum += w;
   }
-  return sum * (1.0 / wsum) - p;
+  return Vec3{sx[0] + sx[1], sy[0] + sy[1], sz[0] + sz[1]} * (1.0 / (wsum[0] + wsum[1]));
 }
 
 // The 1-D umbrella of a boundary vertex: midpoint of its two loop neighbours minus P.
@@ -92,11 +101,8 @@ inline Vec3 CurveUmbrella(const StepContext& c, const Vec3* pos, int32_t v) {
 struct Curvature {
   Vec3 hn;      // mean-curvature normal H n: |hn| = H, pointing to the centre of curvature
   Vec3 normal;  // area-weighted face normal (not normalised; orientation of the ring)
+  Vec3 u0;      // U0 of eq. (3), mean of Q_k - P, from the same pass over the ring
 };
-
-// Two doubles, one per triangle of a ring: an SSE2 register (the x86-64 baseline, so every
-// build computes the same bits).
-using Lanes = double __attribute__((vector_size(16)));
 
 // Eq. (8) with the mixed Voronoi area of Meyer et al. in place of A/3 (NOTES.md): on a sphere
 // of radius r, |H n| = 1/r. Zero-area triangles contribute nothing; cotangents are clamped.
@@ -107,7 +113,7 @@ __attribute__((always_inline)) inline Curvature MeanCurvatureNormal(const StepCo
   const int32_t b = c.offsets[v], e = c.offsets[v + 1], n = e - b;
   const Vec3 p = pos[v];
   const Lanes zero{}, one = zero + 1.0, cot_max = zero + kCotMax;
-  Lanes sx{}, sy{}, sz{}, nx{}, ny{}, nz{}, area{};
+  Lanes sx{}, sy{}, sz{}, nx{}, ny{}, nz{}, ux{}, uy{}, uz{}, area{};
   Vec3 prev = pos[c.ring[e - 1]] - p;  // Q_{k-1} - P, wrapping around the closed ring
   for (int32_t k = 0; k < n; k += 2) {
     // Edges a = Q_{k-1} - P and q = Q_k - P of the two triangles.
@@ -116,6 +122,7 @@ __attribute__((always_inline)) inline Curvature MeanCurvatureNormal(const StepCo
     const Lanes ax{prev.x, q0.x}, ay{prev.y, q0.y}, az{prev.z, q0.z};
     const Lanes qx{q0.x, q1.x}, qy{q0.y, q1.y}, qz{q0.z, q1.z};
     prev = q1;
+    ux += qx, uy += qy, uz += qz;
     const Lanes cx = ay * qz - az * qy, cy = az * qx - ax * qz, cz = ax * qy - ay * qx;
     nx += cx, ny += cy, nz += cz;
     const Lanes dbl_area = __builtin_ia32_sqrtpd(cx * cx + cy * cy + cz * cz);
@@ -136,6 +143,7 @@ __attribute__((always_inline)) inline Curvature MeanCurvatureNormal(const StepCo
   }
   Curvature k;
   k.normal = {nx[0] + nx[1], ny[0] + ny[1], nz[0] + nz[1]};
+  k.u0 = Vec3{ux[0] + ux[1], uy[0] + uy[1], uz[0] + uz[1]} * (1.0 / n);
   const double total_area = area[0] + area[1];
   if (total_area > 0.0) k.hn = Vec3{sx[0] + sx[1], sy[0] + sy[1], sz[0] + sz[1]} * (0.25 / total_area);
   return k;

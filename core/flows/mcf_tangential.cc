@@ -19,7 +19,7 @@ class McfTangential final : public FlowKernel {
     const double weight = c_ * c.inv_h2;
     return ApplyStep(c, cur, next, begin, end, [&](int32_t v) {
       const Curvature k = MeanCurvatureNormal(c, cur, v);
-      const Vec3 u = UmbrellaU0(c, cur, v);
+      const Vec3& u = k.u0;
       const double len = Norm(k.normal);
       if (!(len > 0.0)) return k.hn;
       const Vec3 n = k.normal * (1.0 / len);

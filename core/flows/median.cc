@@ -19,8 +19,8 @@ class Median final : public FlowKernel {
     const double eps = epsilon_;
     const double tiny_h = 1e-12 / c.h, tiny_u = 1e-12 * c.h;
     return ApplyStep(c, cur, next, begin, end, [&](int32_t v) {
-      const Vec3 hn = MeanCurvatureNormal(c, cur, v).hn;
-      const Vec3 u = UmbrellaU0(c, cur, v);
+      const Curvature k = MeanCurvatureNormal(c, cur, v);
+      const Vec3 hn = k.hn, u = k.u0;
       const double hm = Norm(hn), um = Norm(u);
       if (!(hm > tiny_h) || !(um > tiny_u)) return Vec3{};
       const Vec3 m = u * (1.0 / um);
