@@ -162,6 +162,44 @@ OurTiming TimeOurs(const Mesh& mesh, const Topology& topo, FlowParams p, int ite
   return {Median(per), Median(setup)};
 }
 
+// The ceiling of our layout: a plain CSR U0 loop (no roles, statistics, caps or checks) over
+// the same Morton-ordered arrays Smooth() runs on; ms per iteration, median of `runs`.
+double PlainU0Ms(const Mesh& mesh, int iterations, int threads, int runs) {
+  const int32_t n = mesh.num_vertices();
+  const std::vector<int32_t> order = MortonOrder(mesh.positions);  // new -> old
+  std::vector<int32_t> rank(n);
+  for (int32_t i = 0; i < n; ++i) rank[order[i]] = i;
+  Mesh m;
+  m.positions.resize(n);
+  for (int32_t i = 0; i < n; ++i) m.positions[i] = mesh.positions[order[i]];
+  m.triangles = mesh.triangles;
+  for (Triangle& t : m.triangles) {
+    for (int32_t& v : t) v = rank[v];
+  }
+  const Topology topo = BuildTopology(m);
+  const int32_t* off = topo.ring_offsets.data();
+  const int32_t* ring = topo.ring.data();
+  std::vector<Vec3> cur = m.positions, next(n);
+  std::vector<double> t;
+  for (int r = 0; r < runs; ++r) {
+    const auto t0 = Clock::now();
+    for (int k = 0; k < iterations; ++k) {
+      const Vec3* p = cur.data();
+      Vec3* q = next.data();
+#pragma omp parallel for schedule(static) num_threads(threads)
+      for (int32_t v = 0; v < n; ++v) {
+        Vec3 sum;
+        for (int32_t i = off[v]; i < off[v + 1]; ++i) sum += p[ring[i]];
+        const int32_t d = off[v + 1] - off[v];
+        q[v] = d > 0 ? p[v] + (sum * (1.0 / d) - p[v]) * 0.5 : p[v];
+      }
+      cur.swap(next);
+    }
+    t.push_back(Ms(t0, Clock::now()) / iterations);
+  }
+  return Median(t);
+}
+
 struct NamedMesh {
   std::string name;
   Mesh mesh;
@@ -409,6 +447,12 @@ int main(int argc, char** argv) {
       const double gbs = bytes * n / (t2 / 1000.0) / 1e9;
       std::printf("| %s | %.2f | %.2f | %.2fx | %.0f | %.0f | %.0f%% | %.1f |\n", v.label.c_str(), t1, t2, t1 / t2,
                   n / (t2 / 1000.0) / 1e6, bytes, 100.0 * gbs / bw2, one.setup_ms);
+    }
+    {
+      const double t1 = PlainU0Ms(nm.mesh, iterations, 1, opt.runs), t2 = PlainU0Ms(nm.mesh, iterations, std::min(2, hw), opt.runs);
+      const double bytes = BytesPerVertex("laplacian", valence);
+      std::printf("| (reference) plain CSR U0 loop, same order, no checks | %.2f | %.2f | %.2fx | %.0f | %.0f | %.0f%% | - |\n", t1,
+                  t2, t1 / t2, n / (t2 / 1000.0) / 1e6, bytes, 100.0 * bytes * n / (t2 / 1000.0) / 1e9 / bw2);
     }
     std::printf("\nCotangent flows against laplacian U0 (1 thread):");
     for (const char* flow : {"mcf", "mcf_tangential", "median"}) {

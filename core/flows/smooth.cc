@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <numeric>
 #include <utility>
 
 #include "absl/strings/str_cat.h"
@@ -319,11 +320,22 @@ uint64_t Spread3(uint64_t x) {
   return x;
 }
 
-// Vertices in Morton (Z-order) of their positions, so that a vertex's neighbours sit close to
-// it in memory: new -> old. Keys pack a 39-bit Morton code (13 bits per axis) above a 25-bit
-// vertex index and are sorted by three 13-bit LSD radix passes.
+// Reordering pays off once the positions outgrow the caches; below this it is skipped.
+constexpr int32_t kReorderThreshold = 100000;
+// Morton keys hold 25 bits of vertex index.
+constexpr int32_t kReorderMaxVertices = 1 << 25;
+
+}  // namespace
+
+// Keys pack a 39-bit Morton code (13 bits per axis) above a 25-bit vertex index and are
+// sorted by three 13-bit LSD radix passes.
 std::vector<int32_t> MortonOrder(const std::vector<Vec3>& pos) {
   const int32_t n = static_cast<int32_t>(pos.size());
+  if (n > kReorderMaxVertices) {  // the keys have no room for the index: keep the order
+    std::vector<int32_t> identity(n);
+    std::iota(identity.begin(), identity.end(), 0);
+    return identity;
+  }
   BoundingBox box;
   for (const Vec3& q : pos) {
     if (IsFinite(q)) box.Add(q);
@@ -354,13 +366,6 @@ std::vector<int32_t> MortonOrder(const std::vector<Vec3>& pos) {
   for (int32_t i = 0; i < n; ++i) order[i] = static_cast<int32_t>(keys[i] & 0x1ffffff);
   return order;
 }
-
-// Reordering pays off once the positions outgrow the caches; below this it is skipped.
-constexpr int32_t kReorderThreshold = 100000;
-// Morton keys hold 25 bits of vertex index.
-constexpr int32_t kReorderMaxVertices = 1 << 25;
-
-}  // namespace
 
 // Validates, then runs the iterations, on a Morton-reordered copy for large meshes (undone on
 // return, so indices stay stable). Each ring keeps its order and h is taken in the caller's
