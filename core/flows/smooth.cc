@@ -226,9 +226,12 @@ absl::StatusOr<FlowResult> Run(Mesh& mesh, const Topology& topo, const FlowParam
                                                                : (curvature ? 1.0 : 0.5 * h * h);
   if (p.adaptive == AdaptiveMode::kConstant) threshold.assign(n, p.adaptive_threshold * t_scale);
 
-  std::vector<Vec3> cur = mesh.positions, next(n), start;
+  // `cur` keeps the iteration's start until the iteration is accepted; passes write `next`,
+  // then alternate with `mid` (taubin: cur -> next -> mid), so measuring the displacement of a
+  // whole iteration needs no copy of the start.
+  std::vector<Vec3> cur = mesh.positions, next(n), mid;
   const int passes = (*kernel)->passes();
-  if (passes > 1) start.resize(n);
+  if (passes > 1) mid.resize(n);
   std::vector<BlockStats> stats(blocks);
   const auto t0 = std::chrono::steady_clock::now();
   int capped_run = 0;  // consecutive iterations with more than kCappedSharePersistent capped
@@ -245,29 +248,33 @@ absl::StatusOr<FlowResult> Run(Mesh& mesh, const Topology& topo, const FlowParam
       }
     }
     ctx.threshold = threshold.empty() ? nullptr : threshold.data();
-    if (passes > 1) start = cur;
+    const Vec3* in = cur.data();
+    std::vector<Vec3>* out = &next;
     for (int pass = 0; pass < passes; ++pass) {
+      out = pass == 0 || out == &mid ? &next : &mid;
       const double factor = (*kernel)->pass_factor(pass);
       ctx.lambda = lambda * factor;
       ctx.curve_lambda = curve_step * factor;
-      (*kernel)->Prepare(ctx, cur.data(), n, threads);
+      (*kernel)->Prepare(ctx, in, n, threads);
       const FlowKernel& k = **kernel;
+      Vec3* const dst = out->data();
       flows::ForBlocks(n, threads, [&](int32_t b, int32_t begin, int32_t end) {
-        stats[b] = k.Step(ctx, cur.data(), next.data(), begin, end);
+        stats[b] = k.Step(ctx, in, dst, begin, end);
       });
-      cur.swap(next);
+      in = dst;
     }
+    const Vec3* const end_pos = in;
     if (passes > 1) {  // displacement over the whole iteration, not the last pass
       flows::ForBlocks(n, threads, [&](int32_t b, int32_t begin, int32_t end) {
         BlockStats s;
         for (int32_t v = begin; v < end; ++v) {
           if (role[v] == flows::kFixed) continue;
-          const double d2 = SquaredNorm(cur[v] - start[v]);
+          const double d2 = SquaredNorm(end_pos[v] - cur[v]);
           s.max_sq = std::max(s.max_sq, d2);
           s.sum += std::sqrt(d2);
           s.moved += d2 > 0.0;
           ++s.movable;
-          s.non_finite |= !IsFinite(cur[v]);
+          s.non_finite |= !IsFinite(end_pos[v]);
         }
         stats[b] = s;
       });
@@ -283,7 +290,7 @@ absl::StatusOr<FlowResult> Run(Mesh& mesh, const Topology& topo, const FlowParam
     capped_run = capped_share > kCappedSharePersistent ? capped_run + 1 : 0;
     const bool too_many_capped = capped_share > kCappedShareAtOnce || capped_run >= kCappedPersistentIterations;
     if (total.non_finite || !(progress.max_displacement <= diagonal) || too_many_capped) {
-      mesh.positions = passes > 1 ? start : next;  // the last iteration before the failure
+      mesh.positions = cur;  // the last iteration before the failure
       return absl::FailedPreconditionError(absl::StrFormat(
           "%s diverged at iteration %d (%s); try a smaller step than %g", p.flow, it,
           total.non_finite ? "a coordinate became NaN or infinite"
@@ -292,6 +299,7 @@ absl::StatusOr<FlowResult> Run(Mesh& mesh, const Topology& topo, const FlowParam
               : absl::StrFormat("a vertex moved %g, more than the mesh's size %g", progress.max_displacement, diagonal),
           step));
     }
+    cur.swap(*out);  // the iteration is accepted
     result.iterations_run = it;
     result.last = progress;
     if (control.on_progress) control.on_progress(progress);
