@@ -29,6 +29,7 @@
 #include "client/smooth_client.h"
 #include "core/draco_codec.h"
 #include "core/flows/flow.h"
+#include "core/huge_pages.h"
 #include "core/io/mesh_io.h"
 #include "core/metrics.h"
 #include "core/shapes.h"
@@ -372,6 +373,7 @@ void ServiceRow(const NamedMesh& nm, int iterations, int runs) {
 }  // namespace meshsmooth::bench
 
 int main(int argc, char** argv) {
+  meshsmooth::UseHugePagesForLargeBuffers(argv);  // first: may re-execute the program
   using namespace meshsmooth;
   using namespace meshsmooth::bench;
   Options opt;

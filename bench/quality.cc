@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "core/flows/flow.h"
+#include "core/huge_pages.h"
 #include "core/io/mesh_io.h"
 #include "core/metrics.h"
 #include "core/shapes.h"
@@ -90,6 +91,7 @@ void Table(const std::string& title, const Mesh& clean, double noise, int iterat
 }  // namespace meshsmooth
 
 int main(int argc, char** argv) {
+  meshsmooth::UseHugePagesForLargeBuffers(argv);  // first: may re-execute the program
   using namespace meshsmooth;
   std::filesystem::path meshes = std::filesystem::path(MESHSMOOTH_SOURCE_DIR) / ".." / "shared" / "data" / "meshes";
   int iterations = 20;

@@ -32,6 +32,7 @@
 #include "client/inputs.h"
 #include "client/smooth_client.h"
 #include "core/draco_codec.h"
+#include "core/huge_pages.h"
 #include "core/features/ridges.h"
 #include "core/io/mesh_io.h"
 #include "core/metrics.h"
@@ -477,6 +478,7 @@ void AddConnectionOptions(CLI::App* app, ConnectionOptions& c) {
 }  // namespace meshsmooth::cli
 
 int main(int argc, char** argv) {
+  meshsmooth::UseHugePagesForLargeBuffers(argv);  // first: may re-execute the program
   using namespace meshsmooth::cli;
   // Before any thread exists: Ctrl-C is handled by InterruptWatcher, not by a handler.
   sigset_t set;

@@ -13,9 +13,11 @@
 #include <thread>
 
 #include "CLI/CLI.hpp"
+#include "core/huge_pages.h"
 #include "server/server.h"
 
 int main(int argc, char** argv) {
+  meshsmooth::UseHugePagesForLargeBuffers(argv);  // first: may re-execute the program
   using meshsmooth::server::ServerOptions;
   ServerOptions o;
   std::string token_file;

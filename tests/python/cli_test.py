@@ -314,6 +314,29 @@ def main():
                 assert f.readline().strip() == "OFF"
         check(f"smooth through meshsmoothd at {address}", through_server)
 
+        def huge_page_tunable():
+            # core/huge_pages.h: the binaries re-execute themselves with glibc's THP tunable when
+            # the kernel grants huge pages on request, and not when told otherwise.
+            with open(f"/proc/{server.pid}/environ", "rb") as f:
+                env = f.read().split(b"\0")
+            try:
+                with open("/sys/kernel/mm/transparent_hugepage/enabled") as f:
+                    madvise = "[madvise]" in f.read()
+            except OSError:
+                madvise = False
+            assert (b"GLIBC_TUNABLES=glibc.malloc.hugetlb=1" in env) == madvise, (madvise, env)
+            off = subprocess.Popen([a.server, "--listen", "127.0.0.1:0", "--quiet"], stdout=subprocess.PIPE,
+                                   text=True, env=dict(os.environ, MESHSMOOTH_HUGE_PAGES="0"))
+            try:
+                assert "listening on" in off.stdout.readline()
+                with open(f"/proc/{off.pid}/environ", "rb") as f:
+                    assert b"hugetlb" not in f.read()
+            finally:
+                off.terminate()
+                off.wait(timeout=10)
+        check("meshsmoothd runs with huge pages for large buffers where THP is on request, not with MESHSMOOTH_HUGE_PAGES=0",
+              huge_page_tunable)
+
         def ctrl_c_cancels():
             # Taubin neither shrinks nor diverges: 10000 iterations on 40962 vertices take seconds.
             p = subprocess.Popen([cli, "smooth", "builtin:noisy-sphere-large", "-o", os.path.join(tmp, "never.ply"),

@@ -1,0 +1,32 @@
+#include "core/huge_pages.h"
+
+#include <unistd.h>
+
+#include <cstdlib>
+#include <fstream>
+#include <iterator>
+#include <string>
+
+namespace meshsmooth {
+
+void UseHugePagesForLargeBuffers(char** argv) {
+#if defined(__SANITIZE_ADDRESS__)
+  return;  // ASan has its own allocator
+#endif
+  if (const char* opt = std::getenv("MESHSMOOTH_HUGE_PAGES"); opt != nullptr && std::string(opt) == "0") return;
+  const char* tunables = std::getenv("GLIBC_TUNABLES");
+  // Already set (by an earlier pass through here, or by the user): never exec twice.
+  if (tunables != nullptr && std::string(tunables).find("glibc.malloc.hugetlb") != std::string::npos) return;
+  std::ifstream thp("/sys/kernel/mm/transparent_hugepage/enabled");
+  const std::string mode((std::istreambuf_iterator<char>(thp)), std::istreambuf_iterator<char>());
+  // "always" needs no request and "never" grants none.
+  if (mode.find("[madvise]") == std::string::npos) return;
+  std::string value = tunables != nullptr && *tunables != '\0' ? std::string(tunables) + ":" : std::string();
+  value += "glibc.malloc.hugetlb=1";
+  if (setenv("GLIBC_TUNABLES", value.c_str(), 1) != 0) return;
+  execv("/proc/self/exe", argv);
+  // exec failed (no /proc, say): carry on with 4 KiB pages; the tunable stays set, so a child
+  // process started later gets it without exec.
+}
+
+}  // namespace meshsmooth
