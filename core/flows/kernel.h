@@ -17,6 +17,13 @@ namespace meshsmooth::flows {
 // Loops over vertices run in fixed blocks of this many vertices (see ForBlocks).
 inline constexpr int32_t kBlock = 4096;
 
+// The instruction set the arithmetic-bound loops are compiled for (RunWithIsa).
+enum class VectorIsa : uint8_t { kSse2, kAvx2, kAvx512 };
+
+// The widest this CPU has, or a narrower one named by MESHSMOOTH_VECTOR_ISA (sse2, avx2; for
+// tests and measurements).
+VectorIsa BestVectorIsa();
+
 // What a vertex does in an iteration.
 enum Role : uint8_t {
   kFixed = 0,  // copies its position
@@ -38,6 +45,7 @@ struct StepContext {
   // Curvature flows: a free vertex moves at most this far (squared) in one pass; see smooth.cc.
   double max_step_sq = std::numeric_limits<double>::infinity();
   double inv_h2 = 1.0;          // 1 / h^2
+  VectorIsa isa = VectorIsa::kSse2;  // see RunWithIsa
 };
 
 // Displacement statistics of one block of vertices; reduced in block order, so the totals do
@@ -162,7 +170,7 @@ inline Vec3 Threshold(const Vec3& f, double t) {
 // or infinite position makes its step, hence the block's displacement sum, non-finite (the
 // positions going in are finite).
 template <bool kAllFree, typename SpeedFn>
-inline BlockStats StepRange(const StepContext& c, const Vec3* cur, Vec3* next, int32_t begin, int32_t end,
+__attribute__((always_inline)) inline BlockStats StepRange(const StepContext& c, const Vec3* cur, Vec3* next, int32_t begin, int32_t end,
                             SpeedFn&& speed) {
   // Locals, not c's fields or the returned struct: the stores to next[] could alias those
   // doubles, which would force a reload or store of each per vertex.
@@ -208,10 +216,31 @@ inline BlockStats StepRange(const StepContext& c, const Vec3* cur, Vec3* next, i
 }
 
 template <typename SpeedFn>
-inline BlockStats ApplyStep(const StepContext& c, const Vec3* cur, Vec3* next, int32_t begin, int32_t end,
+__attribute__((always_inline)) inline BlockStats ApplyStep(const StepContext& c, const Vec3* cur, Vec3* next, int32_t begin, int32_t end,
                             SpeedFn&& speed) {
   if (c.all_free != nullptr && c.all_free[begin / kBlock]) return StepRange<true>(c, cur, next, begin, end, speed);
   return StepRange<false>(c, cur, next, begin, end, speed);
+}
+
+// fn() compiled for `isa`. The code is the same SSE2 lane code in every case; compiled for
+// AVX2 or AVX-512 it gets three-operand instructions and, with AVX-512VL, 32 registers instead
+// of 16, which removes the cotangent kernel's spills (~15% faster, docs/performance.md). The
+// entry points are flattened, so fn and everything it calls is compiled into them (fn and the
+// lambdas it passes down should be always_inline). No FMA is ever formed (core is built with
+// -ffp-contract=off): the same bits whichever runs.
+template <class Fn>
+__attribute__((target("avx512f,avx512vl"), flatten)) BlockStats RunAvx512(const Fn& fn) {
+  return fn();
+}
+template <class Fn>
+__attribute__((target("avx2"), flatten)) BlockStats RunAvx2(const Fn& fn) {
+  return fn();
+}
+template <class Fn>
+__attribute__((always_inline)) inline BlockStats RunWithIsa(VectorIsa isa, const Fn& fn) {
+  if (isa == VectorIsa::kAvx512) return RunAvx512(fn);
+  if (isa == VectorIsa::kAvx2) return RunAvx2(fn);
+  return fn();
 }
 
 // One flow: how one pass moves the vertices of a block. Flow files implement it.

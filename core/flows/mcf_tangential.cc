@@ -17,13 +17,15 @@ class McfTangential final : public FlowKernel {
   bool curvature_units() const override { return true; }
   BlockStats Step(const StepContext& c, const Vec3* cur, Vec3* next, int32_t begin, int32_t end) const override {
     const double weight = c_ * c.inv_h2;
-    return ApplyStep(c, cur, next, begin, end, [&](int32_t v) {
-      const Curvature k = MeanCurvatureNormal(c, cur, v);
-      const Vec3& u = k.u0;
-      const double len = Norm(k.normal);
-      if (!(len > 0.0)) return k.hn;
-      const Vec3 n = k.normal * (1.0 / len);
-      return k.hn + (u - n * Dot(u, n)) * weight;
+    return RunWithIsa(c.isa, [&]() __attribute__((always_inline)) {
+      return ApplyStep(c, cur, next, begin, end, [&](int32_t v) __attribute__((always_inline)) {
+        const Curvature k = MeanCurvatureNormal(c, cur, v);
+        const Vec3& u = k.u0;
+        const double len = Norm(k.normal);
+        if (!(len > 0.0)) return k.hn;
+        const Vec3 n = k.normal * (1.0 / len);
+        return k.hn + (u - n * Dot(u, n)) * weight;
+      });
     });
   }
 

@@ -18,16 +18,18 @@ class Median final : public FlowKernel {
   BlockStats Step(const StepContext& c, const Vec3* cur, Vec3* next, int32_t begin, int32_t end) const override {
     const double eps = epsilon_;
     const double tiny_h = 1e-12 / c.h, tiny_u = 1e-12 * c.h;
-    return ApplyStep(c, cur, next, begin, end, [&](int32_t v) {
-      const Curvature k = MeanCurvatureNormal(c, cur, v);
-      const Vec3 hn = k.hn, u = k.u0;
-      const double hm = Norm(hn), um = Norm(u);
-      if (!(hm > tiny_h) || !(um > tiny_u)) return Vec3{};
-      const Vec3 m = u * (1.0 / um);
-      const double cos_theta = Dot(m, hn) / hm;
-      if (cos_theta > eps) return m * (hm / cos_theta);
-      if (cos_theta < -eps) return hn * 2.0 - m * (hm / cos_theta);
-      return Vec3{};
+    return RunWithIsa(c.isa, [&]() __attribute__((always_inline)) {
+      return ApplyStep(c, cur, next, begin, end, [&](int32_t v) __attribute__((always_inline)) {
+        const Curvature k = MeanCurvatureNormal(c, cur, v);
+        const Vec3 hn = k.hn, u = k.u0;
+        const double hm = Norm(hn), um = Norm(u);
+        if (!(hm > tiny_h) || !(um > tiny_u)) return Vec3{};
+        const Vec3 m = u * (1.0 / um);
+        const double cos_theta = Dot(m, hn) / hm;
+        if (cos_theta > eps) return m * (hm / cos_theta);
+        if (cos_theta < -eps) return hn * 2.0 - m * (hm / cos_theta);
+        return Vec3{};
+      });
     });
   }
 

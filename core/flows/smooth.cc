@@ -3,6 +3,7 @@
 #include <omp.h>
 
 #include <chrono>
+#include <cstdlib>
 #include <cmath>
 #include <limits>
 #include <numeric>
@@ -74,6 +75,22 @@ BlockStats Reduce(const std::vector<BlockStats>& blocks) {
 }
 
 }  // namespace
+
+namespace flows {
+
+VectorIsa BestVectorIsa() {
+  VectorIsa best = VectorIsa::kSse2;
+  if (__builtin_cpu_supports("avx2")) best = VectorIsa::kAvx2;
+  if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl")) best = VectorIsa::kAvx512;
+  if (const char* want = std::getenv("MESHSMOOTH_VECTOR_ISA")) {  // never wider than the CPU
+    const std::string w = want;
+    if (w == "sse2") best = VectorIsa::kSse2;
+    if (w == "avx2" && best == VectorIsa::kAvx512) best = VectorIsa::kAvx2;
+  }
+  return best;
+}
+
+}  // namespace flows
 
 const std::vector<std::string>& FlowNames() {
   static const std::vector<std::string> kNames = {"laplacian", "taubin", "bilaplacian",
@@ -215,6 +232,7 @@ absl::StatusOr<FlowResult> Run(Mesh& mesh, const Topology& topo, const FlowParam
   ctx.kind = topo.kind.data();
   ctx.h = h;
   ctx.inv_h2 = 1.0 / (h * h);
+  ctx.isa = flows::BestVectorIsa();
   if (curvature) ctx.max_step_sq = h * h;
   // Curvature flows move a boundary curve like the curve-shortening flow with the same time
   // step (kappa ~ 2 U / h^2), capped at the stable umbrella step 0.5.

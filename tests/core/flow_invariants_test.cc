@@ -2,6 +2,7 @@
 // ../shared/data/meshes when present): no NaN, boundary and non-manifold vertices fixed by
 // default, locked vertices fixed, and the same bytes with 1 and 2 threads.
 #include <atomic>
+#include <cstdlib>
 #include <cstring>
 
 #include "core/io/mesh_io.h"
@@ -92,6 +93,33 @@ TEST(FlowInvariantsTest, InternalReorderingChangesNoPosition) {
     p.reorder = false;
     ASSERT_TRUE(Smooth(b, topo, p).ok());
     EXPECT_TRUE(SameBytes(a, b)) << p.flow;
+  }
+}
+
+// The cotangent flows run compiled for AVX2 or AVX-512 where the CPU has them
+// (flows::RunWithIsa): the positions must be the bytes of the x86-64 baseline build. (On a CPU
+// without AVX2 every run below is the baseline and the test cannot tell them apart.)
+TEST(FlowInvariantsTest, InstructionSetChangesNoPosition) {
+  std::vector<Case> cases;
+  cases.push_back({"noisy icosphere(6)", NoisySphere(6)});
+  cases.push_back({"noisy two-rate torus", NoisyTorus()});
+  for (const Case& c : cases) {
+    const Topology topo = BuildTopology(c.mesh);
+    for (const char* flow : {"mcf", "mcf_tangential", "median"}) {
+      SCOPED_TRACE(c.name + " / " + flow);
+      FlowParams p = Params(flow, 5);
+      std::vector<Mesh> runs;
+      for (const char* isa : {"sse2", "avx2", ""}) {  // "": the widest this CPU has
+        setenv("MESHSMOOTH_VECTOR_ISA", isa, 1);
+        Mesh m = c.mesh;
+        ASSERT_TRUE(Smooth(m, topo, p).ok());
+        runs.push_back(std::move(m));
+      }
+      unsetenv("MESHSMOOTH_VECTOR_ISA");
+      EXPECT_FALSE(SameBytes(runs[0], c.mesh));
+      EXPECT_TRUE(SameBytes(runs[0], runs[1])) << "sse2 and avx2 differ";
+      EXPECT_TRUE(SameBytes(runs[0], runs[2])) << "sse2 and the widest differ";
+    }
   }
 }
 
