@@ -99,7 +99,9 @@ struct Progress {
 };
 
 struct RunControl {
-  std::function<void(const Progress&)> on_progress;  // called after every iteration
+  // Called after every iteration, on the calling thread. The mesh's positions are held by the
+  // run until Smooth() returns: do not read the mesh from here.
+  std::function<void(const Progress&)> on_progress;
   const std::atomic<bool>* cancel = nullptr;         // checked every iteration
   double time_budget_seconds = 0.0;                  // > 0: stop when exceeded
 };

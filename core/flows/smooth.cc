@@ -247,7 +247,9 @@ absl::StatusOr<FlowResult> Run(Mesh& mesh, const Topology& topo, const FlowParam
   // `cur` keeps the iteration's start until the iteration is accepted; passes write `next`,
   // then alternate with `mid` (taubin: cur -> next -> mid), so measuring the displacement of a
   // whole iteration needs no copy of the start.
-  std::vector<Vec3> cur = mesh.positions, next(n), mid;
+  // The positions move into `cur` for the run (no copy; the mesh gets them back on every
+  // return below, so nothing should read `mesh` from a progress callback).
+  std::vector<Vec3> cur = std::move(mesh.positions), next(n), mid;
   const int passes = (*kernel)->passes();
   if (passes > 1) mid.resize(n);
   std::vector<BlockStats> stats(blocks);
@@ -256,7 +258,7 @@ absl::StatusOr<FlowResult> Run(Mesh& mesh, const Topology& topo, const FlowParam
 
   for (int it = 1; it <= p.iterations; ++it) {
     if (control.cancel != nullptr && control.cancel->load(std::memory_order_relaxed)) {
-      mesh.positions = cur;
+      mesh.positions = std::move(cur);
       return absl::CancelledError(absl::StrCat("cancelled after ", it - 1, " iterations"));
     }
     if (p.adaptive == AdaptiveMode::kRing1 || p.adaptive == AdaptiveMode::kRing2) {
@@ -308,7 +310,7 @@ absl::StatusOr<FlowResult> Run(Mesh& mesh, const Topology& topo, const FlowParam
     capped_run = capped_share > kCappedSharePersistent ? capped_run + 1 : 0;
     const bool too_many_capped = capped_share > kCappedShareAtOnce || capped_run >= kCappedPersistentIterations;
     if (total.non_finite || !(progress.max_displacement <= diagonal) || too_many_capped) {
-      mesh.positions = cur;  // the last iteration before the failure
+      mesh.positions = std::move(cur);  // the last iteration before the failure
       return absl::FailedPreconditionError(absl::StrFormat(
           "%s diverged at iteration %d (%s); try a smaller step than %g", p.flow, it,
           total.non_finite ? "a coordinate became NaN or infinite"
