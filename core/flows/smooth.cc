@@ -376,6 +376,7 @@ std::vector<int32_t> MortonOrder(const std::vector<Vec3>& pos) {
     return static_cast<uint64_t>(std::clamp(std::isfinite(c) ? c : 0.0, 0.0, 8191.0));
   };
   std::vector<uint64_t> keys(n), tmp(n);
+#pragma omp parallel for schedule(static)
   for (int32_t i = 0; i < n; ++i) {
     const uint64_t code = Spread3(cell(pos[i].x, lo.x)) | Spread3(cell(pos[i].y, lo.y)) << 1 |
                           Spread3(cell(pos[i].z, lo.z)) << 2;
@@ -409,8 +410,11 @@ absl::StatusOr<FlowResult> Smooth(Mesh& mesh, const Topology& topo, const FlowPa
   const double h = MeanEdgeLength(mesh, topo);
   if (!p.reorder || n < kReorderThreshold || n > kReorderMaxVertices) return Run(mesh, topo, p, control, h);
 
+  // A pure permutation, so it runs on the job's threads without changing a bit.
+  const int threads = p.threads > 0 ? p.threads : omp_get_max_threads();
   const std::vector<int32_t> order = MortonOrder(mesh.positions);  // new -> old
   std::vector<int32_t> rank(n);                                    // old -> new
+#pragma omp parallel for schedule(static) num_threads(threads)
   for (int32_t i = 0; i < n; ++i) rank[order[i]] = i;
   Mesh local;
   local.positions.resize(n);
@@ -421,18 +425,19 @@ absl::StatusOr<FlowResult> Smooth(Mesh& mesh, const Topology& topo, const FlowPa
   FlowParams q = p;
   if (!p.locked.empty()) q.locked.resize(n);
   t.ring_offsets[0] = 0;
+  for (int32_t i = 0; i < n; ++i) t.ring_offsets[i + 1] = t.ring_offsets[i] + topo.valence(order[i]);
+#pragma omp parallel for schedule(static) num_threads(threads)
   for (int32_t i = 0; i < n; ++i) {
     const int32_t old = order[i];
     local.positions[i] = mesh.positions[old];
     t.kind[i] = topo.kind[old];
     if (!p.locked.empty()) q.locked[i] = p.locked[old];
-    const int32_t b = topo.ring_offsets[old], e = topo.ring_offsets[old + 1];
     int32_t out = t.ring_offsets[i];
-    for (int32_t k = b; k < e; ++k) t.ring[out++] = rank[topo.ring[k]];
-    t.ring_offsets[i + 1] = out;
+    for (int32_t k = topo.ring_offsets[old]; k < topo.ring_offsets[old + 1]; ++k) t.ring[out++] = rank[topo.ring[k]];
   }
   absl::StatusOr<FlowResult> result = Run(local, t, q, control, h);
   // The positions as Run left them (the last good iteration on failure), in the caller's order.
+#pragma omp parallel for schedule(static) num_threads(threads)
   for (int32_t i = 0; i < n; ++i) mesh.positions[order[i]] = local.positions[i];
   return result;
 }
