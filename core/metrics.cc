@@ -132,29 +132,33 @@ MeshMetrics ComputeMetrics(const Mesh& mesh, const Topology& topo) {
 }
 
 absl::StatusOr<Displacement> CompareMeshes(const Mesh& before, const Mesh& after) {
-  if (before.positions.size() != after.positions.size()) {
-    return absl::InvalidArgumentError(absl::StrCat("vertex counts differ: ", before.positions.size(),
-                                                   " and ", after.positions.size()));
-  }
   if (before.triangles != after.triangles) {
     return absl::InvalidArgumentError("the meshes' triangles differ");
   }
+  return CompareMeshes(before.positions, after);
+}
+
+absl::StatusOr<Displacement> CompareMeshes(const std::vector<Vec3>& before, const Mesh& after) {
+  if (before.size() != after.positions.size()) {
+    return absl::InvalidArgumentError(absl::StrCat("vertex counts differ: ", before.size(),
+                                                   " and ", after.positions.size()));
+  }
   Displacement d;
   double sq = 0.0;
-  for (size_t i = 0; i < before.positions.size(); ++i) {
-    const double len = Norm(after.positions[i] - before.positions[i]);
+  for (size_t i = 0; i < before.size(); ++i) {
+    const double len = Norm(after.positions[i] - before[i]);
     sq += len * len;
     d.max = std::max(d.max, len);
   }
-  if (!before.positions.empty()) d.rms = std::sqrt(sq / static_cast<double>(before.positions.size()));
-  const int32_t n = before.num_vertices();
-  for (const Triangle& t : before.triangles) {
+  if (!before.empty()) d.rms = std::sqrt(sq / static_cast<double>(before.size()));
+  const int32_t n = after.num_vertices();
+  for (const Triangle& t : after.triangles) {
     if (!IsUsableTriangle(t, n)) continue;
-    auto normal = [&t](const Mesh& m) {
-      const Vec3& p = m.positions[t[0]];
-      return Cross(m.positions[t[1]] - p, m.positions[t[2]] - p);
+    auto normal = [&t](const std::vector<Vec3>& pos) {
+      const Vec3& p = pos[t[0]];
+      return Cross(pos[t[1]] - p, pos[t[2]] - p);
     };
-    if (Dot(normal(before), normal(after)) < 0.0) ++d.flipped_normals;
+    if (Dot(normal(before), normal(after.positions)) < 0.0) ++d.flipped_normals;
   }
   return d;
 }

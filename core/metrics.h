@@ -33,6 +33,11 @@ struct Displacement {
 // triangles differ.
 absl::StatusOr<Displacement> CompareMeshes(const Mesh& before, const Mesh& after);
 
+// Same, for `after` and the positions its vertices had before (its triangles throughout): a
+// job keeps only the input's positions, not a second copy of the triangles. InvalidArgument
+// when the vertex counts differ.
+absl::StatusOr<Displacement> CompareMeshes(const std::vector<Vec3>& before, const Mesh& after);
+
 // Mean edge length of the usable faces' unique edges (0 for a mesh without edges).
 double MeanEdgeLength(const Mesh& mesh, const Topology& topo);
 

@@ -94,7 +94,7 @@ void SmoothJob::Run() {
   accepted.mutable_input()->set_seam_points(draco->seam_points());
   Emit([&](JobSink& sink) { sink.OnAccepted(accepted); });
 
-  const Mesh input = mesh;
+  const std::vector<Vec3> input = mesh.positions;  // for the displacement; the triangles stay put
   FlowParams flow = params_.flow;
   flow.threads = options_.threads_per_job;
   RunControl control;

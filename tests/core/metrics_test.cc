@@ -63,6 +63,16 @@ TEST(MetricsTest, DisplacementAndFlippedNormals) {
   ASSERT_TRUE(d.ok());
   EXPECT_EQ(d->flipped_normals, 5);  // vertex 0 is a valence-5 icosahedron corner
 
+  // The positions-only form (what a job keeps of its input) gives the same figures.
+  absl::StatusOr<Displacement> p = CompareMeshes(a.positions, c);
+  ASSERT_TRUE(p.ok());
+  EXPECT_EQ(p->flipped_normals, 5);
+  EXPECT_EQ(p->max, d->max);
+  EXPECT_EQ(p->rms, d->rms);
+  std::vector<Vec3> fewer = a.positions;
+  fewer.pop_back();
+  EXPECT_EQ(CompareMeshes(fewer, c).status().code(), absl::StatusCode::kInvalidArgument);
+
   Mesh e = a;
   e.triangles.pop_back();
   EXPECT_EQ(CompareMeshes(a, e).status().code(), absl::StatusCode::kInvalidArgument);
