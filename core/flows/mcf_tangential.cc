@@ -21,10 +21,10 @@ class McfTangential final : public FlowKernel {
       return ApplyStep(c, cur, next, begin, end, [&](int32_t v) __attribute__((always_inline)) {
         const Curvature k = MeanCurvatureNormal(c, cur, v);
         const Vec3& u = k.u0;
-        const double len = Norm(k.normal);
-        if (!(len > 0.0)) return k.hn;
-        const Vec3 n = k.normal * (1.0 / len);
-        return k.hn + (u - n * Dot(u, n)) * weight;
+        const double len2 = SquaredNorm(k.normal);
+        if (!(len2 > 0.0)) return k.hn;
+        // The tangential part U0 - (U0 . n) n with n = N / |N|, without the square root.
+        return k.hn + (u - k.normal * (Dot(u, k.normal) / len2)) * weight;
       });
     });
   }

@@ -16,19 +16,21 @@ class Median final : public FlowKernel {
   explicit Median(double epsilon) : epsilon_(epsilon) {}
   bool curvature_units() const override { return true; }
   BlockStats Step(const StepContext& c, const Vec3* cur, Vec3* next, int32_t begin, int32_t end) const override {
-    const double eps = epsilon_;
+    const double eps2 = epsilon_ * epsilon_;
     const double tiny_h = 1e-12 / c.h, tiny_u = 1e-12 * c.h;
+    const double tiny_h2 = tiny_h * tiny_h, tiny_u2 = tiny_u * tiny_u;
     return RunWithIsa(c.isa, [&]() __attribute__((always_inline)) {
       return ApplyStep(c, cur, next, begin, end, [&](int32_t v) __attribute__((always_inline)) {
         const Curvature k = MeanCurvatureNormal(c, cur, v);
         const Vec3 hn = k.hn, u = k.u0;
-        const double hm = Norm(hn), um = Norm(u);
-        if (!(hm > tiny_h) || !(um > tiny_u)) return Vec3{};
-        const Vec3 m = u * (1.0 / um);
-        const double cos_theta = Dot(m, hn) / hm;
-        if (cos_theta > eps) return m * (hm / cos_theta);
-        if (cos_theta < -eps) return hn * 2.0 - m * (hm / cos_theta);
-        return Vec3{};
+        const double hm2 = SquaredNorm(hn), um2 = SquaredNorm(u);
+        if (!(hm2 > tiny_h2) || !(um2 > tiny_u2)) return Vec3{};
+        // Without square roots: d = U0 . Hn = |U0| |Hn| cos(theta), so |cos(theta)| > epsilon
+        // is d^2 > epsilon^2 |U0|^2 |Hn|^2, and |H| m / cos(theta) = U0 |Hn|^2 / d.
+        const double d = Dot(u, hn);
+        if (!(d * d > eps2 * um2 * hm2)) return Vec3{};
+        const Vec3 along = u * (hm2 / d);
+        return d > 0.0 ? along : hn * 2.0 - along;
       });
     });
   }
