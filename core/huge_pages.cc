@@ -22,7 +22,11 @@ void UseHugePagesForLargeBuffers(char** argv) {
   // "always" needs no request and "never" grants none.
   if (mode.find("[madvise]") == std::string::npos) return;
   std::string value = tunables != nullptr && *tunables != '\0' ? std::string(tunables) + ":" : std::string();
-  value += "glibc.malloc.hugetlb=1";
+  // One arena: glibc gives each thread that allocates its own arena, and memory freed into those
+  // comes back without huge pages (a job runs on a worker thread: its decode, topology and
+  // encode took 1.5-2x longer there than on the main thread; docs/performance.md). Small
+  // allocations still avoid the arena's lock through glibc's per-thread cache.
+  value += "glibc.malloc.hugetlb=1:glibc.malloc.arena_max=1";
   if (setenv("GLIBC_TUNABLES", value.c_str(), 1) != 0) return;
   execv("/proc/self/exe", argv);
   // exec failed (no /proc, say): carry on with 4 KiB pages; the tunable stays set, so a child

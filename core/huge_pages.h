@@ -6,16 +6,17 @@
 // encoded result. Where the kernel gives transparent huge pages on request
 // (/sys/kernel/mm/transparent_hugepage/enabled is "madvise"), glibc's malloc asks for them when
 // the tunable glibc.malloc.hugetlb=1 is set, and the same faults cost ~50x less
-// (docs/performance.md). Tunables are read when a program starts, so the binaries call this
+// (docs/performance.md); glibc.malloc.arena_max=1 keeps the worker threads' buffers in the one
+// arena that gets them. Tunables are read when a program starts, so the binaries call this
 // first thing in main().
 #pragma once
 
 namespace meshsmooth {
 
 // Re-executes the program (same pid, same argv, same environment plus
-// GLIBC_TUNABLES=...:glibc.malloc.hugetlb=1) unless the tunable is already set, the kernel's
-// THP mode is not "madvise", the environment says MESHSMOOTH_HUGE_PAGES=0, or the build is
-// sanitized. Call it before any thread exists. Returns when nothing was done or exec failed.
+// GLIBC_TUNABLES=...:glibc.malloc.hugetlb=1:glibc.malloc.arena_max=1) unless
+// glibc.malloc.hugetlb is already set, the kernel's THP mode is not "madvise", the environment
+// says MESHSMOOTH_HUGE_PAGES=0, or the build is sanitized. Call it before any thread exists. Returns when nothing was done or exec failed.
 void UseHugePagesForLargeBuffers(char** argv);
 
 }  // namespace meshsmooth
