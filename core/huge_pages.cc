@@ -22,10 +22,11 @@ void UseHugePagesForLargeBuffers(char** argv) {
   // "always" needs no request and "never" grants none.
   if (mode.find("[madvise]") == std::string::npos) return;
   std::string value = tunables != nullptr && *tunables != '\0' ? std::string(tunables) + ":" : std::string();
-  // One arena: glibc gives each thread that allocates its own arena, and memory freed into those
-  // comes back without huge pages (a job runs on a worker thread: its decode, topology and
-  // encode took 1.5-2x longer there than on the main thread; docs/performance.md). Small
-  // allocations still avoid the arena's lock through glibc's per-thread cache.
+  // One arena: glibc gives each allocating thread an arena of its own, and a job runs on a
+  // worker thread, where its decode, topology and encode took 1.5-2x the main thread's time for
+  // the same steps (measured, docs/performance.md; presumably the thread arenas' heaps get no
+  // huge pages or are trimmed and faulted in again). Small allocations still avoid the arena's
+  // lock through glibc's per-thread cache.
   value += "glibc.malloc.hugetlb=1:glibc.malloc.arena_max=1";
   if (setenv("GLIBC_TUNABLES", value.c_str(), 1) != 0) return;
   execv("/proc/self/exe", argv);
