@@ -16,7 +16,8 @@ namespace meshsmooth {
 // Re-executes the program (same pid, same argv, same environment plus
 // GLIBC_TUNABLES=...:glibc.malloc.hugetlb=1:glibc.malloc.arena_max=1) unless
 // glibc.malloc.hugetlb is already set, the kernel's THP mode is not "madvise", the environment
-// says MESHSMOOTH_HUGE_PAGES=0, or the build is sanitized. Call it before any thread exists. Returns when nothing was done or exec failed.
+// says MESHSMOOTH_HUGE_PAGES=0, or the build is sanitized. Call it before any thread exists.
+// Returns when nothing was done or exec failed.
 void UseHugePagesForLargeBuffers(char** argv);
 
 }  // namespace meshsmooth

@@ -139,8 +139,8 @@ absl::StatusOr<FlowResult> Smooth(Mesh& mesh, const FlowParams& p, const RunCont
 
 // The order Smooth() runs meshes of 100k vertices or more in (FlowParams::reorder): vertices
 // in Morton (Z-)order of their positions, so that a vertex's neighbours sit close to it in
-// memory. new -> old; the identity above 2^25 vertices.
-std::vector<int32_t> MortonOrder(const std::vector<Vec3>& positions);
+// memory. new -> old; the identity above 2^25 vertices. The keys are computed on `threads`.
+std::vector<int32_t> MortonOrder(const std::vector<Vec3>& positions, int threads = 1);
 
 // Per-vertex mean-curvature normal H n (eq. 8 with the mixed Voronoi area, so |H| = 1/r on a
 // sphere; points towards the centre of curvature). Zero for vertices that are not interior.

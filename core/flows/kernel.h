@@ -170,8 +170,8 @@ inline Vec3 Threshold(const Vec3& f, double t) {
 // or infinite position makes its step, hence the block's displacement sum, non-finite (the
 // positions going in are finite).
 template <bool kAllFree, typename SpeedFn>
-__attribute__((always_inline)) inline BlockStats StepRange(const StepContext& c, const Vec3* cur, Vec3* next, int32_t begin, int32_t end,
-                            SpeedFn&& speed) {
+__attribute__((always_inline)) inline BlockStats StepRange(const StepContext& c, const Vec3* cur, Vec3* next,
+                                                           int32_t begin, int32_t end, SpeedFn&& speed) {
   // Locals, not c's fields or the returned struct: the stores to next[] could alias those
   // doubles, which would force a reload or store of each per vertex.
   const double lambda = c.lambda, curve_lambda = c.curve_lambda, max_step_sq = c.max_step_sq;
@@ -216,8 +216,8 @@ __attribute__((always_inline)) inline BlockStats StepRange(const StepContext& c,
 }
 
 template <typename SpeedFn>
-__attribute__((always_inline)) inline BlockStats ApplyStep(const StepContext& c, const Vec3* cur, Vec3* next, int32_t begin, int32_t end,
-                            SpeedFn&& speed) {
+__attribute__((always_inline)) inline BlockStats ApplyStep(const StepContext& c, const Vec3* cur, Vec3* next,
+                                                           int32_t begin, int32_t end, SpeedFn&& speed) {
   if (c.all_free != nullptr && c.all_free[begin / kBlock]) return StepRange<true>(c, cur, next, begin, end, speed);
   return StepRange<false>(c, cur, next, begin, end, speed);
 }
@@ -225,9 +225,8 @@ __attribute__((always_inline)) inline BlockStats ApplyStep(const StepContext& c,
 // fn() compiled for `isa`. The code is the same SSE2 lane code in every case; compiled for
 // AVX2 or AVX-512 it gets three-operand instructions and, with AVX-512VL, 32 registers instead
 // of 16, which removes the cotangent kernel's spills (~15% faster, docs/performance.md). The
-// entry points are flattened, so fn and everything it calls is compiled into them (fn and the
-// lambdas it passes down should be always_inline). No FMA is ever formed (core is built with
-// -ffp-contract=off): the same bits whichever runs.
+// entry points are flattened, so fn and everything it calls is compiled into them. No FMA is
+// ever formed (core is built with -ffp-contract=off): the same bits whichever runs.
 template <class Fn>
 __attribute__((target("avx512f,avx512vl"), flatten)) BlockStats RunAvx512(const Fn& fn) {
   return fn();
@@ -241,6 +240,15 @@ __attribute__((always_inline)) inline BlockStats RunWithIsa(VectorIsa isa, const
   if (isa == VectorIsa::kAvx512) return RunAvx512(fn);
   if (isa == VectorIsa::kAvx2) return RunAvx2(fn);
   return fn();
+}
+
+// ApplyStep compiled for c.isa (RunWithIsa). `speed` should be always_inline: GCC's flatten
+// stops at a lambda whose inlined body would grow the stack frame too much, and that lambda
+// would then run as baseline code called from the wide entry point.
+template <typename SpeedFn>
+__attribute__((always_inline)) inline BlockStats ApplyStepWithIsa(const StepContext& c, const Vec3* cur, Vec3* next,
+                                                                  int32_t begin, int32_t end, SpeedFn&& speed) {
+  return RunWithIsa(c.isa, [&]() __attribute__((always_inline)) { return ApplyStep(c, cur, next, begin, end, speed); });
 }
 
 // One flow: how one pass moves the vertices of a block. Flow files implement it.

@@ -12,10 +12,8 @@ class Mcf final : public FlowKernel {
  public:
   bool curvature_units() const override { return true; }
   BlockStats Step(const StepContext& c, const Vec3* cur, Vec3* next, int32_t begin, int32_t end) const override {
-    return RunWithIsa(c.isa, [&]() __attribute__((always_inline)) {
-      return ApplyStep(c, cur, next, begin, end,
-                       [&](int32_t v) __attribute__((always_inline)) { return MeanCurvatureNormal(c, cur, v).hn; });
-    });
+    return ApplyStepWithIsa(c, cur, next, begin, end,
+                            [&](int32_t v) __attribute__((always_inline)) { return MeanCurvatureNormal(c, cur, v).hn; });
   }
 };
 

@@ -19,19 +19,17 @@ class Median final : public FlowKernel {
     const double eps2 = epsilon_ * epsilon_;
     const double tiny_h = 1e-12 / c.h, tiny_u = 1e-12 * c.h;
     const double tiny_h2 = tiny_h * tiny_h, tiny_u2 = tiny_u * tiny_u;
-    return RunWithIsa(c.isa, [&]() __attribute__((always_inline)) {
-      return ApplyStep(c, cur, next, begin, end, [&](int32_t v) __attribute__((always_inline)) {
-        const Curvature k = MeanCurvatureNormal(c, cur, v);
-        const Vec3 hn = k.hn, u = k.u0;
-        const double hm2 = SquaredNorm(hn), um2 = SquaredNorm(u);
-        if (!(hm2 > tiny_h2) || !(um2 > tiny_u2)) return Vec3{};
-        // Without square roots: d = U0 . Hn = |U0| |Hn| cos(theta), so |cos(theta)| > epsilon
-        // is d^2 > epsilon^2 |U0|^2 |Hn|^2, and |H| m / cos(theta) = U0 |Hn|^2 / d.
-        const double d = Dot(u, hn);
-        if (!(d * d > eps2 * um2 * hm2)) return Vec3{};
-        const Vec3 along = u * (hm2 / d);
-        return d > 0.0 ? along : hn * 2.0 - along;
-      });
+    return ApplyStepWithIsa(c, cur, next, begin, end, [&](int32_t v) __attribute__((always_inline)) {
+      const Curvature k = MeanCurvatureNormal(c, cur, v);
+      const Vec3 hn = k.hn, u = k.u0;
+      const double hm2 = SquaredNorm(hn), um2 = SquaredNorm(u);
+      if (!(hm2 > tiny_h2) || !(um2 > tiny_u2)) return Vec3{};
+      // Without square roots: d = U0 . Hn = |U0| |Hn| cos(theta), so |cos(theta)| > epsilon
+      // is d^2 > epsilon^2 |U0|^2 |Hn|^2, and |H| m / cos(theta) = U0 |Hn|^2 / d.
+      const double d = Dot(u, hn);
+      if (!(d * d > eps2 * um2 * hm2)) return Vec3{};
+      const Vec3 along = u * (hm2 / d);
+      return d > 0.0 ? along : hn * 2.0 - along;
     });
   }
 

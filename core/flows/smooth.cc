@@ -37,6 +37,12 @@ constexpr double kCappedShareAtOnce = 0.5;
 constexpr double kCappedSharePersistent = 0.05;
 constexpr int kCappedPersistentIterations = 3;
 
+// Threads of a run's vertex loops: one below kParallelThreshold, else FlowParams::threads
+// (0 = all hardware threads).
+int ThreadsFor(int32_t n, const FlowParams& p) {
+  return n < kParallelThreshold ? 1 : (p.threads > 0 ? p.threads : omp_get_max_threads());
+}
+
 bool IsCurvatureFlow(const std::string& flow) {
   return flow == "mcf" || flow == "mcf_tangential" || flow == "median";
 }
@@ -223,7 +229,7 @@ absl::StatusOr<FlowResult> Run(Mesh& mesh, const Topology& topo, const FlowParam
     if (role[v] != flows::kFree) all_free[v / flows::kBlock] = 0;
   }
 
-  const int threads = n < kParallelThreshold ? 1 : (p.threads > 0 ? p.threads : omp_get_max_threads());
+  const int threads = ThreadsFor(n, p);
   StepContext ctx;
   ctx.offsets = topo.ring_offsets.data();
   ctx.ring = topo.ring.data();
@@ -244,11 +250,10 @@ absl::StatusOr<FlowResult> Run(Mesh& mesh, const Topology& topo, const FlowParam
                                                                : (curvature ? 1.0 : 0.5 * h * h);
   if (p.adaptive == AdaptiveMode::kConstant) threshold.assign(n, p.adaptive_threshold * t_scale);
 
-  // `cur` keeps the iteration's start until the iteration is accepted; passes write `next`,
-  // then alternate with `mid` (taubin: cur -> next -> mid), so measuring the displacement of a
-  // whole iteration needs no copy of the start.
-  // The positions move into `cur` for the run (no copy; the mesh gets them back on every
-  // return below, so nothing should read `mesh` from a progress callback).
+  // The positions move into `cur` for the run (no copy; the mesh gets them back on every return
+  // below). `cur` keeps the iteration's start until the iteration is accepted; passes write
+  // `next`, then alternate with `mid` (taubin: cur -> next -> mid), so measuring the
+  // displacement of a whole iteration needs no copy of the start.
   std::vector<Vec3> cur = std::move(mesh.positions), next(n), mid;
   const int passes = (*kernel)->passes();
   if (passes > 1) mid.resize(n);
@@ -271,7 +276,7 @@ absl::StatusOr<FlowResult> Run(Mesh& mesh, const Topology& topo, const FlowParam
     const Vec3* in = cur.data();
     std::vector<Vec3>* out = &next;
     for (int pass = 0; pass < passes; ++pass) {
-      out = pass == 0 || out == &mid ? &next : &mid;
+      out = pass % 2 == 0 ? &next : &mid;
       const double factor = (*kernel)->pass_factor(pass);
       ctx.lambda = lambda * factor;
       ctx.curve_lambda = curve_step * factor;
@@ -357,7 +362,7 @@ constexpr int32_t kReorderMaxVertices = 1 << 25;
 
 // Keys pack a 39-bit Morton code (13 bits per axis) above a 25-bit vertex index and are
 // sorted by three 13-bit LSD radix passes.
-std::vector<int32_t> MortonOrder(const std::vector<Vec3>& pos) {
+std::vector<int32_t> MortonOrder(const std::vector<Vec3>& pos, int threads) {
   const int32_t n = static_cast<int32_t>(pos.size());
   if (n > kReorderMaxVertices) {  // the keys have no room for the index: keep the order
     std::vector<int32_t> identity(n);
@@ -376,7 +381,7 @@ std::vector<int32_t> MortonOrder(const std::vector<Vec3>& pos) {
     return static_cast<uint64_t>(std::clamp(std::isfinite(c) ? c : 0.0, 0.0, 8191.0));
   };
   std::vector<uint64_t> keys(n), tmp(n);
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) num_threads(threads)
   for (int32_t i = 0; i < n; ++i) {
     const uint64_t code = Spread3(cell(pos[i].x, lo.x)) | Spread3(cell(pos[i].y, lo.y)) << 1 |
                           Spread3(cell(pos[i].z, lo.z)) << 2;
@@ -411,8 +416,8 @@ absl::StatusOr<FlowResult> Smooth(Mesh& mesh, const Topology& topo, const FlowPa
   if (!p.reorder || n < kReorderThreshold || n > kReorderMaxVertices) return Run(mesh, topo, p, control, h);
 
   // A pure permutation, so it runs on the job's threads without changing a bit.
-  const int threads = p.threads > 0 ? p.threads : omp_get_max_threads();
-  const std::vector<int32_t> order = MortonOrder(mesh.positions);  // new -> old
+  const int threads = ThreadsFor(n, p);
+  const std::vector<int32_t> order = MortonOrder(mesh.positions, threads);  // new -> old
   std::vector<int32_t> rank(n);                                    // old -> new
 #pragma omp parallel for schedule(static) num_threads(threads)
   for (int32_t i = 0; i < n; ++i) rank[order[i]] = i;
