@@ -12,8 +12,8 @@ class Mcf final : public FlowKernel {
  public:
   bool curvature_units() const override { return true; }
   BlockStats Step(const StepContext& c, const Vec3* cur, Vec3* next, int32_t begin, int32_t end) const override {
-    return ApplyStepWithIsa(c, cur, next, begin, end,
-                            [&](int32_t v) __attribute__((always_inline)) { return MeanCurvatureNormal(c, cur, v).hn; });
+    return ApplyCurvatureStep(c, cur, next, begin, end,
+                              [](const Curvature& k, int32_t) __attribute__((always_inline)) { return k.hn; });
   }
 };
 

@@ -17,8 +17,7 @@ class McfTangential final : public FlowKernel {
   bool curvature_units() const override { return true; }
   BlockStats Step(const StepContext& c, const Vec3* cur, Vec3* next, int32_t begin, int32_t end) const override {
     const double weight = c_ * c.inv_h2;
-    return ApplyStepWithIsa(c, cur, next, begin, end, [&](int32_t v) __attribute__((always_inline)) {
-      const Curvature k = MeanCurvatureNormal(c, cur, v);
+    return ApplyCurvatureStep(c, cur, next, begin, end, [&](const Curvature& k, int32_t) __attribute__((always_inline)) {
       const Vec3& u = k.u0;
       const double len2 = SquaredNorm(k.normal);
       if (!(len2 > 0.0)) return k.hn;

@@ -19,8 +19,7 @@ class Median final : public FlowKernel {
     const double eps2 = epsilon_ * epsilon_;
     const double tiny_h = 1e-12 / c.h, tiny_u = 1e-12 * c.h;
     const double tiny_h2 = tiny_h * tiny_h, tiny_u2 = tiny_u * tiny_u;
-    return ApplyStepWithIsa(c, cur, next, begin, end, [&](int32_t v) __attribute__((always_inline)) {
-      const Curvature k = MeanCurvatureNormal(c, cur, v);
+    return ApplyCurvatureStep(c, cur, next, begin, end, [&](const Curvature& k, int32_t) __attribute__((always_inline)) {
       const Vec3 hn = k.hn, u = k.u0;
       const double hm2 = SquaredNorm(hn), um2 = SquaredNorm(u);
       if (!(hm2 > tiny_h2) || !(um2 > tiny_u2)) return Vec3{};

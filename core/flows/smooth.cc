@@ -87,7 +87,9 @@ namespace flows {
 VectorIsa BestVectorIsa() {
   VectorIsa best = VectorIsa::kSse2;
   if (__builtin_cpu_supports("avx2")) best = VectorIsa::kAvx2;
-  if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl")) best = VectorIsa::kAvx512;
+  if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl") && __builtin_cpu_supports("avx512dq")) {
+    best = VectorIsa::kAvx512;
+  }
   if (const char* want = std::getenv("MESHSMOOTH_VECTOR_ISA")) {  // never wider than the CPU
     const std::string w = want;
     if (w == "sse2") best = VectorIsa::kSse2;
@@ -111,6 +113,11 @@ double DefaultStep(const std::string& flow) {
 }
 
 absl::Status ValidateFlowParams(const FlowParams& p, int32_t num_vertices) {
+  // The cotangent kernel addresses coordinates as int32 3 * vertex (kernel.h, RingLanes3).
+  if (num_vertices > std::numeric_limits<int32_t>::max() / 3) {
+    return absl::InvalidArgumentError(absl::StrCat("the mesh has ", num_vertices, " vertices; at most ",
+                                                   std::numeric_limits<int32_t>::max() / 3, " can be smoothed"));
+  }
   const auto& names = FlowNames();
   if (std::find(names.begin(), names.end(), p.flow) == names.end()) {
     return absl::InvalidArgumentError(absl::StrCat(
