@@ -115,6 +115,18 @@ struct Curvature {
   Vec3 u0;      // U0 of eq. (3), mean of Q_k - P, from the same pass over the ring
 };
 
+// Vec3s of W vertices, one per lane: V is a double or a vector of doubles (VertexLanesOf).
+template <typename V>
+struct LaneVec3 {
+  V x, y, z;
+};
+
+// Curvature of W vertices, one per lane.
+template <typename V>
+struct CurvatureLanes {
+  LaneVec3<V> hn, normal, u0;
+};
+
 // W doubles, one per vertex, for the cotangent kernel below (W = 1 is a plain double). Only
 // lane-wise IEEE operations are used on them, so every lane computes the bits a plain double
 // computation of the same vertex would: results do not depend on W.
@@ -205,8 +217,8 @@ __attribute__((always_inline)) inline typename IndexLanesOf<W>::type RingLanes3(
 // shorter gets a zero triangle, which adds +0 to sums that can never be -0, so its bits are
 // those of its vertex computed alone. Lanes past `count` repeat the first vertex.
 template <int W>
-__attribute__((always_inline)) inline void MeanCurvatureNormals(const StepContext& c, const Vec3* pos, int32_t first,
-                                                                int32_t count, Curvature* out) {
+__attribute__((always_inline)) inline CurvatureLanes<typename VertexLanesOf<W>::type> MeanCurvatureLanes(
+    const StepContext& c, const Vec3* pos, int32_t first, int32_t count) {
   using V = typename VertexLanesOf<W>::type;
   using I = typename IndexLanesOf<W>::type;
   const double* const base = &pos[0].x;
@@ -279,25 +291,19 @@ __attribute__((always_inline)) inline void MeanCurvatureNormals(const StepContex
   const auto curved = zero < area;
   const V scale = curved ? 0.25 / area : zero;
   sx = curved ? sx * scale : zero, sy = curved ? sy * scale : zero, sz = curved ? sz * scale : zero;
-  if constexpr (W == 1) {
-    out[0] = Curvature{{sx, sy, sz}, {nx, ny, nz}, {ux, uy, uz}};
-  } else {
-    for (int l = 0; l < count; ++l) {
-      out[l] = Curvature{{sx[l], sy[l], sz[l]}, {nx[l], ny[l], nz[l]}, {ux[l], uy[l], uz[l]}};
-    }
-  }
+  return {{sx, sy, sz}, {nx, ny, nz}, {ux, uy, uz}};
 }
 
-// One vertex's MeanCurvatureNormals.
+// One vertex's MeanCurvatureLanes.
 inline Curvature MeanCurvatureNormal(const StepContext& c, const Vec3* pos, int32_t v) {
-  Curvature k;
-  MeanCurvatureNormals<1>(c, pos, v, 1, &k);
-  return k;
+  const CurvatureLanes<double> k = MeanCurvatureLanes<1>(c, pos, v, 1);
+  return {{k.hn.x, k.hn.y, k.hn.z}, {k.normal.x, k.normal.y, k.normal.z}, {k.u0.x, k.u0.y, k.u0.z}};
 }
 
-// The speed of a cotangent flow at vertex v, for StepRange: finish(Curvature, v) -> F, with
-// the curvatures computed W vertices at a time. StepRange asks for increasing v, so one batch
-// serves the next W vertices.
+// The speed of a cotangent flow at vertex v, for StepRange: F = finish(CurvatureLanes<V>), a
+// function of lanes like MeanCurvatureLanes (so its divisions and selects run W vertices at a
+// time, without a branch per vertex), computed W vertices at a time. StepRange asks for
+// increasing v, so one batch serves the next W vertices.
 //
 // The gathers of a batch wait on the cache misses of its neighbours' positions (the arithmetic
 // leaves the core too few loads in flight to hide them): each batch prefetches the neighbours of
@@ -318,9 +324,16 @@ class CurvatureSpeed {
           __builtin_prefetch(&pos_[c_.ring[i]]);
         }
       }
-      MeanCurvatureNormals<W>(c_, pos_, v, std::min<int32_t>(W, end_ - v), batch_);
+      const int32_t count = std::min<int32_t>(W, end_ - v);
+      // Whole-register stores, read back per vertex: taking lanes out one by one lets GCC
+      // turn finish's selects into one branch per lane.
+      const auto f = finish_(MeanCurvatureLanes<W>(c_, pos_, v, count));
+      std::memcpy(x_, &f.x, sizeof(x_));
+      std::memcpy(y_, &f.y, sizeof(y_));
+      std::memcpy(z_, &f.z, sizeof(z_));
     }
-    return finish_(batch_[v - first_], v);
+    const int32_t l = v - first_;
+    return {x_[l], y_[l], z_[l]};
   }
 
  private:
@@ -328,7 +341,7 @@ class CurvatureSpeed {
   const Vec3* pos_;
   int32_t end_, first_;
   FinishFn& finish_;
-  Curvature batch_[W];
+  alignas(8 * W) double x_[W], y_[W], z_[W];
 };
 
 // Eq. (14): shortens F by T, or stops the vertex when |F| <= T.
@@ -418,7 +431,9 @@ __attribute__((always_inline)) inline BlockStats RunWithIsa(VectorIsa isa, const
   return fn(LaneWidth<2>{});
 }
 
-// The step of a cotangent flow, F = finish(Curvature, v), compiled for c.isa (RunWithIsa).
+// The step of a cotangent flow, F = finish(CurvatureLanes<V>) (see CurvatureSpeed), compiled
+// for c.isa (RunWithIsa). finish is generic over V and must use only lane-wise operations,
+// `<` comparisons and one comparison per select (see MeanCurvatureLanes).
 // `finish` should be always_inline: GCC's flatten stops at a lambda whose inlined body would
 // grow the stack frame too much, and that lambda would then run as baseline code called from
 // the wide entry point.

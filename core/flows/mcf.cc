@@ -13,7 +13,7 @@ class Mcf final : public FlowKernel {
   bool curvature_units() const override { return true; }
   BlockStats Step(const StepContext& c, const Vec3* cur, Vec3* next, int32_t begin, int32_t end) const override {
     return ApplyCurvatureStep(c, cur, next, begin, end,
-                              [](const Curvature& k, int32_t) __attribute__((always_inline)) { return k.hn; });
+                              [](const auto& k) __attribute__((always_inline)) { return k.hn; });
   }
 };
 
