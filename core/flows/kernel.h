@@ -157,19 +157,21 @@ template <> struct IndexLanesOf<2> { typedef int32_t type __attribute__((vector_
 template <> struct IndexLanesOf<4> { typedef int32_t type __attribute__((vector_size(16))); };
 template <> struct IndexLanesOf<8> { typedef int32_t type __attribute__((vector_size(32))); };
 
-// Lane l holds base[index[l]].
+// Lane l holds base[index[l]] where live[l] (a comparison of lanes), else fallback[l]; lanes
+// that are not live read no memory.
 template <int W>
 __attribute__((always_inline)) inline typename IndexLanesOf<W>::type GatherIndexLanes(
-    const int32_t* base, const typename IndexLanesOf<W>::type& index) {
+    const int32_t* base, const typename IndexLanesOf<W>::type& index, const typename IndexLanesOf<W>::type& live,
+    const typename IndexLanesOf<W>::type& fallback) {
   using I = typename IndexLanesOf<W>::type;
   if constexpr (W == 1) {
-    return base[index];
+    return live ? base[index] : fallback;
   } else if constexpr (W == 2) {
-    return I{base[index[0]], base[index[1]]};
+    return I{live[0] ? base[index[0]] : fallback[0], live[1] ? base[index[1]] : fallback[1]};
   } else if constexpr (W == 4) {
-    return __builtin_ia32_gathersiv4si(I{}, base, index, I{} == I{}, 4);
+    return __builtin_ia32_gathersiv4si(fallback, base, index, live, 4);
   } else {
-    return __builtin_ia32_gathersiv8si(I{}, base, index, I{} == I{}, 4);
+    return __builtin_ia32_gathersiv8si(fallback, base, index, live, 4);
   }
 }
 
@@ -186,24 +188,6 @@ __attribute__((always_inline)) inline typename VertexLanesOf<W>::type GatherLane
     return __builtin_ia32_gathersiv4df(V{}, base, index, V{} == V{}, 8);
   } else {
     return __builtin_ia32_gathersiv8df(V{}, base, index, static_cast<unsigned char>(0xff), 8);
-  }
-}
-
-// Lane l holds 3 ring[at[l]] (the offset of that vertex's x in a Vec3 array) when at[l] < end[l],
-// else 3 self[l].
-template <int W>
-__attribute__((always_inline)) inline typename IndexLanesOf<W>::type RingLanes3(
-    const int32_t* ring, const typename IndexLanesOf<W>::type& at, const typename IndexLanesOf<W>::type& end,
-    const typename IndexLanesOf<W>::type& self) {
-  if constexpr (W == 1) {
-    return 3 * (at < end ? ring[at] : self);
-  } else if constexpr (W == 2) {
-    using I = typename IndexLanesOf<W>::type;
-    return 3 * I{at[0] < end[0] ? ring[at[0]] : self[0], at[1] < end[1] ? ring[at[1]] : self[1]};
-  } else if constexpr (W == 4) {
-    return 3 * __builtin_ia32_gathersiv4si(self, ring, at, at < end, 4);
-  } else {
-    return 3 * __builtin_ia32_gathersiv8si(self, ring, at, at < end, 4);
   }
 }
 
@@ -231,7 +215,8 @@ __attribute__((always_inline)) inline CurvatureLanes<typename VertexLanesOf<W>::
     self = lane < count ? first + lane : first + I{};
   }
   const I self3 = 3 * self;
-  const I begin = GatherIndexLanes<W>(c.offsets, self), end = GatherIndexLanes<W>(c.offsets, self + 1);
+  const I all = self == self;
+  const I begin = GatherIndexLanes<W>(c.offsets, self, all, self), end = GatherIndexLanes<W>(c.offsets, self + 1, all, self);
   V valence;
   int32_t max_valence;
   if constexpr (W == 1) {
@@ -244,8 +229,9 @@ __attribute__((always_inline)) inline CurvatureLanes<typename VertexLanesOf<W>::
     for (int l = 1; l < W; ++l) max_valence = std::max(max_valence, n[l]);
   }
   const V px = GatherLanes<W>(base, self3), py = GatherLanes<W>(base + 1, self3), pz = GatherLanes<W>(base + 2, self3);
-  // Q_{-1} = Q_{n-1}: the ring is closed. A lane past its valence loads its own P (q = 0).
-  I index3 = RingLanes3<W>(c.ring, end - 1, end, self);
+  // Q_{-1} = Q_{n-1}: the ring is closed. index3 = 3 ring[at] (where Q's x sits in pos[]); a
+  // lane past its valence loads its own P (q = 0).
+  I index3 = 3 * GatherIndexLanes<W>(c.ring, end - 1, begin < end, self);
   V prev_x = GatherLanes<W>(base, index3) - px, prev_y = GatherLanes<W>(base + 1, index3) - py,
     prev_z = GatherLanes<W>(base + 2, index3) - pz;
   const V zero{}, one = zero + 1.0, cot_max = zero + kCotMax;
@@ -253,7 +239,7 @@ __attribute__((always_inline)) inline CurvatureLanes<typename VertexLanesOf<W>::
   I at = begin;
   for (int32_t k = 0; k < max_valence; ++k) {
     // Edges a = Q_{k-1} - P and q = Q_k - P.
-    index3 = RingLanes3<W>(c.ring, at, end, self);
+    index3 = 3 * GatherIndexLanes<W>(c.ring, at, at < end, self);
     at += 1;
     const V qx = GatherLanes<W>(base, index3) - px, qy = GatherLanes<W>(base + 1, index3) - py,
             qz = GatherLanes<W>(base + 2, index3) - pz;

@@ -113,7 +113,7 @@ double DefaultStep(const std::string& flow) {
 }
 
 absl::Status ValidateFlowParams(const FlowParams& p, int32_t num_vertices) {
-  // The cotangent kernel addresses coordinates as int32 3 * vertex (kernel.h, RingLanes3).
+  // The cotangent kernel addresses coordinates as int32 3 * vertex (kernel.h, MeanCurvatureLanes).
   if (num_vertices > std::numeric_limits<int32_t>::max() / 3) {
     return absl::InvalidArgumentError(absl::StrCat("the mesh has ", num_vertices, " vertices; at most ",
                                                    std::numeric_limits<int32_t>::max() / 3, " can be smoothed"));
