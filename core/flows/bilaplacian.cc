@@ -15,6 +15,7 @@ class Bilaplacian final : public FlowKernel {
     u_.resize(n);
     ForBlocks(n, threads, [&](int32_t, int32_t begin, int32_t end) {
       for (int32_t v = begin; v < end; ++v) {
+        PrefetchPositionsAhead(cur, v, n);
         u_[v] = c.offsets[v + 1] > c.offsets[v] ? UmbrellaU0(c, cur, v) : Vec3{};
       }
     });
@@ -22,7 +23,11 @@ class Bilaplacian final : public FlowKernel {
   BlockStats Step(const StepContext& c, const Vec3* cur, Vec3* next, int32_t begin, int32_t end) const override {
     const Vec3* u = u_.data();
     // The umbrella of the field U0 is U0^2.
-    return ApplyStep(c, cur, next, begin, end, [&](int32_t v) { return -UmbrellaU0(c, u, v); });
+    // (ApplyStep prefetches cur ahead; the neighbours read here are u's.)
+    return ApplyStep(c, cur, next, begin, end, [&](int32_t v) {
+      PrefetchPositionsAhead(u, v, c.num_vertices);
+      return -UmbrellaU0(c, u, v);
+    });
   }
 
  private:

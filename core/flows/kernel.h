@@ -37,6 +37,7 @@ enum Role : uint8_t {
 
 // Everything a step needs besides positions; built once per run.
 struct StepContext {
+  int32_t num_vertices = 0;          // size of the position arrays (0: StepRange prefetches nothing)
   const int32_t* offsets = nullptr;  // Topology::ring_offsets
   const int32_t* ring = nullptr;     // Topology::ring
   const uint8_t* role = nullptr;
@@ -336,6 +337,26 @@ inline Vec3 Threshold(const Vec3& f, double t) {
   return len > t ? f * ((len - t) / len) : Vec3{};
 }
 
+// Loops reading positions at the neighbours of each vertex (StepRange, bilaplacian's U0 field)
+// prefetch the positions this many vertices ahead of the one they compute. In Morton
+// order most neighbours lie within a few thousand vertices of a vertex, on either side; those
+// behind were read recently, those ahead are not yet in cache and the hardware prefetcher
+// (which follows the sequential stream only a few lines ahead) does not fetch them. Scratch,
+// plain U0 loop at 2.6M vertices: 29.9 -> 15.0 ms per iteration on 1 thread, 13.6 -> 7.1 ms on
+// 2, with 4096 (256: 20.0 / 9.2, 1024: 16.9 / 7.9, 16384: 15.5 / 8.6).
+inline constexpr int32_t kPositionPrefetchAhead = 4096;
+
+// Called for every vertex v of a loop over [0, n) reading pos at v's neighbours: one prefetch
+// of 8 positions (192 bytes, three cache lines) every 8 vertices.
+__attribute__((always_inline)) inline void PrefetchPositionsAhead(const Vec3* pos, int32_t v, int32_t n) {
+  if ((v & 7) == 0 && v < n - kPositionPrefetchAhead - 8) {
+    const char* ahead = reinterpret_cast<const char*>(pos + v + kPositionPrefetchAhead);
+    __builtin_prefetch(ahead);
+    __builtin_prefetch(ahead + 64);
+    __builtin_prefetch(ahead + 128);
+  }
+}
+
 // The fused Jacobi step over vertices [begin, end): next = cur + lambda F for free vertices,
 // the boundary-curve umbrella for curve vertices, a copy for fixed ones, with the block's
 // displacement statistics. kAllFree: every vertex of the range is free (most blocks of a
@@ -352,7 +373,9 @@ __attribute__((always_inline)) inline BlockStats StepRange(const StepContext& c,
   const uint8_t* const role_of = c.role;
   double max_sq = 0.0, sum = 0.0;
   int64_t moved = 0, movable = 0, capped = 0;
+  const int32_t n = c.num_vertices;
   for (int32_t v = begin; v < end; ++v) {
+    PrefetchPositionsAhead(cur, v, n);
     const uint8_t role = kAllFree ? uint8_t{kFree} : role_of[v];
     if (role == kFixed) {
       next[v] = cur[v];

@@ -238,6 +238,7 @@ absl::StatusOr<FlowResult> Run(Mesh& mesh, const Topology& topo, const FlowParam
 
   const int threads = ThreadsFor(n, p);
   StepContext ctx;
+  ctx.num_vertices = n;
   ctx.offsets = topo.ring_offsets.data();
   ctx.ring = topo.ring.data();
   ctx.role = role.data();
