@@ -6,6 +6,7 @@
 #include <immintrin.h>  // declares the wide builtins used below (LaneSqrt)
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -71,6 +72,16 @@ inline constexpr double kCotMax = 1e3;
 // time. SSE2 is the x86-64 baseline, so every build computes the same bits.
 using Lanes = double __attribute__((vector_size(16)));
 
+// 1.0 / k for the valences most vertices have, without a division per vertex. Constant folding
+// rounds correctly, as the division does: the same bits.
+inline constexpr int32_t kReciprocals = 64;
+inline constexpr auto kReciprocal = [] {
+  std::array<double, kReciprocals> r{};
+  for (int32_t k = 1; k < kReciprocals; ++k) r[k] = 1.0 / k;
+  return r;
+}();
+inline double Reciprocal(int32_t k) { return k < kReciprocals ? kReciprocal[k] : 1.0 / k; }
+
 // U0, eq. (3). Two running sums halve the chain of dependent additions (the loads of the
 // neighbours then overlap); the order is fixed, so results do not depend on threads.
 inline Vec3 UmbrellaU0(const StepContext& c, const Vec3* pos, int32_t v) {
@@ -82,7 +93,7 @@ inline Vec3 UmbrellaU0(const StepContext& c, const Vec3* pos, int32_t v) {
     odd += pos[c.ring[i + 1]];
   }
   if (i < e) even += pos[c.ring[i]];
-  return (even + odd) * (1.0 / (e - b)) - pos[v];
+  return (even + odd) * Reciprocal(e - b) - pos[v];
 }
 
 // U1, eq. (4): weights 1/|P - Q|, with coincident neighbours given the weight of a 1e-9 h edge.
@@ -373,6 +384,10 @@ __attribute__((always_inline)) inline BlockStats StepRange(const StepContext& c,
   const uint8_t* const role_of = c.role;
   double max_sq = 0.0, sum = 0.0;
   int64_t moved = 0, movable = 0, capped = 0;
+  // The lengths of the steps are summed in vertex order, but square-rooted two at a time (one
+  // sqrtpd instead of two sqrtsd: the same bits). `held` is the squared length waiting for its
+  // pair, or negative.
+  double held = -1.0;
   const int32_t n = c.num_vertices;
   for (int32_t v = begin; v < end; ++v) {
     PrefetchPositionsAhead(cur, v, n);
@@ -397,10 +412,18 @@ __attribute__((always_inline)) inline BlockStats StepRange(const StepContext& c,
     next[v] = cur[v] + step;
     const double d2 = SquaredNorm(step);
     max_sq = std::max(max_sq, d2);
-    sum += std::sqrt(d2);
+    if (held < 0.0) {
+      held = d2;
+    } else {
+      const Lanes root = __builtin_ia32_sqrtpd(Lanes{held, d2});
+      sum += root[0];
+      sum += root[1];
+      held = -1.0;
+    }
     moved += d2 > 0.0;
     if (!kAllFree) ++movable;
   }
+  if (held >= 0.0) sum += std::sqrt(held);
   BlockStats s;
   s.max_sq = max_sq;
   s.sum = sum;
