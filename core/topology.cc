@@ -90,6 +90,35 @@ bool WalkFan(Scratch& s, int32_t start, int32_t start_face, bool closed, int32_t
   return static_cast<int32_t>(s.ring.size()) == distinct;
 }
 
+// The common case, in O(k^2) compares without sorting: v is an interior vertex of a
+// consistently oriented manifold. Its k >= 3 faces (v, a, b) then chain into a single cycle,
+// face i followed by the one face whose a is i's b, through k distinct neighbours a. On success
+// s.ring holds the cycle from faces[0].a, the order WalkFan gives such a fan. Any other fan
+// (boundary, non-manifold, inconsistent orientation, repeated neighbour) returns false and
+// takes the general path.
+bool ConsistentClosedFan(Scratch& s) {
+  const int32_t k = static_cast<int32_t>(s.faces.size());
+  if (k < 3) return false;
+  s.ring.clear();
+  int32_t face = 0;
+  for (int32_t step = 0; step < k; ++step) {
+    if (step > 0 && face == 0) return false;  // a shorter cycle: more than one fan
+    s.ring.push_back(s.faces[face].a);
+    const int32_t b = s.faces[face].b;
+    int32_t next = -1;
+    for (int32_t j = 0; j < k; ++j) {
+      if (s.faces[j].a != b) continue;
+      if (next >= 0) return false;  // two faces continue from b: a repeated neighbour
+      next = j;
+    }
+    if (next < 0) return false;  // b is a boundary neighbour, or an edge is oriented against
+    face = next;
+  }
+  // Back at face 0 after exactly k steps: the k faces were visited once each, and every a had
+  // a single predecessor, so the k neighbours are distinct, each in exactly two faces.
+  return face == 0;
+}
+
 // What ProcessVertices finds in its range of vertices.
 struct RangeResult {
   std::vector<int32_t> ring;                          // the range's rings, in vertex order
@@ -121,6 +150,13 @@ void ProcessVertices(const std::vector<int32_t>& vf_offsets, const std::vector<L
     const int32_t nf = static_cast<int32_t>(s.faces.size());
     if (nf == 0) {
       ++r.unreferenced_vertices;
+      topo.ring_offsets[v + 1] = static_cast<int32_t>(out.ring.size());
+      continue;
+    }
+    if (ConsistentClosedFan(s)) {
+      for (int32_t w : s.ring) r.edges += v < w;
+      topo.kind[v] = VertexKind::kInterior;
+      out.ring.insert(out.ring.end(), s.ring.begin(), s.ring.end());
       topo.ring_offsets[v + 1] = static_cast<int32_t>(out.ring.size());
       continue;
     }

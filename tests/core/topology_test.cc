@@ -128,6 +128,46 @@ TEST(TopologyTest, BowtieVertexIsNonManifold) {
   EXPECT_EQ(r.boundary_loops, 1);  // the two triangles' boundaries meet at vertex 0
 }
 
+// Interior vertices of consistently oriented closed fans take a fast path (ConsistentClosedFan);
+// these fans look closed from each face but are not one fan of distinct neighbours.
+TEST(TopologyTest, ClosedFansThatAreNotOneFanTakeTheGeneralPath) {
+  {
+    // Two closed tetrahedra sharing vertex 0: its six faces form two 3-cycles.
+    Mesh m;
+    m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {-1, 0, 0}, {0, -1, 0}, {0, 0, -1}};
+    m.triangles = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}, {0, 5, 4}, {0, 4, 6}, {0, 6, 5}, {4, 5, 6}};
+    ValidationReport r;
+    const Topology t = BuildTopology(m, &r);
+    EXPECT_EQ(t.kind[0], VertexKind::kNonManifold);
+    EXPECT_EQ(r.nonmanifold_vertices, 1);
+    EXPECT_EQ(t.valence(0), 6);
+    EXPECT_EQ(t.kind[1], VertexKind::kInterior);
+    EXPECT_EQ(r.edges, 12);
+    EXPECT_EQ(r.boundary_edges, 0);
+  }
+  {
+    // A hexagon fan with one face repeated: every face still has a successor, but neighbour 1
+    // and 2 follow two faces each.
+    Mesh m = Hexagon();
+    m.triangles.push_back(m.triangles[0]);
+    ValidationReport r;
+    const Topology t = BuildTopology(m, &r);
+    EXPECT_EQ(r.duplicate_faces, 1);
+    EXPECT_NE(t.kind[0], VertexKind::kInterior);
+  }
+  {
+    // The hexagon fan with one face reversed: no face continues from it, yet each of vertex 0's
+    // edges has two faces, so the general path still finds an interior vertex.
+    Mesh m = Hexagon();
+    std::swap(m.triangles[2][1], m.triangles[2][2]);
+    ValidationReport r;
+    const Topology t = BuildTopology(m, &r);
+    EXPECT_EQ(r.inconsistently_oriented_edges, 2);
+    EXPECT_EQ(t.kind[0], VertexKind::kInterior);
+    EXPECT_EQ(t.valence(0), 6);
+  }
+}
+
 TEST(TopologyTest, IsolatedVertexIsUnreferenced) {
   Mesh m = Square();
   m.positions.push_back({5, 5, 5});
