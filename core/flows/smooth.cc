@@ -395,16 +395,33 @@ std::vector<int32_t> MortonOrder(const std::vector<Vec3>& pos, int threads) {
                           Spread3(cell(pos[i].z, lo.z)) << 2;
     keys[i] = code << 25 | static_cast<uint64_t>(i);
   }
-  std::vector<uint32_t> count(1 << 13);
+  // Each pass: one histogram per contiguous chunk of keys (one chunk per thread), bucket
+  // offsets taken bucket by bucket and chunk by chunk, then each chunk scatters its keys in
+  // order. The sort stays stable, so the order does not depend on the number of chunks.
+  constexpr int kBuckets = 1 << 13;
+  const int chunks = threads > 1 && n >= kReorderThreshold ? threads : 1;
+  auto chunk_begin = [&](int c) { return static_cast<int32_t>(int64_t{n} * c / chunks); };
+  std::vector<uint32_t> count(static_cast<size_t>(chunks) * kBuckets);
   for (int shift = 25; shift < 64; shift += 13) {
-    std::fill(count.begin(), count.end(), 0u);
-    for (uint64_t k : keys) ++count[(k >> shift) & 0x1fff];
+#pragma omp parallel for schedule(static, 1) num_threads(chunks) if (chunks > 1)
+    for (int c = 0; c < chunks; ++c) {
+      uint32_t* h = &count[static_cast<size_t>(c) * kBuckets];
+      std::fill(h, h + kBuckets, 0u);
+      for (int32_t i = chunk_begin(c); i < chunk_begin(c + 1); ++i) ++h[(keys[i] >> shift) & 0x1fff];
+    }
     uint32_t sum = 0;
-    for (uint32_t& c : count) sum += std::exchange(c, sum);
-    for (uint64_t k : keys) tmp[count[(k >> shift) & 0x1fff]++] = k;
+    for (int b = 0; b < kBuckets; ++b) {
+      for (int c = 0; c < chunks; ++c) sum += std::exchange(count[static_cast<size_t>(c) * kBuckets + b], sum);
+    }
+#pragma omp parallel for schedule(static, 1) num_threads(chunks) if (chunks > 1)
+    for (int c = 0; c < chunks; ++c) {
+      uint32_t* h = &count[static_cast<size_t>(c) * kBuckets];
+      for (int32_t i = chunk_begin(c); i < chunk_begin(c + 1); ++i) tmp[h[(keys[i] >> shift) & 0x1fff]++] = keys[i];
+    }
     keys.swap(tmp);
   }
   std::vector<int32_t> order(n);
+#pragma omp parallel for schedule(static) num_threads(chunks)
   for (int32_t i = 0; i < n; ++i) order[i] = static_cast<int32_t>(keys[i] & 0x1ffffff);
   return order;
 }
