@@ -248,13 +248,21 @@ __attribute__((always_inline)) inline CurvatureLanes<typename VertexLanesOf<W>::
     prev_z = GatherLanes<W>(base + 2, index3) - pz;
   const V zero{}, one = zero + 1.0, cot_max = zero + kCotMax;
   V sx{}, sy{}, sz{}, nx{}, ny{}, nz{}, ux{}, uy{}, uz{}, area{};
+  // The loads run one step ahead of the arithmetic: step k computes with Q_k, loaded during
+  // step k - 1, while Q_{k+1} loads. Loaded in the step that used them, the index gather and
+  // the position gathers sat on every step's critical path: the kernel alone over a 41k mesh
+  // in cache, 8 lanes, took 25.6 ns per vertex, 19.8 ns with the loads ahead.
   I at = begin;
+  index3 = 3 * GatherIndexLanes<W>(c.ring, at, at < end, self);
+  V next_x = GatherLanes<W>(base, index3), next_y = GatherLanes<W>(base + 1, index3),
+    next_z = GatherLanes<W>(base + 2, index3);
   for (int32_t k = 0; k < max_valence; ++k) {
     // Edges a = Q_{k-1} - P and q = Q_k - P.
+    const V qx = next_x - px, qy = next_y - py, qz = next_z - pz;
+    at += 1;  // Q_{k+1}; a lane past its ring loads its own P, as above
     index3 = 3 * GatherIndexLanes<W>(c.ring, at, at < end, self);
-    at += 1;
-    const V qx = GatherLanes<W>(base, index3) - px, qy = GatherLanes<W>(base + 1, index3) - py,
-            qz = GatherLanes<W>(base + 2, index3) - pz;
+    next_x = GatherLanes<W>(base, index3), next_y = GatherLanes<W>(base + 1, index3),
+    next_z = GatherLanes<W>(base + 2, index3);
     const auto live = zero + k < valence;
     const V ax = live ? prev_x : zero, ay = live ? prev_y : zero, az = live ? prev_z : zero;
     prev_x = qx, prev_y = qy, prev_z = qz;
