@@ -160,6 +160,32 @@ TEST(FlowInvariantsTest, InstructionSetChangesNoPosition) {
   }
 }
 
+// Blocks of free vertices without eq. (14) step W vertices at a time (CurvatureStepLanes);
+// eq. (14) with T = 0, which leaves every speed as it is (F (|F| - 0) / |F| = F), takes the
+// per-vertex step. Positions and statistics must be the same bits.
+TEST(FlowInvariantsTest, LaneStepMatchesVertexStep) {
+  Mesh split = SplitEverySeventhFace(Icosphere(5));
+  AddUniformNoise(split, 0.3, 3);
+  for (const Mesh& mesh : {NoisySphere(5), split}) {
+    const Topology topo = BuildTopology(mesh);
+    for (const char* flow : {"mcf", "mcf_tangential", "median"}) {
+      SCOPED_TRACE(flow);
+      FlowParams p = Params(flow, 5);
+      Mesh lanes = mesh, vertex = mesh;
+      const absl::StatusOr<FlowResult> a = Smooth(lanes, topo, p);
+      p.adaptive = AdaptiveMode::kConstant;
+      p.adaptive_threshold = 0.0;
+      const absl::StatusOr<FlowResult> b = Smooth(vertex, topo, p);
+      ASSERT_TRUE(a.ok() && b.ok());
+      EXPECT_FALSE(SameBytes(lanes, mesh));
+      EXPECT_TRUE(SameBytes(lanes, vertex));
+      EXPECT_EQ(a->last.mean_displacement, b->last.mean_displacement);
+      EXPECT_EQ(a->last.max_displacement, b->last.max_displacement);
+      EXPECT_EQ(a->last.moved_share, b->last.moved_share);
+    }
+  }
+}
+
 TEST(FlowInvariantsTest, BoundaryCurveModeSmoothsTheLoopInItsPlane) {
   const Mesh plane = TwoRatePlane(24, 16);
   Mesh m = plane;
