@@ -96,7 +96,11 @@ MeshMetrics ComputeMetrics(const Mesh& mesh, const Topology& topo) {
           // The smallest angle is opposite the shortest edge: one atan2 per face.
           const double lab = SquaredNorm(ab), lbc = SquaredNorm(bc), lca = SquaredNorm(ca);
           const double d = lbc <= lab && lbc <= lca ? dots[0] : (lca <= lab ? dots[1] : dots[2]);
-          const double face_min = std::atan2(cross, d);
+          // The smallest angle is at most 60 degrees, so d > 0 but for degenerate corners, where
+          // atan(cross / d) is atan2's value (to an ulp) for less time: ComputeMetrics of a
+          // 655k-vertex mesh, 2 threads, 38.1/38.5 -> 35.8/35.9 ms. atan2 keeps the degenerate
+          // cases (d = 0 with cross = 0 gives 0, not NaN).
+          const double face_min = d > 0.0 ? std::atan(cross / d) : std::atan2(cross, d);
           q.min_angle = std::min(q.min_angle, face_min);
           q.sum_min_angle += face_min;
         }
