@@ -246,6 +246,7 @@ __attribute__((always_inline)) inline CurvatureLanes<typename VertexLanesOf<W>::
   I index3 = 3 * GatherIndexLanes<W>(c.ring, end - 1, begin < end, self);
   V prev_x = GatherLanes<W>(base, index3) - px, prev_y = GatherLanes<W>(base + 1, index3) - py,
     prev_z = GatherLanes<W>(base + 2, index3) - pz;
+  V prev_len2 = prev_x * prev_x + prev_y * prev_y + prev_z * prev_z;  // |a|^2 is the last step's |q|^2
   const V zero{}, one = zero + 1.0, cot_max = zero + kCotMax;
   V sx{}, sy{}, sz{}, nx{}, ny{}, nz{}, ux{}, uy{}, uz{}, area{};
   // The loads run one step ahead of the arithmetic: step k computes with Q_k, loaded during
@@ -265,12 +266,12 @@ __attribute__((always_inline)) inline CurvatureLanes<typename VertexLanesOf<W>::
     next_z = GatherLanes<W>(base + 2, index3);
     const auto live = zero + k < valence;
     const V ax = live ? prev_x : zero, ay = live ? prev_y : zero, az = live ? prev_z : zero;
-    prev_x = qx, prev_y = qy, prev_z = qz;
+    const V la = live ? prev_len2 : zero, lq = qx * qx + qy * qy + qz * qz;
+    prev_x = qx, prev_y = qy, prev_z = qz, prev_len2 = lq;
     ux += qx, uy += qy, uz += qz;
     const V cx = ay * qz - az * qy, cy = az * qx - ax * qz, cz = ax * qy - ay * qx;
     nx += cx, ny += cy, nz += cz;
     const V dbl_area = LaneSqrt(cx * cx + cy * cy + cz * cz);
-    const V la = ax * ax + ay * ay + az * az, lq = qx * qx + qy * qy + qz * qz;
     // Angle at Q_{k-1} is opposite edge P-Q_k, angle at Q_k opposite edge P-Q_{k-1}; with
     // d = q - a their dot products are -a.d = la - a.q and q.d = lq - a.q.
     const V dot_p = ax * qx + ay * qy + az * qz, dot_a = la - dot_p, dot_q = lq - dot_p;
