@@ -203,6 +203,41 @@ __attribute__((always_inline)) inline typename VertexLanesOf<W>::type GatherLane
   }
 }
 
+// The x, y and z of positions index3[l] / 3, lane by lane. With 8 lanes, eight masked loads of
+// one position each (3 doubles; masked-off elements never fault past the array's end)
+// transposed by shuffles instead of three gathers. The same values either way.
+template <int W>
+__attribute__((always_inline)) inline void GatherXyzLanes(const double* base, const typename IndexLanesOf<W>::type& index3,
+                                                          typename VertexLanesOf<W>::type& x,
+                                                          typename VertexLanesOf<W>::type& y,
+                                                          typename VertexLanesOf<W>::type& z) {
+  if constexpr (W == 8) {
+    using V = typename VertexLanesOf<8>::type;
+    typedef long long Select __attribute__((vector_size(64)));
+    const unsigned char xyz = 0x07;
+    const V l0 = __builtin_ia32_loadupd512_mask(base + index3[0], V{}, xyz),
+            l1 = __builtin_ia32_loadupd512_mask(base + index3[1], V{}, xyz),
+            l2 = __builtin_ia32_loadupd512_mask(base + index3[2], V{}, xyz),
+            l3 = __builtin_ia32_loadupd512_mask(base + index3[3], V{}, xyz),
+            l4 = __builtin_ia32_loadupd512_mask(base + index3[4], V{}, xyz),
+            l5 = __builtin_ia32_loadupd512_mask(base + index3[5], V{}, xyz),
+            l6 = __builtin_ia32_loadupd512_mask(base + index3[6], V{}, xyz),
+            l7 = __builtin_ia32_loadupd512_mask(base + index3[7], V{}, xyz);
+    // l_i = (x_i, y_i, z_i, 0, ...): two lanes per register, then x and y of four lanes, then all.
+    const Select pair{0, 1, 2, 3, 8, 9, 10, 11}, xy{0, 4, 8, 12, 1, 5, 9, 13}, zz{2, 6, 10, 14, 2, 6, 10, 14},
+                 low{0, 1, 2, 3, 8, 9, 10, 11}, high{4, 5, 6, 7, 12, 13, 14, 15};
+    const V p01 = __builtin_shuffle(l0, l1, pair), p23 = __builtin_shuffle(l2, l3, pair),
+            p45 = __builtin_shuffle(l4, l5, pair), p67 = __builtin_shuffle(l6, l7, pair);
+    const V xy0 = __builtin_shuffle(p01, p23, xy), xy1 = __builtin_shuffle(p45, p67, xy);
+    const V z0 = __builtin_shuffle(p01, p23, zz), z1 = __builtin_shuffle(p45, p67, zz);
+    x = __builtin_shuffle(xy0, xy1, low);
+    y = __builtin_shuffle(xy0, xy1, high);
+    z = __builtin_shuffle(z0, z1, low);
+  } else {
+    x = GatherLanes<W>(base, index3), y = GatherLanes<W>(base + 1, index3), z = GatherLanes<W>(base + 2, index3);
+  }
+}
+
 // Eq. (8) with the mixed Voronoi area of Meyer et al. in place of A/3 (NOTES.md): on a sphere
 // of radius r, |H n| = 1/r. Zero-area triangles contribute nothing; cotangents are clamped.
 // Meaningful only for interior vertices (closed ring); finite for any vertex.
@@ -255,15 +290,14 @@ __attribute__((always_inline)) inline CurvatureLanes<typename VertexLanesOf<W>::
   // in cache, 8 lanes, took 25.6 ns per vertex, 19.8 ns with the loads ahead.
   I at = begin;
   index3 = 3 * GatherIndexLanes<W>(c.ring, at, at < end, self);
-  V next_x = GatherLanes<W>(base, index3), next_y = GatherLanes<W>(base + 1, index3),
-    next_z = GatherLanes<W>(base + 2, index3);
+  V next_x, next_y, next_z;
+  GatherXyzLanes<W>(base, index3, next_x, next_y, next_z);
   for (int32_t k = 0; k < max_valence; ++k) {
     // Edges a = Q_{k-1} - P and q = Q_k - P.
     const V qx = next_x - px, qy = next_y - py, qz = next_z - pz;
     at += 1;  // Q_{k+1}; a lane past its ring loads its own P, as above
     index3 = 3 * GatherIndexLanes<W>(c.ring, at, at < end, self);
-    next_x = GatherLanes<W>(base, index3), next_y = GatherLanes<W>(base + 1, index3),
-    next_z = GatherLanes<W>(base + 2, index3);
+    GatherXyzLanes<W>(base, index3, next_x, next_y, next_z);
     const auto live = zero + k < valence;
     const V ax = live ? prev_x : zero, ay = live ? prev_y : zero, az = live ? prev_z : zero;
     const V la = live ? prev_len2 : zero, lq = qx * qx + qy * qy + qz * qz;
