@@ -275,12 +275,14 @@ __attribute__((always_inline)) inline CurvatureLanes<typename VertexLanesOf<W>::
     max_valence = n[0];
     for (int l = 1; l < W; ++l) max_valence = std::max(max_valence, n[l]);
   }
-  const V px = GatherLanes<W>(base, self3), py = GatherLanes<W>(base + 1, self3), pz = GatherLanes<W>(base + 2, self3);
+  V px, py, pz;
+  GatherXyzLanes<W>(base, self3, px, py, pz);
   // Q_{-1} = Q_{n-1}: the ring is closed. index3 = 3 ring[at] (where Q's x sits in pos[]); a
   // lane past its valence loads its own P (q = 0).
   I index3 = 3 * GatherIndexLanes<W>(c.ring, end - 1, begin < end, self);
-  V prev_x = GatherLanes<W>(base, index3) - px, prev_y = GatherLanes<W>(base + 1, index3) - py,
-    prev_z = GatherLanes<W>(base + 2, index3) - pz;
+  V prev_x, prev_y, prev_z;
+  GatherXyzLanes<W>(base, index3, prev_x, prev_y, prev_z);
+  prev_x -= px, prev_y -= py, prev_z -= pz;
   V prev_len2 = prev_x * prev_x + prev_y * prev_y + prev_z * prev_z;  // |a|^2 is the last step's |q|^2
   const V zero{}, one = zero + 1.0, cot_max = zero + kCotMax;
   V sx{}, sy{}, sz{}, nx{}, ny{}, nz{}, ux{}, uy{}, uz{}, area{};
