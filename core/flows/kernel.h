@@ -298,8 +298,10 @@ __attribute__((always_inline)) inline CurvatureLanes<typename VertexLanesOf<W>::
     // Edges a = Q_{k-1} - P and q = Q_k - P.
     const V qx = next_x - px, qy = next_y - py, qz = next_z - pz;
     at += 1;  // Q_{k+1}; a lane past its ring loads its own P, as above
-    index3 = 3 * GatherIndexLanes<W>(c.ring, at, at < end, self);
-    GatherXyzLanes<W>(base, index3, next_x, next_y, next_z);
+    if (k + 1 < max_valence) {  // none after the last step
+      index3 = 3 * GatherIndexLanes<W>(c.ring, at, at < end, self);
+      GatherXyzLanes<W>(base, index3, next_x, next_y, next_z);
+    }
     const auto live = zero + k < valence;
     const V ax = live ? prev_x : zero, ay = live ? prev_y : zero, az = live ? prev_z : zero;
     const V la = live ? prev_len2 : zero, lq = qx * qx + qy * qy + qz * qz;
