@@ -93,7 +93,7 @@ MeshMetrics ComputeMetrics(const Mesh& mesh, const Topology& topo) {
           // the dot is positive and cross < tan(10 deg) dot (or the corner is degenerate).
           const double dots[3] = {-Dot(ab, ca), -Dot(bc, ab), -Dot(ca, bc)};  // at a, b, c
           for (double d : dots) q.below10 += (d > 0.0 && cross < tan10 * d) || (d == 0.0 && cross == 0.0);
-          // The smallest angle is opposite the shortest edge: one atan2 per face.
+          // The smallest angle is opposite the shortest edge: one arctangent per face.
           const double lab = SquaredNorm(ab), lbc = SquaredNorm(bc), lca = SquaredNorm(ca);
           const double d = lbc <= lab && lbc <= lca ? dots[0] : (lca <= lab ? dots[1] : dots[2]);
           // The smallest angle is at most 60 degrees, so d > 0 but for degenerate corners, where

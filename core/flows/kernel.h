@@ -65,6 +65,25 @@ struct BlockStats {
   bool non_finite = false;
 };
 
+// A block's statistics from its step loop's running sums. Non-finite results are caught here:
+// a NaN or infinite position makes its step, hence the displacement sum, non-finite (the
+// positions going in are finite).
+inline BlockStats FinishBlock(double max_sq, double sum, int64_t moved, int64_t movable, int64_t capped) {
+  BlockStats s;
+  s.max_sq = max_sq;
+  s.sum = sum;
+  s.moved = moved;
+  s.movable = movable;
+  s.capped = capped;
+  s.non_finite = !std::isfinite(sum);
+  return s;
+}
+
+// True when every vertex of the kBlock block starting at `begin` is free.
+inline bool AllFreeBlock(const StepContext& c, int32_t begin) {
+  return c.all_free != nullptr && c.all_free[begin / kBlock];
+}
+
 // Cotangents of needle triangles are clamped to this magnitude (NOTES.md, degenerate places).
 inline constexpr double kCotMax = 1e3;
 
@@ -345,15 +364,10 @@ inline Curvature MeanCurvatureNormal(const StepContext& c, const Vec3* pos, int3
   return {{k.hn.x, k.hn.y, k.hn.z}, {k.normal.x, k.normal.y, k.normal.z}, {k.u0.x, k.u0.y, k.u0.z}};
 }
 
-// The speed of a cotangent flow at vertex v, for StepRange: F = finish(CurvatureLanes<V>), a
-// function of lanes like MeanCurvatureLanes (so its divisions and selects run W vertices at a
-// time, without a branch per vertex), computed W vertices at a time. StepRange asks for
-// increasing v, so one batch serves the next W vertices.
-//
-// The gathers of a batch wait on the cache misses of its neighbours' positions (the arithmetic
-// leaves the core too few loads in flight to hide them): each batch prefetches the neighbours of
-// the vertices kRingPrefetchAhead further on. mcf at 655k vertices, 1 thread: 31 -> 22 ms per
-// iteration; 16 to 96 vertices ahead all measure the same.
+// The loads of a batch of the cotangent kernel wait on the cache misses of its neighbours'
+// positions (the arithmetic leaves the core too few loads in flight to hide them): each batch
+// prefetches the neighbours of the vertices kRingPrefetchAhead further on. mcf at 655k
+// vertices, 1 thread: 31 -> 22 ms per iteration; 16 to 96 vertices ahead all measure the same.
 inline constexpr int32_t kRingPrefetchAhead = 32;
 
 // Prefetches the positions of the neighbours of vertices [v + kRingPrefetchAhead, + count).
@@ -366,6 +380,10 @@ __attribute__((always_inline)) inline void PrefetchRingsAhead(const StepContext&
   }
 }
 
+// The speed of a cotangent flow at vertex v, for StepRange: F = finish(CurvatureLanes<V>), a
+// function of lanes like MeanCurvatureLanes (so its divisions and selects run W vertices at a
+// time, without a branch per vertex), computed W vertices at a time. StepRange asks for
+// increasing v, so one batch serves the next W vertices.
 template <int W, typename FinishFn>
 class CurvatureSpeed {
  public:
@@ -424,9 +442,8 @@ __attribute__((always_inline)) inline void PrefetchPositionsAhead(const Vec3* po
 // The fused Jacobi step over vertices [begin, end): next = cur + lambda F for free vertices,
 // the boundary-curve umbrella for curve vertices, a copy for fixed ones, with the block's
 // displacement statistics. kAllFree: every vertex of the range is free (most blocks of a
-// closed mesh), so the role branch goes. Non-finite results are caught once per block: a NaN
-// or infinite position makes its step, hence the block's displacement sum, non-finite (the
-// positions going in are finite).
+// closed mesh), so the role branch goes. Non-finite results are caught once per block
+// (FinishBlock).
 template <bool kAllFree, typename SpeedFn>
 __attribute__((always_inline)) inline BlockStats StepRange(const StepContext& c, const Vec3* cur, Vec3* next,
                                                            int32_t begin, int32_t end, SpeedFn&& speed) {
@@ -477,20 +494,13 @@ __attribute__((always_inline)) inline BlockStats StepRange(const StepContext& c,
     if (!kAllFree) ++movable;
   }
   if (held >= 0.0) sum += std::sqrt(held);
-  BlockStats s;
-  s.max_sq = max_sq;
-  s.sum = sum;
-  s.moved = moved;
-  s.movable = kAllFree ? end - begin : movable;
-  s.capped = capped;
-  s.non_finite = !std::isfinite(sum);
-  return s;
+  return FinishBlock(max_sq, sum, moved, kAllFree ? end - begin : movable, capped);
 }
 
 template <typename SpeedFn>
 __attribute__((always_inline)) inline BlockStats ApplyStep(const StepContext& c, const Vec3* cur, Vec3* next,
                                                            int32_t begin, int32_t end, SpeedFn&& speed) {
-  if (c.all_free != nullptr && c.all_free[begin / kBlock]) return StepRange<true>(c, cur, next, begin, end, speed);
+  if (AllFreeBlock(c, begin)) return StepRange<true>(c, cur, next, begin, end, speed);
   return StepRange<false>(c, cur, next, begin, end, speed);
 }
 
@@ -559,14 +569,7 @@ __attribute__((always_inline)) inline BlockStats CurvatureStepLanes(const StepCo
       moved += d2_of[l] > 0.0;
     }
   }
-  BlockStats s;
-  s.max_sq = max_sq;
-  s.sum = sum;
-  s.moved = moved;
-  s.movable = end - begin;
-  s.capped = capped;
-  s.non_finite = !std::isfinite(sum);
-  return s;
+  return FinishBlock(max_sq, sum, moved, end - begin, capped);
 }
 
 // The step of a cotangent flow, F = finish(CurvatureLanes<V>) (see CurvatureSpeed), compiled
@@ -580,7 +583,7 @@ __attribute__((always_inline)) inline BlockStats ApplyCurvatureStep(const StepCo
                                                                     int32_t begin, int32_t end, FinishFn&& finish) {
   return RunWithIsa(c.isa, [&](auto width) __attribute__((always_inline)) {
     constexpr int W = decltype(width)::value;
-    if (c.all_free != nullptr && c.all_free[begin / kBlock] && c.threshold == nullptr) {
+    if (AllFreeBlock(c, begin) && c.threshold == nullptr) {
       return CurvatureStepLanes<W>(c, cur, next, begin, end, finish);
     }
     CurvatureSpeed<W, FinishFn> speed(c, cur, begin, end, finish);
