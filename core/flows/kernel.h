@@ -195,6 +195,29 @@ __attribute__((always_inline)) inline bool AnyLaneLess(VertexLanesOf<8>::type a,
                                       4 /* current rounding */) != 0;
 }
 
+// a < b ? a : b and b < a ? a : b lane by lane (NaN in a gives b), as one instruction: GCC
+// turns only some of these selects into minpd/maxpd.
+inline double LaneMin(double a, double b) { return a < b ? a : b; }
+inline double LaneMax(double a, double b) { return b < a ? a : b; }
+__attribute__((always_inline)) inline VertexLanesOf<2>::type LaneMin(VertexLanesOf<2>::type a, VertexLanesOf<2>::type b) {
+  return __builtin_ia32_minpd(a, b);
+}
+__attribute__((always_inline)) inline VertexLanesOf<2>::type LaneMax(VertexLanesOf<2>::type a, VertexLanesOf<2>::type b) {
+  return __builtin_ia32_maxpd(a, b);
+}
+__attribute__((always_inline)) inline VertexLanesOf<4>::type LaneMin(VertexLanesOf<4>::type a, VertexLanesOf<4>::type b) {
+  return __builtin_ia32_minpd256(a, b);
+}
+__attribute__((always_inline)) inline VertexLanesOf<4>::type LaneMax(VertexLanesOf<4>::type a, VertexLanesOf<4>::type b) {
+  return __builtin_ia32_maxpd256(a, b);
+}
+__attribute__((always_inline)) inline VertexLanesOf<8>::type LaneMin(VertexLanesOf<8>::type a, VertexLanesOf<8>::type b) {
+  return __builtin_ia32_minpd512_mask(a, b, a, static_cast<unsigned char>(0xff), 4 /* current rounding */);
+}
+__attribute__((always_inline)) inline VertexLanesOf<8>::type LaneMax(VertexLanesOf<8>::type a, VertexLanesOf<8>::type b) {
+  return __builtin_ia32_maxpd512_mask(a, b, a, static_cast<unsigned char>(0xff), 4 /* current rounding */);
+}
+
 // W int32 lanes beside them: vertex and ring indices.
 template <int W> struct IndexLanesOf;
 template <> struct IndexLanesOf<1> { using type = int32_t; };
@@ -364,18 +387,15 @@ __attribute__((always_inline)) inline CurvatureLanes<typename VertexLanesOf<W>::
     const auto ok = 1e-12 * (la + lq) < dbl_area;
     const V inv = ok ? one / dbl_area : zero;  // a degenerate triangle gets cotangents 0
     V cot_a = dot_a * inv, cot_q = dot_q * inv;
-    cot_a = cot_a < cot_max ? cot_a : cot_max;
-    cot_a = -cot_max < cot_a ? cot_a : -cot_max;
-    cot_q = cot_q < cot_max ? cot_q : cot_max;
-    cot_q = -cot_max < cot_q ? cot_q : -cot_max;
+    cot_a = LaneMax(LaneMin(cot_a, cot_max), -cot_max);
+    cot_q = LaneMax(LaneMin(cot_q, cot_max), -cot_max);
     sx += qx * cot_a + ax * cot_q, sy += qy * cot_a + ay * cot_q, sz += qz * cot_a + az * cot_q;
     // Voronoi region of a non-obtuse triangle, else half (obtuse at P) or a quarter of its area.
     // Only `<`, and one comparison per select: GCC 12 lowers other comparisons of 512-bit
     // vectors, and selects on an & or | of masks, to one branch per lane.
     const V voronoi = (lq * cot_a + la * cot_q) * 0.125;
     const V part = dbl_area * (dot_p < zero ? zero + 0.25 : zero + 0.125);
-    V least = dot_a < dot_q ? dot_a : dot_q;
-    least = dot_p < least ? dot_p : least;
+    const V least = LaneMin(dot_p, LaneMin(dot_a, dot_q));
     const V region = least < zero ? part : voronoi;
     area += ok ? region : zero;
   }
