@@ -21,6 +21,7 @@ namespace meshsmooth::flows {
 
 // Loops over vertices run in fixed blocks of this many vertices (see ForBlocks).
 inline constexpr int32_t kBlock = 4096;
+static_assert(kBlock % 8 == 0, "blocks start at whole batches of the cotangent kernel");
 
 // The instruction set the arithmetic-bound loops are compiled for (RunWithIsa).
 enum class VectorIsa : uint8_t { kSse2, kAvx2, kAvx512 };
@@ -52,6 +53,10 @@ struct StepContext {
   double max_step_sq = std::numeric_limits<double>::infinity();
   double inv_h2 = 1.0;          // 1 / h^2
   VectorIsa isa = VectorIsa::kSse2;  // see RunWithIsa
+  // The cotangent kernel's ring, lane by lane (core/flows/lane_ring.h), or null.
+  const int32_t* lane_ring = nullptr;
+  const int64_t* lane_offsets = nullptr;
+  int lane_width = 0;
 };
 
 // Displacement statistics of one block of vertices; reduced in block order, so the totals do
@@ -306,9 +311,12 @@ __attribute__((always_inline)) inline void GatherXyzLanes(const double* base, co
 // dropped: `ok` is false). The sums start at +0, so they are never -0, and adding +-0 to them
 // changes nothing: the lane's bits are those of its vertex computed alone. (Selecting a = 0
 // for those steps cost 4% of mcf at 41k vertices.) Lanes past `count` repeat the first vertex.
-template <int W>
+//
+// With kLaneRows (a whole batch, first a multiple of W), the indices come from `rows`, the
+// batch's rows of BuildLaneRing, instead of gathers from c.ring: the same values.
+template <int W, bool kLaneRows = false>
 __attribute__((always_inline)) inline CurvatureLanes<typename VertexLanesOf<W>::type> MeanCurvatureLanes(
-    const StepContext& c, const Vec3* pos, int32_t first, int32_t count) {
+    const StepContext& c, const Vec3* pos, int32_t first, int32_t count, const int32_t* rows = nullptr) {
   using V = typename VertexLanesOf<W>::type;
   using I = typename IndexLanesOf<W>::type;
   const double* const base = &pos[0].x;
@@ -352,7 +360,12 @@ __attribute__((always_inline)) inline CurvatureLanes<typename VertexLanesOf<W>::
   GatherXyzLanes<W>(base, self3, px, py, pz);
   // Q_{-1} = Q_{n-1}: the ring is closed. index3 = 3 ring[at] (where Q's x sits in pos[]); a
   // lane past its valence loads its own P (q = 0).
-  I index3 = 3 * GatherIndexLanes<W>(c.ring, end - 1, begin < end, self);
+  I index3;
+  if constexpr (kLaneRows) {
+    std::memcpy(&index3, rows, sizeof index3);
+  } else {
+    index3 = 3 * GatherIndexLanes<W>(c.ring, end - 1, begin < end, self);
+  }
   V prev_x, prev_y, prev_z;
   GatherXyzLanes<W>(base, index3, prev_x, prev_y, prev_z);
   prev_x -= px, prev_y -= py, prev_z -= pz;
@@ -364,7 +377,11 @@ __attribute__((always_inline)) inline CurvatureLanes<typename VertexLanesOf<W>::
   // the position gathers sat on every step's critical path: the kernel alone over a 41k mesh
   // in cache, 8 lanes, took 25.6 ns per vertex, 19.8 ns with the loads ahead.
   I at = begin;
-  index3 = 3 * GatherIndexLanes<W>(c.ring, at, at < end, self);
+  if constexpr (kLaneRows) {
+    std::memcpy(&index3, rows + W, sizeof index3);
+  } else {
+    index3 = 3 * GatherIndexLanes<W>(c.ring, at, at < end, self);
+  }
   V next_x, next_y, next_z;
   GatherXyzLanes<W>(base, index3, next_x, next_y, next_z);
   for (int32_t k = 0; k < max_valence; ++k) {
@@ -372,7 +389,11 @@ __attribute__((always_inline)) inline CurvatureLanes<typename VertexLanesOf<W>::
     const V qx = next_x - px, qy = next_y - py, qz = next_z - pz;
     at += 1;  // Q_{k+1}; a lane past its ring loads its own P, as above
     if (k + 1 < max_valence) {  // none after the last step
-      index3 = 3 * GatherIndexLanes<W>(c.ring, at, at < end, self);
+      if constexpr (kLaneRows) {
+        std::memcpy(&index3, rows + (k + 2) * W, sizeof index3);
+      } else {
+        index3 = 3 * GatherIndexLanes<W>(c.ring, at, at < end, self);
+      }
       GatherXyzLanes<W>(base, index3, next_x, next_y, next_z);
     }
     const V ax = prev_x, ay = prev_y, az = prev_z, la = prev_len2, lq = qx * qx + qy * qy + qz * qz;
@@ -588,6 +609,8 @@ __attribute__((always_inline)) inline BlockStats CurvatureStepLanes(const StepCo
   const double lambda = c.lambda, max_step_sq = c.max_step_sq;
   const int32_t n = c.num_vertices;
   const V one = V{} + 1.0, max_sq_lanes = V{} + max_step_sq;
+  // Whole batches start at multiples of W (blocks do), so they are BuildLaneRing's batches.
+  const int32_t* const lane_ring = c.lane_width == W ? c.lane_ring : nullptr;
   double max_sq = 0.0, sum = 0.0;
   int64_t moved = 0, capped = 0;
   alignas(8 * W) double sx[W], sy[W], sz[W], len2_of[W], d2_of[W], root_of[W];
@@ -595,7 +618,9 @@ __attribute__((always_inline)) inline BlockStats CurvatureStepLanes(const StepCo
     PrefetchPositionsAhead(cur, first, n);
     PrefetchRingsAhead(c, cur, first, W, end);
     const int32_t count = std::min<int32_t>(W, end - first);
-    const auto f = finish(MeanCurvatureLanes<W>(c, cur, first, count));
+    const auto f = lane_ring != nullptr && count == W
+                       ? finish(MeanCurvatureLanes<W, true>(c, cur, first, W, lane_ring + c.lane_offsets[first / W]))
+                       : finish(MeanCurvatureLanes<W>(c, cur, first, count));
     V x = f.x * lambda, y = f.y * lambda, z = f.z * lambda;
     const V len2 = x * x + y * y + z * z;
     V d2 = len2;
@@ -666,6 +691,9 @@ std::unique_ptr<FlowKernel> MakeBilaplacian(const FlowParams& p);
 std::unique_ptr<FlowKernel> MakeMcf(const FlowParams& p);
 std::unique_ptr<FlowKernel> MakeMcfTangential(const FlowParams& p);
 std::unique_ptr<FlowKernel> MakeMedian(const FlowParams& p);
+
+// Doubles in one register of `isa`: the cotangent kernel's W.
+inline int LaneWidthOf(VectorIsa isa) { return isa == VectorIsa::kAvx512 ? 8 : isa == VectorIsa::kAvx2 ? 4 : 2; }
 
 // Eq. (14)'s T(P): mean |H| over the first ring (rings = 1) or the first and second rings
 // (rings = 2) of every vertex, over interior neighbours only; written to `t`.

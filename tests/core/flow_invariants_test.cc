@@ -6,6 +6,7 @@
 #include <cstdlib>
 #include <cstring>
 
+#include "core/flows/lane_ring.h"
 #include "core/io/mesh_io.h"
 #include "gtest/gtest.h"
 #include "tests/flow_fixtures.h"
@@ -203,6 +204,34 @@ TEST(FlowInvariantsTest, LaneStepMatchesVertexStep) {
     EXPECT_DOUBLE_EQ(a->last.max_displacement, a->mean_edge_length);  // capped
     EXPECT_TRUE(SameBytes(lanes, vertex));
     EXPECT_EQ(a->last.mean_displacement, b->last.mean_displacement);
+  }
+}
+
+TEST(FlowInvariantsTest, LaneRingHoldsEachLanesRingRowByRow) {
+  const Mesh mesh = SplitEverySeventhFace(Icosphere(3));  // valences 3 .. 9
+  const Topology topo = BuildTopology(mesh);
+  const std::vector<int32_t>& offsets = topo.ring_offsets;
+  for (const int width : {2, 4, 8}) {
+    SCOPED_TRACE(width);
+    std::vector<int32_t> lane_ring;
+    std::vector<int64_t> lane_offsets;
+    flows::BuildLaneRing(topo, width, 2, lane_ring, lane_offsets);
+    const int32_t batches = mesh.num_vertices() / width;
+    ASSERT_EQ(lane_offsets.size(), static_cast<size_t>(batches) + 1);
+    ASSERT_EQ(lane_ring.size(), static_cast<size_t>(lane_offsets.back()));
+    for (int32_t b = 0; b < batches; ++b) {
+      const int32_t* rows = &lane_ring[static_cast<size_t>(lane_offsets[b])];
+      int32_t most = 0;
+      for (int32_t v = b * width; v < (b + 1) * width; ++v) most = std::max(most, offsets[v + 1] - offsets[v]);
+      ASSERT_EQ(lane_offsets[b + 1] - lane_offsets[b], int64_t{most + 1} * width);
+      for (int32_t l = 0; l < width; ++l) {
+        const int32_t v = b * width + l, begin = offsets[v], n = offsets[v + 1] - begin;
+        ASSERT_EQ(rows[l], 3 * topo.ring[begin + n - 1]);  // Q_{n-1}
+        for (int32_t k = 0; k < most; ++k) {  // Q_k, or P past the ring
+          ASSERT_EQ(rows[(k + 1) * width + l], 3 * (k < n ? topo.ring[begin + k] : v));
+        }
+      }
+    }
   }
 }
 
