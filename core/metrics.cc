@@ -29,37 +29,42 @@ Partial BlockReduce(int64_t n, Fn&& fn, Merge&& merge) {
   return total;
 }
 
-// Sums fn(a, b) over the edges (a < b) of the vertices' rings, in fixed blocks of vertices.
-template <typename Fn>
-std::pair<double, int64_t> SumOverEdges(const Topology& topo, Fn&& fn) {
-  using Partial = std::pair<double, int64_t>;
-  return BlockReduce<Partial>(
+struct EdgeLengthSums {
+  double sum = 0.0, sum_sq = 0.0;  // of the lengths and of their squares
+  int64_t count = 0;
+};
+
+// The lengths of the edges (a < b) of the vertices' rings, summed in fixed blocks of vertices:
+// one pass serves the mean and the spread.
+EdgeLengthSums SumEdgeLengths(const Mesh& mesh, const Topology& topo) {
+  return BlockReduce<EdgeLengthSums>(
       topo.num_vertices(),
       [&](int64_t begin, int64_t end) {
-        Partial p{0.0, 0};
+        EdgeLengthSums p;
         for (int32_t v = static_cast<int32_t>(begin); v < end; ++v) {
           for (int32_t i = topo.ring_offsets[v]; i < topo.ring_offsets[v + 1]; ++i) {
             if (v < topo.ring[i]) {
-              p.first += fn(v, topo.ring[i]);
-              ++p.second;
+              const double len = Norm(mesh.positions[v] - mesh.positions[topo.ring[i]]);
+              p.sum += len;
+              p.sum_sq += len * len;
+              ++p.count;
             }
           }
         }
         return p;
       },
-      [](Partial& t, const Partial& p) {
-        t.first += p.first;
-        t.second += p.second;
+      [](EdgeLengthSums& t, const EdgeLengthSums& p) {
+        t.sum += p.sum;
+        t.sum_sq += p.sum_sq;
+        t.count += p.count;
       });
 }
 
+double MeanOf(const EdgeLengthSums& e) { return e.count > 0 ? e.sum / static_cast<double>(e.count) : 0.0; }
+
 }  // namespace
 
-double MeanEdgeLength(const Mesh& mesh, const Topology& topo) {
-  const auto [sum, count] =
-      SumOverEdges(topo, [&](int32_t a, int32_t b) { return Norm(mesh.positions[a] - mesh.positions[b]); });
-  return count > 0 ? sum / static_cast<double>(count) : 0.0;
-}
+double MeanEdgeLength(const Mesh& mesh, const Topology& topo) { return MeanOf(SumEdgeLengths(mesh, topo)); }
 
 MeshMetrics ComputeMetrics(const Mesh& mesh, const Topology& topo) {
   MeshMetrics m;
@@ -124,13 +129,15 @@ MeshMetrics ComputeMetrics(const Mesh& mesh, const Topology& topo) {
     m.share_angles_below_10deg = static_cast<double>(below10) / (3.0 * nf);
   }
 
-  m.edge_length_mean = MeanEdgeLength(mesh, topo);
-  const auto [sq, count] = SumOverEdges(topo, [&](int32_t a, int32_t b) {
-    const double d = Norm(mesh.positions[a] - mesh.positions[b]) - m.edge_length_mean;
-    return d * d;
-  });
-  if (count > 0 && m.edge_length_mean > 0.0) {
-    m.edge_length_cv = std::sqrt(sq / static_cast<double>(count)) / m.edge_length_mean;
+  // One pass over the edges: the variance as E[l^2] - E[l]^2 (edge lengths of one mesh have a
+  // CV well above the 1e-8 where that would lose digits). A second pass for the deviations
+  // from the mean took ~6 ms of a 655k-vertex mesh's ~40.
+  const EdgeLengthSums edges = SumEdgeLengths(mesh, topo);
+  m.edge_length_mean = MeanOf(edges);
+  if (edges.count > 0 && m.edge_length_mean > 0.0) {
+    const double mean_sq = edges.sum_sq / static_cast<double>(edges.count);
+    const double variance = std::max(0.0, mean_sq - m.edge_length_mean * m.edge_length_mean);
+    m.edge_length_cv = std::sqrt(variance) / m.edge_length_mean;
   }
   return m;
 }
