@@ -596,60 +596,99 @@ __attribute__((always_inline)) inline BlockStats RunWithIsa(VectorIsa isa, const
   return fn(LaneWidth<2>{});
 }
 
-// StepRange<true> for a cotangent flow without eq. (14), W vertices at a time: the speed, the
-// step, its cap and the displacement statistics in lanes, then one short loop storing the
-// positions and adding the statistics in vertex order. Per vertex the operations are those of
-// StepRange (the cap as a factor min(1, sqrt(max / len2)), which is 1 exactly when the step is
-// not capped), so the bits are too. Through CurvatureSpeed, the per-vertex step around the
-// kernel cost about as much again as the kernel.
-template <int W, typename FinishFn>
+// StepRange for a cotangent flow without eq. (14), W vertices at a time: the speed, the step,
+// its cap and the displacement statistics in lanes, then one short loop storing the positions
+// and adding the statistics in vertex order. Per vertex the operations are those of StepRange
+// (the cap as a factor min(1, sqrt(max / len2)), which is 1 exactly when the step is not
+// capped), so the bits are too. kAllFree: every vertex of the range is free; otherwise a batch
+// with a fixed or curve vertex takes its roles lane by lane (the kernel's values for those
+// lanes are dropped), and a batch without a free vertex skips the kernel. Through
+// CurvatureSpeed, the per-vertex step around the kernel cost about as much again as the
+// kernel; on the dragon scan, whose 1% of boundary vertices leave 46 of its 107 blocks not
+// all free, mcf took 10.35-10.75 ms per iteration with those blocks there, 9.56-9.68 here.
+template <int W, bool kAllFree, typename FinishFn>
 __attribute__((always_inline)) inline BlockStats CurvatureStepLanes(const StepContext& c, const Vec3* cur, Vec3* next,
                                                                     int32_t begin, int32_t end, FinishFn& finish) {
   using V = typename VertexLanesOf<W>::type;
-  const double lambda = c.lambda, max_step_sq = c.max_step_sq;
+  const double lambda = c.lambda, curve_lambda = c.curve_lambda, max_step_sq = c.max_step_sq;
+  const uint8_t* const role_of = c.role;
   const int32_t n = c.num_vertices;
   const V one = V{} + 1.0, max_sq_lanes = V{} + max_step_sq;
   // Whole batches start at multiples of W (blocks do), so they are BuildLaneRing's batches.
   const int32_t* const lane_ring = c.lane_width == W ? c.lane_ring : nullptr;
   double max_sq = 0.0, sum = 0.0;
-  int64_t moved = 0, capped = 0;
+  int64_t moved = 0, movable = 0, capped = 0;
   alignas(8 * W) double sx[W], sy[W], sz[W], len2_of[W], d2_of[W], root_of[W];
   for (int32_t first = begin; first < end; first += W) {
     PrefetchPositionsAhead(cur, first, n);
     PrefetchRingsAhead(c, cur, first, W, end);
     const int32_t count = std::min<int32_t>(W, end - first);
-    const auto f = lane_ring != nullptr && count == W
-                       ? finish(MeanCurvatureLanes<W, true>(c, cur, first, W, lane_ring + c.lane_offsets[first / W]))
-                       : finish(MeanCurvatureLanes<W>(c, cur, first, count));
-    V x = f.x * lambda, y = f.y * lambda, z = f.z * lambda;
-    const V len2 = x * x + y * y + z * z;
-    V d2 = len2;
-    // The factor is 1 in every lane whose len2 <= max_step_sq (or NaN): x * 1 == x and d2 ==
-    // len2, so the division and square root are skipped unless some lane is capped (rare:
-    // mcf at 41k vertices, 1.02 -> 0.93 ms per iteration).
-    if (AnyLaneLess(max_sq_lanes, len2)) {
-      V factor = LaneSqrt(max_sq_lanes / len2);
-      factor = factor < one ? factor : one;
-      x = x * factor, y = y * factor, z = z * factor;
-      d2 = x * x + y * y + z * z;
+    int32_t free_lanes = count;
+    if constexpr (!kAllFree) {
+      free_lanes = 0;
+      for (int32_t l = 0; l < count; ++l) free_lanes += role_of[first + l] == kFree;
     }
-    const V root = LaneSqrt(d2);
-    std::memcpy(sx, &x, sizeof sx);
-    std::memcpy(sy, &y, sizeof sy);
-    std::memcpy(sz, &z, sizeof sz);
-    std::memcpy(len2_of, &len2, sizeof len2_of);
-    std::memcpy(d2_of, &d2, sizeof d2_of);
-    std::memcpy(root_of, &root, sizeof root_of);
-    for (int32_t l = 0; l < count; ++l) {
+    if (kAllFree || free_lanes > 0) {
+      const auto f = lane_ring != nullptr && count == W
+                         ? finish(MeanCurvatureLanes<W, true>(c, cur, first, W, lane_ring + c.lane_offsets[first / W]))
+                         : finish(MeanCurvatureLanes<W>(c, cur, first, count));
+      V x = f.x * lambda, y = f.y * lambda, z = f.z * lambda;
+      const V len2 = x * x + y * y + z * z;
+      V d2 = len2;
+      // The factor is 1 in every lane whose len2 <= max_step_sq (or NaN): x * 1 == x and d2 ==
+      // len2, so the division and square root are skipped unless some lane is capped (rare:
+      // mcf at 41k vertices, 1.02 -> 0.93 ms per iteration).
+      if (AnyLaneLess(max_sq_lanes, len2)) {
+        V factor = LaneSqrt(max_sq_lanes / len2);
+        factor = factor < one ? factor : one;
+        x = x * factor, y = y * factor, z = z * factor;
+        d2 = x * x + y * y + z * z;
+      }
+      const V root = LaneSqrt(d2);
+      std::memcpy(sx, &x, sizeof sx);
+      std::memcpy(sy, &y, sizeof sy);
+      std::memcpy(sz, &z, sizeof sz);
+      std::memcpy(len2_of, &len2, sizeof len2_of);
+      std::memcpy(d2_of, &d2, sizeof d2_of);
+      std::memcpy(root_of, &root, sizeof root_of);
+    }
+    if (free_lanes == count) {
+      for (int32_t l = 0; l < count; ++l) {
+        const int32_t v = first + l;
+        next[v] = cur[v] + Vec3{sx[l], sy[l], sz[l]};
+        capped += len2_of[l] > max_step_sq;
+        max_sq = std::max(max_sq, d2_of[l]);
+        sum += root_of[l];
+        moved += d2_of[l] > 0.0;
+      }
+      movable += count;
+      continue;
+    }
+    for (int32_t l = 0; l < count; ++l) {  // StepRange's roles
       const int32_t v = first + l;
-      next[v] = cur[v] + Vec3{sx[l], sy[l], sz[l]};
-      capped += len2_of[l] > max_step_sq;
-      max_sq = std::max(max_sq, d2_of[l]);
-      sum += root_of[l];
-      moved += d2_of[l] > 0.0;
+      const uint8_t role = role_of[v];
+      if (role == kFixed) {
+        next[v] = cur[v];
+        continue;
+      }
+      ++movable;
+      if (role == kFree) {
+        next[v] = cur[v] + Vec3{sx[l], sy[l], sz[l]};
+        capped += len2_of[l] > max_step_sq;
+        max_sq = std::max(max_sq, d2_of[l]);
+        sum += root_of[l];
+        moved += d2_of[l] > 0.0;
+      } else {
+        const Vec3 step = CurveUmbrella(c, cur, v) * curve_lambda;
+        next[v] = cur[v] + step;
+        const double d2 = SquaredNorm(step);
+        max_sq = std::max(max_sq, d2);
+        sum += std::sqrt(d2);
+        moved += d2 > 0.0;
+      }
     }
   }
-  return FinishBlock(max_sq, sum, moved, end - begin, capped);
+  return FinishBlock(max_sq, sum, moved, movable, capped);
 }
 
 // The step of a cotangent flow, F = finish(CurvatureLanes<V>) (see CurvatureSpeed), compiled
@@ -663,8 +702,9 @@ __attribute__((always_inline)) inline BlockStats ApplyCurvatureStep(const StepCo
                                                                     int32_t begin, int32_t end, FinishFn&& finish) {
   return RunWithIsa(c.isa, [&](auto width) __attribute__((always_inline)) {
     constexpr int W = decltype(width)::value;
-    if (AllFreeBlock(c, begin) && c.threshold == nullptr) {
-      return CurvatureStepLanes<W>(c, cur, next, begin, end, finish);
+    if (c.threshold == nullptr) {
+      if (AllFreeBlock(c, begin)) return CurvatureStepLanes<W, true>(c, cur, next, begin, end, finish);
+      return CurvatureStepLanes<W, false>(c, cur, next, begin, end, finish);
     }
     CurvatureSpeed<W, FinishFn> speed(c, cur, begin, end, finish);
     return ApplyStep(c, cur, next, begin, end, speed);

@@ -185,6 +185,32 @@ TEST(FlowInvariantsTest, LaneStepMatchesVertexStep) {
       EXPECT_EQ(a->last.moved_share, b->last.moved_share);
     }
   }
+  // Blocks that are not all free: boundary vertices moving as curves, locked vertices, batches
+  // with no free vertex (the plane's first rows are all locked).
+  Mesh plane = TwoRatePlane(96, 64);
+  AddUniformNoise(plane, 0.3, 7);
+  {
+    const Topology topo = BuildTopology(plane);
+    std::vector<uint8_t> locked(plane.num_vertices(), 0);
+    for (int32_t v = 0; v < plane.num_vertices(); ++v) locked[v] = v % 13 == 0 || v < 200;
+    for (const char* flow : {"mcf", "mcf_tangential", "median"}) {
+      SCOPED_TRACE(std::string("plane / ") + flow);
+      FlowParams p = Params(flow, 5);
+      p.boundary = BoundaryMode::kCurve;
+      p.locked = locked;
+      Mesh lanes = plane, vertex = plane;
+      const absl::StatusOr<FlowResult> a = Smooth(lanes, topo, p);
+      p.adaptive = AdaptiveMode::kConstant;
+      p.adaptive_threshold = 0.0;
+      const absl::StatusOr<FlowResult> b = Smooth(vertex, topo, p);
+      ASSERT_TRUE(a.ok() && b.ok()) << a.status() << b.status();
+      EXPECT_FALSE(SameBytes(lanes, plane));
+      EXPECT_TRUE(SameBytes(lanes, vertex));
+      EXPECT_EQ(a->last.mean_displacement, b->last.mean_displacement);
+      EXPECT_EQ(a->last.max_displacement, b->last.max_displacement);
+      EXPECT_EQ(a->last.moved_share, b->last.moved_share);
+    }
+  }
   // Spikes of 4 h on every 97th vertex: a step of 2.5 h^2 moves them by more than h, so they are
   // capped (the lane step computes the cap only for batches that have a capped vertex).
   Mesh spiky = NoisySphere(5, 0.05);
