@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "core/flows/flow.h"
+#include "core/flows/lane_ring.h"
 
 namespace meshsmooth::flows {
 
@@ -53,10 +54,8 @@ struct StepContext {
   double max_step_sq = std::numeric_limits<double>::infinity();
   double inv_h2 = 1.0;          // 1 / h^2
   VectorIsa isa = VectorIsa::kSse2;  // see RunWithIsa
-  // The cotangent kernel's ring, lane by lane (core/flows/lane_ring.h), or null.
-  const int32_t* lane_ring = nullptr;
-  const int64_t* lane_offsets = nullptr;
-  int lane_width = 0;
+  // The cotangent kernel's batches of free vertices (core/flows/lane_ring.h), or null.
+  const LaneBatches* batches = nullptr;
 };
 
 // Displacement statistics of one block of vertices; reduced in block order, so the totals do
@@ -312,16 +311,22 @@ __attribute__((always_inline)) inline void GatherXyzLanes(const double* base, co
 // changes nothing: the lane's bits are those of its vertex computed alone. (Selecting a = 0
 // for those steps cost 4% of mcf at 41k vertices.) Lanes past `count` repeat the first vertex.
 //
-// With kLaneRows (a whole batch, first a multiple of W), the indices come from `rows`, the
-// batch's rows of BuildLaneRing, instead of gathers from c.ring: the same values.
+// With kLaneRows, the vertices, their valences and every index come from `rows`, a batch of
+// BuildLaneBatches (first and count are unused), instead of gathers from c.offsets and c.ring:
+// the same values.
 template <int W, bool kLaneRows = false>
 __attribute__((always_inline)) inline CurvatureLanes<typename VertexLanesOf<W>::type> MeanCurvatureLanes(
     const StepContext& c, const Vec3* pos, int32_t first, int32_t count, const int32_t* rows = nullptr) {
   using V = typename VertexLanesOf<W>::type;
   using I = typename IndexLanesOf<W>::type;
   const double* const base = &pos[0].x;
-  I self;
-  if constexpr (W == 1) {
+  I self, begin, end;
+  if constexpr (kLaneRows) {
+    std::memcpy(&self, rows, sizeof self);
+    std::memcpy(&end, rows + W, sizeof end);  // the valences
+    begin = I{};
+    rows += 2 * W;
+  } else if constexpr (W == 1) {
     self = first;
   } else {
     I lane;
@@ -329,13 +334,14 @@ __attribute__((always_inline)) inline CurvatureLanes<typename VertexLanesOf<W>::
     self = lane < count ? first + lane : first + I{};
   }
   const I self3 = 3 * self;
-  I begin, end;
-  if (count == W) {  // consecutive vertices: their offsets are too
-    std::memcpy(&begin, c.offsets + first, sizeof begin);
-    std::memcpy(&end, c.offsets + first + 1, sizeof end);
-  } else {
-    const I all = self == self;
-    begin = GatherIndexLanes<W>(c.offsets, self, all, self), end = GatherIndexLanes<W>(c.offsets, self + 1, all, self);
+  if constexpr (!kLaneRows) {
+    if (count == W) {  // consecutive vertices: their offsets are too
+      std::memcpy(&begin, c.offsets + first, sizeof begin);
+      std::memcpy(&end, c.offsets + first + 1, sizeof end);
+    } else {
+      const I all = self == self;
+      begin = GatherIndexLanes<W>(c.offsets, self, all, self), end = GatherIndexLanes<W>(c.offsets, self + 1, all, self);
+    }
   }
   V valence;
   int32_t max_valence;
@@ -439,6 +445,7 @@ inline Curvature MeanCurvatureNormal(const StepContext& c, const Vec3* pos, int3
 // prefetches the neighbours of the vertices kRingPrefetchAhead further on. mcf at 655k
 // vertices, 1 thread: 31 -> 22 ms per iteration; 16 to 96 vertices ahead all measure the same.
 inline constexpr int32_t kRingPrefetchAhead = 32;
+inline constexpr int32_t kBatchPrefetchAhead = 4;  // batches of CurvatureStepLanes: 32 vertices with 8 lanes
 
 // Prefetches the positions of the neighbours of vertices [v + kRingPrefetchAhead, + count).
 __attribute__((always_inline)) inline void PrefetchRingsAhead(const StepContext& c, const Vec3* pos, int32_t v,
@@ -596,16 +603,18 @@ __attribute__((always_inline)) inline BlockStats RunWithIsa(VectorIsa isa, const
   return fn(LaneWidth<2>{});
 }
 
-// StepRange for a cotangent flow without eq. (14), W vertices at a time: the speed, the step,
-// its cap and the displacement statistics in lanes, then one short loop storing the positions
-// and adding the statistics in vertex order. Per vertex the operations are those of StepRange
-// (the cap as a factor min(1, sqrt(max / len2)), which is 1 exactly when the step is not
-// capped), so the bits are too. kAllFree: every vertex of the range is free; otherwise a batch
-// with a fixed or curve vertex takes its roles lane by lane (the kernel's values for those
-// lanes are dropped), and a batch without a free vertex skips the kernel. Through
-// CurvatureSpeed, the per-vertex step around the kernel cost about as much again as the
-// kernel; on the dragon scan, whose 1% of boundary vertices leave 46 of its 107 blocks not
-// all free, mcf took 10.35-10.75 ms per iteration with those blocks there, 9.56-9.68 here.
+// StepRange for a cotangent flow without eq. (14), over the block's batches of free vertices
+// (c.batches, BuildLaneBatches; W = its width): the speed, the step, its cap and the
+// displacement statistics in lanes, stored per vertex; then one loop over the block in vertex
+// order copies the fixed vertices, moves the curve vertices and adds the statistics. Per
+// vertex the operations are those of StepRange (the cap as a factor min(1, sqrt(max / len2)),
+// which is 1 exactly when the step is not capped), in the same order, so the bits are too.
+// kAllFree: every vertex of the block is free (no role to look at).
+//
+// Measured (scratch Smooth() timing, mcf, 1 thread): through CurvatureSpeed, the per-vertex
+// step around the kernel cost about as much again as the kernel. On the dragon scan, whose 1%
+// of boundary vertices leave 46 of its 107 blocks not all free, taking those blocks here too
+// took mcf from 10.35-10.75 to 9.56-9.68 ms per iteration.
 template <int W, bool kAllFree, typename FinishFn>
 __attribute__((always_inline)) inline BlockStats CurvatureStepLanes(const StepContext& c, const Vec3* cur, Vec3* next,
                                                                     int32_t begin, int32_t end, FinishFn& finish) {
@@ -614,79 +623,74 @@ __attribute__((always_inline)) inline BlockStats CurvatureStepLanes(const StepCo
   const uint8_t* const role_of = c.role;
   const int32_t n = c.num_vertices;
   const V one = V{} + 1.0, max_sq_lanes = V{} + max_step_sq;
-  // Whole batches start at multiples of W (blocks do), so they are BuildLaneRing's batches.
-  const int32_t* const lane_ring = c.lane_width == W ? c.lane_ring : nullptr;
+  const LaneBatches& lanes = *c.batches;
+  const int32_t block = begin / kBlock, first_batch = lanes.block_first[block], last_batch = lanes.block_first[block + 1];
+  // Per vertex of the block (offset from begin): a free vertex's squared step, its length and
+  // whether it was capped.
+  alignas(64) double d2_at[kBlock], root_at[kBlock];
+  alignas(64) uint8_t capped_at[kBlock];
+  alignas(8 * W) double sx[W], sy[W], sz[W], len2_of[W], d2_of[W], root_of[W];
+  for (int32_t j = first_batch; j < last_batch; ++j) {
+    // The batches run through the block's vertices out of order: prefetch as if in order.
+    PrefetchPositionsAhead(cur, begin + (j - first_batch) * W, n);
+    if (j + kBatchPrefetchAhead < last_batch) {
+      const int32_t* ahead = &lanes.data[lanes.offsets[j + kBatchPrefetchAhead]];
+      const double* const base = &cur[0].x;
+      for (int64_t i = 3 * W, e = lanes.offsets[j + kBatchPrefetchAhead + 1] - lanes.offsets[j + kBatchPrefetchAhead]; i < e; ++i) {
+        __builtin_prefetch(base + ahead[i]);
+      }
+    }
+    const int32_t* const rows = &lanes.data[lanes.offsets[j]];
+    const auto f = finish(MeanCurvatureLanes<W, true>(c, cur, 0, W, rows));
+    V x = f.x * lambda, y = f.y * lambda, z = f.z * lambda;
+    const V len2 = x * x + y * y + z * z;
+    V d2 = len2;
+    // The factor is 1 in every lane whose len2 <= max_step_sq (or NaN): x * 1 == x and d2 ==
+    // len2, so the division and square root are skipped unless some lane is capped (rare:
+    // mcf at 41k vertices, 1.02 -> 0.93 ms per iteration).
+    if (AnyLaneLess(max_sq_lanes, len2)) {
+      V factor = LaneSqrt(max_sq_lanes / len2);
+      factor = factor < one ? factor : one;
+      x = x * factor, y = y * factor, z = z * factor;
+      d2 = x * x + y * y + z * z;
+    }
+    const V root = LaneSqrt(d2);
+    std::memcpy(sx, &x, sizeof sx);
+    std::memcpy(sy, &y, sizeof sy);
+    std::memcpy(sz, &z, sizeof sz);
+    std::memcpy(len2_of, &len2, sizeof len2_of);
+    std::memcpy(d2_of, &d2, sizeof d2_of);
+    std::memcpy(root_of, &root, sizeof root_of);
+    for (int32_t l = 0, count = lanes.lanes[j]; l < count; ++l) {
+      const int32_t v = rows[l], at = v - begin;
+      next[v] = cur[v] + Vec3{sx[l], sy[l], sz[l]};
+      d2_at[at] = d2_of[l];
+      root_at[at] = root_of[l];
+      capped_at[at] = len2_of[l] > max_step_sq;
+    }
+  }
   double max_sq = 0.0, sum = 0.0;
   int64_t moved = 0, movable = 0, capped = 0;
-  alignas(8 * W) double sx[W], sy[W], sz[W], len2_of[W], d2_of[W], root_of[W];
-  for (int32_t first = begin; first < end; first += W) {
-    PrefetchPositionsAhead(cur, first, n);
-    PrefetchRingsAhead(c, cur, first, W, end);
-    const int32_t count = std::min<int32_t>(W, end - first);
-    int32_t free_lanes = count;
-    if constexpr (!kAllFree) {
-      free_lanes = 0;
-      for (int32_t l = 0; l < count; ++l) free_lanes += role_of[first + l] == kFree;
-    }
-    if (kAllFree || free_lanes > 0) {
-      const auto f = lane_ring != nullptr && count == W
-                         ? finish(MeanCurvatureLanes<W, true>(c, cur, first, W, lane_ring + c.lane_offsets[first / W]))
-                         : finish(MeanCurvatureLanes<W>(c, cur, first, count));
-      V x = f.x * lambda, y = f.y * lambda, z = f.z * lambda;
-      const V len2 = x * x + y * y + z * z;
-      V d2 = len2;
-      // The factor is 1 in every lane whose len2 <= max_step_sq (or NaN): x * 1 == x and d2 ==
-      // len2, so the division and square root are skipped unless some lane is capped (rare:
-      // mcf at 41k vertices, 1.02 -> 0.93 ms per iteration).
-      if (AnyLaneLess(max_sq_lanes, len2)) {
-        V factor = LaneSqrt(max_sq_lanes / len2);
-        factor = factor < one ? factor : one;
-        x = x * factor, y = y * factor, z = z * factor;
-        d2 = x * x + y * y + z * z;
-      }
-      const V root = LaneSqrt(d2);
-      std::memcpy(sx, &x, sizeof sx);
-      std::memcpy(sy, &y, sizeof sy);
-      std::memcpy(sz, &z, sizeof sz);
-      std::memcpy(len2_of, &len2, sizeof len2_of);
-      std::memcpy(d2_of, &d2, sizeof d2_of);
-      std::memcpy(root_of, &root, sizeof root_of);
-    }
-    if (free_lanes == count) {
-      for (int32_t l = 0; l < count; ++l) {
-        const int32_t v = first + l;
-        next[v] = cur[v] + Vec3{sx[l], sy[l], sz[l]};
-        capped += len2_of[l] > max_step_sq;
-        max_sq = std::max(max_sq, d2_of[l]);
-        sum += root_of[l];
-        moved += d2_of[l] > 0.0;
-      }
-      movable += count;
+  for (int32_t v = begin; v < end; ++v) {  // StepRange's roles and statistics, in vertex order
+    const int32_t at = v - begin;
+    const uint8_t role = kAllFree ? uint8_t{kFree} : role_of[v];
+    double d2;
+    if (role == kFree) {
+      d2 = d2_at[at];
+      sum += root_at[at];
+      capped += capped_at[at];
+    } else if (role == kFixed) {
+      next[v] = cur[v];
       continue;
+    } else {
+      const Vec3 step = CurveUmbrella(c, cur, v) * curve_lambda;
+      next[v] = cur[v] + step;
+      d2 = SquaredNorm(step);
+      sum += std::sqrt(d2);
     }
-    for (int32_t l = 0; l < count; ++l) {  // StepRange's roles
-      const int32_t v = first + l;
-      const uint8_t role = role_of[v];
-      if (role == kFixed) {
-        next[v] = cur[v];
-        continue;
-      }
-      ++movable;
-      if (role == kFree) {
-        next[v] = cur[v] + Vec3{sx[l], sy[l], sz[l]};
-        capped += len2_of[l] > max_step_sq;
-        max_sq = std::max(max_sq, d2_of[l]);
-        sum += root_of[l];
-        moved += d2_of[l] > 0.0;
-      } else {
-        const Vec3 step = CurveUmbrella(c, cur, v) * curve_lambda;
-        next[v] = cur[v] + step;
-        const double d2 = SquaredNorm(step);
-        max_sq = std::max(max_sq, d2);
-        sum += std::sqrt(d2);
-        moved += d2 > 0.0;
-      }
-    }
+    max_sq = std::max(max_sq, d2);
+    moved += d2 > 0.0;
+    ++movable;
   }
   return FinishBlock(max_sq, sum, moved, movable, capped);
 }
@@ -702,7 +706,7 @@ __attribute__((always_inline)) inline BlockStats ApplyCurvatureStep(const StepCo
                                                                     int32_t begin, int32_t end, FinishFn&& finish) {
   return RunWithIsa(c.isa, [&](auto width) __attribute__((always_inline)) {
     constexpr int W = decltype(width)::value;
-    if (c.threshold == nullptr) {
+    if (c.threshold == nullptr && c.batches != nullptr && c.batches->width == W) {
       if (AllFreeBlock(c, begin)) return CurvatureStepLanes<W, true>(c, cur, next, begin, end, finish);
       return CurvatureStepLanes<W, false>(c, cur, next, begin, end, finish);
     }

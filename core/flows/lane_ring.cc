@@ -3,39 +3,73 @@
 #include <algorithm>
 #include <limits>
 
+#include "core/flows/kernel.h"
+
 namespace meshsmooth::flows {
 
-void BuildLaneRing(const Topology& topo, int width, int threads, std::vector<int32_t>& lane_ring,
-                   std::vector<int64_t>& lane_offsets) {
-  lane_ring.clear();
-  lane_offsets.clear();
-  const int32_t n = topo.num_vertices(), batches = n / width;
-  if (batches == 0 || int64_t{n} * 3 > std::numeric_limits<int32_t>::max()) return;
+LaneBatches BuildLaneBatches(const Topology& topo, const uint8_t* role, int width, int threads) {
+  LaneBatches out;
+  const int32_t n = topo.num_vertices();
+  if (n == 0 || int64_t{n} * 3 > std::numeric_limits<int32_t>::max()) return out;
   const int32_t* const offsets = topo.ring_offsets.data();
   const int32_t* const ring = topo.ring.data();
   auto valence = [&](int32_t v) { return offsets[v + 1] - offsets[v]; };
-  lane_offsets.resize(static_cast<size_t>(batches) + 1);
-  lane_offsets[0] = 0;
-  for (int32_t b = 0; b < batches; ++b) {
-    int32_t most = 0;
-    for (int32_t v = b * width; v < (b + 1) * width; ++v) most = std::max(most, valence(v));
-    lane_offsets[b + 1] = lane_offsets[b] + int64_t{most + 1} * width;
-  }
-  if (lane_offsets[batches] > 2 * int64_t{offsets[n]} + int64_t{batches} * width) {
-    lane_offsets.clear();  // a few huge valences: the gathers are cheaper than the padding
-    return;
-  }
-  lane_ring.resize(static_cast<size_t>(lane_offsets[batches]));
+  const int32_t blocks = (n + kBlock - 1) / kBlock;
+
+  // Each block's free vertices by valence (a counting sort, stable), then its batches.
+  std::vector<int32_t> sorted(n);
+  std::vector<int32_t> free_count(blocks), batch_count(blocks);
 #pragma omp parallel for schedule(static) num_threads(threads) if (threads > 1)
-  for (int32_t b = 0; b < batches; ++b) {
-    int32_t* row = &lane_ring[static_cast<size_t>(lane_offsets[b])];
-    const int32_t rows = static_cast<int32_t>((lane_offsets[b + 1] - lane_offsets[b]) / width);
-    for (int32_t l = 0; l < width; ++l) {
-      const int32_t v = b * width + l, begin = offsets[v], end = offsets[v + 1];
-      row[l] = 3 * (begin < end ? ring[end - 1] : v);
-      for (int32_t k = 0; k + 1 < rows; ++k) row[(k + 1) * width + l] = 3 * (begin + k < end ? ring[begin + k] : v);
+  for (int32_t b = 0; b < blocks; ++b) {
+    const int32_t begin = b * kBlock, end = std::min(n, begin + kBlock);
+    int32_t most = 0, count = 0;
+    for (int32_t v = begin; v < end; ++v) {
+      if (role[v] == kFree) most = std::max(most, valence(v)), ++count;
+    }
+    std::vector<int32_t> start(static_cast<size_t>(most) + 2, 0);
+    for (int32_t v = begin; v < end; ++v) {
+      if (role[v] == kFree) ++start[valence(v) + 1];
+    }
+    for (int32_t k = 0; k <= most; ++k) start[k + 1] += start[k];
+    for (int32_t v = begin; v < end; ++v) {
+      if (role[v] == kFree) sorted[begin + start[valence(v)]++] = v;
+    }
+    free_count[b] = count;
+    batch_count[b] = (count + width - 1) / width;
+  }
+  out.width = width;
+  out.block_first.resize(static_cast<size_t>(blocks) + 1, 0);
+  for (int32_t b = 0; b < blocks; ++b) out.block_first[b + 1] = out.block_first[b] + batch_count[b];
+  const int32_t batches = out.block_first[blocks];
+  out.lanes.resize(batches);
+  out.offsets.resize(static_cast<size_t>(batches) + 1, 0);
+  for (int32_t b = 0; b < blocks; ++b) {  // the largest valence of a batch is its last lane's
+    for (int32_t j = 0; j < batch_count[b]; ++j) {
+      const int32_t first = b * kBlock + j * width, lanes = std::min(width, free_count[b] - j * width);
+      const int32_t batch = out.block_first[b] + j;
+      out.lanes[batch] = lanes;
+      out.offsets[batch + 1] = out.offsets[batch] + int64_t{valence(sorted[first + lanes - 1]) + 3} * width;
     }
   }
+  if (out.offsets[batches] > 2 * int64_t{offsets[n]} + int64_t{batches} * 3 * width) return LaneBatches{};
+  out.data.resize(static_cast<size_t>(out.offsets[batches]));
+#pragma omp parallel for schedule(static) num_threads(threads) if (threads > 1)
+  for (int32_t b = 0; b < blocks; ++b) {
+    for (int32_t j = 0; j < batch_count[b]; ++j) {
+      const int32_t batch = out.block_first[b] + j, first = b * kBlock + j * width;
+      int32_t* const row = &out.data[static_cast<size_t>(out.offsets[batch])];
+      const int32_t rows = static_cast<int32_t>((out.offsets[batch + 1] - out.offsets[batch]) / width);
+      for (int32_t l = 0; l < width; ++l) {
+        const int32_t v = sorted[first + (l < out.lanes[batch] ? l : 0)];
+        const int32_t begin = offsets[v], end = offsets[v + 1];
+        row[l] = v;
+        row[width + l] = end - begin;
+        row[2 * width + l] = 3 * (begin < end ? ring[end - 1] : v);
+        for (int32_t k = 0; k + 3 < rows; ++k) row[(k + 3) * width + l] = 3 * (begin + k < end ? ring[begin + k] : v);
+      }
+    }
+  }
+  return out;
 }
 
 }  // namespace meshsmooth::flows

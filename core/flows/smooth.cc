@@ -249,13 +249,11 @@ absl::StatusOr<FlowResult> Run(Mesh& mesh, const Topology& topo, const FlowParam
   ctx.inv_h2 = 1.0 / (h * h);
   ctx.isa = flows::BestVectorIsa();
   if (curvature) ctx.max_step_sq = h * h;
-  // The lane ring serves the cotangent flows' all-free blocks without eq. (14).
-  std::vector<int32_t> lane_ring;
-  std::vector<int64_t> lane_offsets;
+  // The cotangent flows without eq. (14) run their free vertices in batches (lane_ring.h).
+  flows::LaneBatches batches;
   if (curvature && p.adaptive == AdaptiveMode::kNone) {
-    ctx.lane_width = flows::LaneWidthOf(ctx.isa);
-    flows::BuildLaneRing(topo, ctx.lane_width, threads, lane_ring, lane_offsets);
-    if (!lane_ring.empty()) ctx.lane_ring = lane_ring.data(), ctx.lane_offsets = lane_offsets.data();
+    batches = flows::BuildLaneBatches(topo, role.data(), flows::LaneWidthOf(ctx.isa), threads);
+    if (!batches.data.empty()) ctx.batches = &batches;
   }
   // Curvature flows move a boundary curve like the curve-shortening flow with the same time
   // step (kappa ~ 2 U / h^2), capped at the stable umbrella step 0.5.

@@ -233,30 +233,52 @@ TEST(FlowInvariantsTest, LaneStepMatchesVertexStep) {
   }
 }
 
-TEST(FlowInvariantsTest, LaneRingHoldsEachLanesRingRowByRow) {
-  const Mesh mesh = SplitEverySeventhFace(Icosphere(3));  // valences 3 .. 9
+TEST(FlowInvariantsTest, LaneBatchesHoldEachBlocksFreeVerticesByValence) {
+  const Mesh mesh = SplitEverySeventhFace(Icosphere(5));  // valences 3 .. 9, three blocks
   const Topology topo = BuildTopology(mesh);
+  const int32_t n = mesh.num_vertices();
   const std::vector<int32_t>& offsets = topo.ring_offsets;
+  auto valence = [&](int32_t v) { return offsets[v + 1] - offsets[v]; };
+  std::vector<uint8_t> role(n, 1);  // flows::kFree
+  for (int32_t v = 0; v < n; v += 11) role[v] = 0;  // flows::kFixed
+  constexpr int32_t kBlock = 4096;  // flows::kBlock
   for (const int width : {2, 4, 8}) {
     SCOPED_TRACE(width);
-    std::vector<int32_t> lane_ring;
-    std::vector<int64_t> lane_offsets;
-    flows::BuildLaneRing(topo, width, 2, lane_ring, lane_offsets);
-    const int32_t batches = mesh.num_vertices() / width;
-    ASSERT_EQ(lane_offsets.size(), static_cast<size_t>(batches) + 1);
-    ASSERT_EQ(lane_ring.size(), static_cast<size_t>(lane_offsets.back()));
-    for (int32_t b = 0; b < batches; ++b) {
-      const int32_t* rows = &lane_ring[static_cast<size_t>(lane_offsets[b])];
-      int32_t most = 0;
-      for (int32_t v = b * width; v < (b + 1) * width; ++v) most = std::max(most, offsets[v + 1] - offsets[v]);
-      ASSERT_EQ(lane_offsets[b + 1] - lane_offsets[b], int64_t{most + 1} * width);
-      for (int32_t l = 0; l < width; ++l) {
-        const int32_t v = b * width + l, begin = offsets[v], n = offsets[v + 1] - begin;
-        ASSERT_EQ(rows[l], 3 * topo.ring[begin + n - 1]);  // Q_{n-1}
-        for (int32_t k = 0; k < most; ++k) {  // Q_k, or P past the ring
-          ASSERT_EQ(rows[(k + 1) * width + l], 3 * (k < n ? topo.ring[begin + k] : v));
+    const flows::LaneBatches lanes = flows::BuildLaneBatches(topo, role.data(), width, 2);
+    const int32_t blocks = (n + kBlock - 1) / kBlock;
+    ASSERT_EQ(lanes.width, width);
+    ASSERT_EQ(lanes.block_first.size(), static_cast<size_t>(blocks) + 1);
+    ASSERT_EQ(lanes.offsets.size(), lanes.lanes.size() + 1);
+    ASSERT_EQ(lanes.data.size(), static_cast<size_t>(lanes.offsets.back()));
+    for (int32_t b = 0; b < blocks; ++b) {
+      std::vector<int32_t> seen;
+      for (int32_t j = lanes.block_first[b]; j < lanes.block_first[b + 1]; ++j) {
+        const int32_t* rows = &lanes.data[static_cast<size_t>(lanes.offsets[j])];
+        const int32_t count = lanes.lanes[j];
+        ASSERT_TRUE(count >= 1 && count <= width);
+        int32_t most = 0;
+        for (int32_t l = 0; l < width; ++l) {
+          const int32_t v = rows[l];
+          ASSERT_EQ(v, rows[l < count ? l : 0]);  // a short batch repeats its first vertex
+          most = std::max(most, valence(v));
+          if (l < count) seen.push_back(v);
+        }
+        ASSERT_EQ(lanes.offsets[j + 1] - lanes.offsets[j], int64_t{most + 3} * width);
+        for (int32_t l = 0; l < width; ++l) {
+          const int32_t v = rows[l], begin = offsets[v], nv = valence(v);
+          ASSERT_EQ(rows[width + l], nv);
+          ASSERT_EQ(rows[2 * width + l], 3 * topo.ring[begin + nv - 1]);  // Q_{n-1}
+          for (int32_t k = 0; k < most; ++k) {  // Q_k, or P past the ring
+            ASSERT_EQ(rows[(k + 3) * width + l], 3 * (k < nv ? topo.ring[begin + k] : v));
+          }
         }
       }
+      std::vector<int32_t> expected;  // the block's free vertices, stably by valence
+      for (int32_t v = b * kBlock; v < std::min(n, (b + 1) * kBlock); ++v) {
+        if (role[v] == 1) expected.push_back(v);
+      }
+      std::stable_sort(expected.begin(), expected.end(), [&](int32_t x, int32_t y) { return valence(x) < valence(y); });
+      ASSERT_EQ(seen, expected);
     }
   }
 }
