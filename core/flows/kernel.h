@@ -603,7 +603,7 @@ __attribute__((always_inline)) inline BlockStats RunWithIsa(VectorIsa isa, const
   return fn(LaneWidth<2>{});
 }
 
-// StepRange for a cotangent flow without eq. (14), over the block's batches of free vertices
+// StepRange for a cotangent flow, over the block's batches of free vertices
 // (c.batches, BuildLaneBatches; W = its width): the speed, the step, its cap and the
 // displacement statistics in lanes, stored per vertex; then one loop over the block in vertex
 // order copies the fixed vertices, moves the curve vertices and adds the statistics. Per
@@ -622,7 +622,8 @@ __attribute__((always_inline)) inline BlockStats CurvatureStepLanes(const StepCo
   const double lambda = c.lambda, curve_lambda = c.curve_lambda, max_step_sq = c.max_step_sq;
   const uint8_t* const role_of = c.role;
   const int32_t n = c.num_vertices;
-  const V one = V{} + 1.0, max_sq_lanes = V{} + max_step_sq;
+  const double* const threshold = c.threshold;
+  const V zero{}, one = zero + 1.0, max_sq_lanes = zero + max_step_sq;
   const LaneBatches& lanes = *c.batches;
   const int32_t block = begin / kBlock, first_batch = lanes.block_first[block], last_batch = lanes.block_first[block + 1];
   // Per vertex of the block (offset from begin): a free vertex's squared step, its length and
@@ -642,7 +643,17 @@ __attribute__((always_inline)) inline BlockStats CurvatureStepLanes(const StepCo
     }
     const int32_t* const rows = &lanes.data[lanes.offsets[j]];
     const auto f = finish(MeanCurvatureLanes<W, true>(c, cur, 0, W, rows));
-    V x = f.x * lambda, y = f.y * lambda, z = f.z * lambda;
+    V fx = f.x, fy = f.y, fz = f.z;
+    if (threshold != nullptr) {  // eq. (14) as Threshold(), lane by lane
+      typename IndexLanesOf<W>::type self;
+      std::memcpy(&self, rows, sizeof self);
+      const V t = GatherLanes<W>(threshold, self);
+      const V len = LaneSqrt(fx * fx + fy * fy + fz * fz);
+      const V shorten = (len - t) / len;
+      const auto keep = t < len;
+      fx = keep ? fx * shorten : zero, fy = keep ? fy * shorten : zero, fz = keep ? fz * shorten : zero;
+    }
+    V x = fx * lambda, y = fy * lambda, z = fz * lambda;
     const V len2 = x * x + y * y + z * z;
     V d2 = len2;
     // The factor is 1 in every lane whose len2 <= max_step_sq (or NaN): x * 1 == x and d2 ==
@@ -706,7 +717,7 @@ __attribute__((always_inline)) inline BlockStats ApplyCurvatureStep(const StepCo
                                                                     int32_t begin, int32_t end, FinishFn&& finish) {
   return RunWithIsa(c.isa, [&](auto width) __attribute__((always_inline)) {
     constexpr int W = decltype(width)::value;
-    if (c.threshold == nullptr && c.batches != nullptr && c.batches->width == W) {
+    if (c.batches != nullptr && c.batches->width == W) {
       if (AllFreeBlock(c, begin)) return CurvatureStepLanes<W, true>(c, cur, next, begin, end, finish);
       return CurvatureStepLanes<W, false>(c, cur, next, begin, end, finish);
     }

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <string_view>
 #include <utility>
 
 #include "absl/strings/str_cat.h"
@@ -249,9 +250,11 @@ absl::StatusOr<FlowResult> Run(Mesh& mesh, const Topology& topo, const FlowParam
   ctx.inv_h2 = 1.0 / (h * h);
   ctx.isa = flows::BestVectorIsa();
   if (curvature) ctx.max_step_sq = h * h;
-  // The cotangent flows without eq. (14) run their free vertices in batches (lane_ring.h).
+  // The cotangent flows run their free vertices in batches (lane_ring.h);
+  // MESHSMOOTH_LANE_BATCHES=0 makes them go vertex by vertex (for tests and measurements).
   flows::LaneBatches batches;
-  if (curvature && p.adaptive == AdaptiveMode::kNone) {
+  const char* want_batches = std::getenv("MESHSMOOTH_LANE_BATCHES");
+  if (curvature && (want_batches == nullptr || std::string_view(want_batches) != "0")) {
     batches = flows::BuildLaneBatches(topo, role.data(), flows::LaneWidthOf(ctx.isa), threads);
     if (!batches.data.empty()) ctx.batches = &batches;
   }

@@ -164,51 +164,45 @@ TEST(FlowInvariantsTest, InstructionSetChangesNoPosition) {
 // Blocks of free vertices without eq. (14) step W vertices at a time (CurvatureStepLanes);
 // eq. (14) with T = 0, which leaves every speed as it is (F (|F| - 0) / |F| = F), takes the
 // per-vertex step. Positions and statistics must be the same bits.
+// Smooths `mesh` in lane batches and vertex by vertex (MESHSMOOTH_LANE_BATCHES=0): the same
+// bytes and statistics. Returns the batched run's result.
+FlowResult ExpectLanesMatchVertices(const Mesh& mesh, const Topology& topo, const FlowParams& p) {
+  Mesh lanes = mesh, vertex = mesh;
+  const absl::StatusOr<FlowResult> a = Smooth(lanes, topo, p);
+  setenv("MESHSMOOTH_LANE_BATCHES", "0", 1);
+  const absl::StatusOr<FlowResult> b = Smooth(vertex, topo, p);
+  unsetenv("MESHSMOOTH_LANE_BATCHES");
+  EXPECT_TRUE(a.ok() && b.ok()) << a.status() << b.status();
+  if (!a.ok() || !b.ok()) return {};
+  EXPECT_FALSE(SameBytes(lanes, mesh));
+  EXPECT_TRUE(SameBytes(lanes, vertex));
+  EXPECT_EQ(a->last.mean_displacement, b->last.mean_displacement);
+  EXPECT_EQ(a->last.max_displacement, b->last.max_displacement);
+  EXPECT_EQ(a->last.moved_share, b->last.moved_share);
+  return *a;
+}
+
 TEST(FlowInvariantsTest, LaneStepMatchesVertexStep) {
   Mesh split = SplitEverySeventhFace(Icosphere(5));
   AddUniformNoise(split, 0.3, 3);
-  for (const Mesh& mesh : {NoisySphere(5), split}) {
-    const Topology topo = BuildTopology(mesh);
-    for (const char* flow : {"mcf", "mcf_tangential", "median"}) {
-      SCOPED_TRACE(flow);
-      FlowParams p = Params(flow, 5);
-      Mesh lanes = mesh, vertex = mesh;
-      const absl::StatusOr<FlowResult> a = Smooth(lanes, topo, p);
-      p.adaptive = AdaptiveMode::kConstant;
-      p.adaptive_threshold = 0.0;
-      const absl::StatusOr<FlowResult> b = Smooth(vertex, topo, p);
-      ASSERT_TRUE(a.ok() && b.ok());
-      EXPECT_FALSE(SameBytes(lanes, mesh));
-      EXPECT_TRUE(SameBytes(lanes, vertex));
-      EXPECT_EQ(a->last.mean_displacement, b->last.mean_displacement);
-      EXPECT_EQ(a->last.max_displacement, b->last.max_displacement);
-      EXPECT_EQ(a->last.moved_share, b->last.moved_share);
-    }
-  }
   // Blocks that are not all free: boundary vertices moving as curves, locked vertices, batches
   // with no free vertex (the plane's first rows are all locked).
   Mesh plane = TwoRatePlane(96, 64);
   AddUniformNoise(plane, 0.3, 7);
-  {
-    const Topology topo = BuildTopology(plane);
-    std::vector<uint8_t> locked(plane.num_vertices(), 0);
-    for (int32_t v = 0; v < plane.num_vertices(); ++v) locked[v] = v % 13 == 0 || v < 200;
+  std::vector<uint8_t> locked(plane.num_vertices(), 0);
+  for (int32_t v = 0; v < plane.num_vertices(); ++v) locked[v] = v % 13 == 0 || v < 200;
+  for (const Mesh* mesh : {&split, &plane}) {
+    const Topology topo = BuildTopology(*mesh);
     for (const char* flow : {"mcf", "mcf_tangential", "median"}) {
-      SCOPED_TRACE(std::string("plane / ") + flow);
-      FlowParams p = Params(flow, 5);
-      p.boundary = BoundaryMode::kCurve;
-      p.locked = locked;
-      Mesh lanes = plane, vertex = plane;
-      const absl::StatusOr<FlowResult> a = Smooth(lanes, topo, p);
-      p.adaptive = AdaptiveMode::kConstant;
-      p.adaptive_threshold = 0.0;
-      const absl::StatusOr<FlowResult> b = Smooth(vertex, topo, p);
-      ASSERT_TRUE(a.ok() && b.ok()) << a.status() << b.status();
-      EXPECT_FALSE(SameBytes(lanes, plane));
-      EXPECT_TRUE(SameBytes(lanes, vertex));
-      EXPECT_EQ(a->last.mean_displacement, b->last.mean_displacement);
-      EXPECT_EQ(a->last.max_displacement, b->last.max_displacement);
-      EXPECT_EQ(a->last.moved_share, b->last.moved_share);
+      for (const AdaptiveMode adaptive : {AdaptiveMode::kNone, AdaptiveMode::kConstant, AdaptiveMode::kRing1}) {
+        SCOPED_TRACE(::testing::Message() << (mesh == &plane ? "plane / " : "split sphere / ") << flow << " / adaptive "
+                                          << static_cast<int>(adaptive));
+        FlowParams p = Params(flow, 5);
+        p.adaptive = adaptive;
+        p.adaptive_threshold = 0.5;  // kConstant: eq. (14) with T = 0.5 (1 / length)
+        if (mesh == &plane) p.boundary = BoundaryMode::kCurve, p.locked = locked;
+        ExpectLanesMatchVertices(*mesh, topo, p);
+      }
     }
   }
   // Spikes of 4 h on every 97th vertex: a step of 2.5 h^2 moves them by more than h, so they are
@@ -221,15 +215,8 @@ TEST(FlowInvariantsTest, LaneStepMatchesVertexStep) {
     SCOPED_TRACE(flow);
     FlowParams p = Params(flow, 1);
     p.step = 2.5;
-    Mesh lanes = spiky, vertex = spiky;
-    const absl::StatusOr<FlowResult> a = Smooth(lanes, topo, p);
-    p.adaptive = AdaptiveMode::kConstant;
-    p.adaptive_threshold = 0.0;
-    const absl::StatusOr<FlowResult> b = Smooth(vertex, topo, p);
-    ASSERT_TRUE(a.ok() && b.ok()) << a.status() << b.status();
-    EXPECT_DOUBLE_EQ(a->last.max_displacement, a->mean_edge_length);  // capped
-    EXPECT_TRUE(SameBytes(lanes, vertex));
-    EXPECT_EQ(a->last.mean_displacement, b->last.mean_displacement);
+    const FlowResult r = ExpectLanesMatchVertices(spiky, topo, p);
+    EXPECT_DOUBLE_EQ(r.last.max_displacement, r.mean_edge_length);  // capped
   }
 }
 
