@@ -16,7 +16,7 @@
 #include <vector>
 
 #include "core/flows/flow.h"
-#include "core/flows/lane_ring.h"
+#include "core/flows/lane_batches.h"
 
 namespace meshsmooth::flows {
 
@@ -54,7 +54,7 @@ struct StepContext {
   double max_step_sq = std::numeric_limits<double>::infinity();
   double inv_h2 = 1.0;          // 1 / h^2
   VectorIsa isa = VectorIsa::kSse2;  // see RunWithIsa
-  // The cotangent kernel's batches of free vertices (core/flows/lane_ring.h), or null.
+  // The cotangent kernel's batches of free vertices (core/flows/lane_batches.h), or null.
   const LaneBatches* batches = nullptr;
 };
 
@@ -457,6 +457,15 @@ __attribute__((always_inline)) inline void PrefetchRingsAhead(const StepContext&
   }
 }
 
+// Prefetches the positions of the ring entries of batch j (its rows from 3 W on).
+__attribute__((always_inline)) inline void PrefetchBatchRing(const LaneBatches& lanes, const Vec3* pos, int32_t j) {
+  const int32_t* const rows = &lanes.data[lanes.offsets[j]];
+  const double* const base = &pos[0].x;
+  for (int64_t i = 3 * lanes.width, e = lanes.offsets[j + 1] - lanes.offsets[j]; i < e; ++i) {
+    __builtin_prefetch(base + rows[i]);
+  }
+}
+
 // The speed of a cotangent flow at vertex v, for StepRange: F = finish(CurvatureLanes<V>), a
 // function of lanes like MeanCurvatureLanes (so its divisions and selects run W vertices at a
 // time, without a branch per vertex), computed W vertices at a time. StepRange asks for
@@ -603,6 +612,9 @@ __attribute__((always_inline)) inline BlockStats RunWithIsa(VectorIsa isa, const
   return fn(LaneWidth<2>{});
 }
 
+// The W that RunWithIsa passes for `isa` (the cotangent kernel's lanes).
+inline int LaneWidthOf(VectorIsa isa) { return isa == VectorIsa::kAvx512 ? 8 : isa == VectorIsa::kAvx2 ? 4 : 2; }
+
 // StepRange for a cotangent flow, over the block's batches of free vertices
 // (c.batches, BuildLaneBatches; W = its width): the speed, the step, its cap and the
 // displacement statistics in lanes, stored per vertex; then one loop over the block in vertex
@@ -634,13 +646,7 @@ __attribute__((always_inline)) inline BlockStats CurvatureStepLanes(const StepCo
   for (int32_t j = first_batch; j < last_batch; ++j) {
     // The batches run through the block's vertices out of order: prefetch as if in order.
     PrefetchPositionsAhead(cur, begin + (j - first_batch) * W, n);
-    if (j + kBatchPrefetchAhead < last_batch) {
-      const int32_t* ahead = &lanes.data[lanes.offsets[j + kBatchPrefetchAhead]];
-      const double* const base = &cur[0].x;
-      for (int64_t i = 3 * W, e = lanes.offsets[j + kBatchPrefetchAhead + 1] - lanes.offsets[j + kBatchPrefetchAhead]; i < e; ++i) {
-        __builtin_prefetch(base + ahead[i]);
-      }
-    }
+    if (j + kBatchPrefetchAhead < last_batch) PrefetchBatchRing(lanes, cur, j + kBatchPrefetchAhead);
     const int32_t* const rows = &lanes.data[lanes.offsets[j]];
     const auto f = finish(MeanCurvatureLanes<W, true>(c, cur, 0, W, rows));
     V fx = f.x, fy = f.y, fz = f.z;
@@ -746,9 +752,6 @@ std::unique_ptr<FlowKernel> MakeBilaplacian(const FlowParams& p);
 std::unique_ptr<FlowKernel> MakeMcf(const FlowParams& p);
 std::unique_ptr<FlowKernel> MakeMcfTangential(const FlowParams& p);
 std::unique_ptr<FlowKernel> MakeMedian(const FlowParams& p);
-
-// Doubles in one register of `isa`: the cotangent kernel's W.
-inline int LaneWidthOf(VectorIsa isa) { return isa == VectorIsa::kAvx512 ? 8 : isa == VectorIsa::kAvx2 ? 4 : 2; }
 
 // Eq. (14)'s T(P): mean |H| over the first ring (rings = 1) or the first and second rings
 // (rings = 2) of every vertex, over interior neighbours only; written to `t`.

@@ -14,7 +14,7 @@
 #include "absl/strings/str_format.h"
 #include "core/flows/flow.h"
 #include "core/flows/kernel.h"
-#include "core/flows/lane_ring.h"
+#include "core/flows/lane_batches.h"
 #include "core/metrics.h"
 
 namespace meshsmooth {
@@ -250,7 +250,7 @@ absl::StatusOr<FlowResult> Run(Mesh& mesh, const Topology& topo, const FlowParam
   ctx.inv_h2 = 1.0 / (h * h);
   ctx.isa = flows::BestVectorIsa();
   if (curvature) ctx.max_step_sq = h * h;
-  // The cotangent flows run their free vertices in batches (lane_ring.h);
+  // The cotangent flows run their free vertices in batches (lane_batches.h);
   // MESHSMOOTH_LANE_BATCHES=0 makes them go vertex by vertex (for tests and measurements).
   flows::LaneBatches batches;
   const char* want_batches = std::getenv("MESHSMOOTH_LANE_BATCHES");

@@ -6,7 +6,7 @@
 #include <cstdlib>
 #include <cstring>
 
-#include "core/flows/lane_ring.h"
+#include "core/flows/lane_batches.h"
 #include "core/io/mesh_io.h"
 #include "gtest/gtest.h"
 #include "tests/flow_fixtures.h"

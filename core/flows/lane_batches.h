@@ -33,9 +33,9 @@ struct LaneBatches {
   std::vector<int32_t> block_first;
 };
 
-// The batches of the vertices whose role is kFree. Left empty (the kernel then takes the
-// vertex-by-vertex path) when 3n does not fit in int32, or when the rows would hold more than
-// twice the ring's entries plus three rows per batch (a few huge valences).
+// The batches of the vertices whose role is kFree (3n must fit in int32, as Smooth() ensures).
+// Left empty (the kernel then takes the vertex-by-vertex path) when the rows would hold more
+// than twice the ring's entries plus three rows per batch (a few huge valences).
 LaneBatches BuildLaneBatches(const Topology& topo, const uint8_t* role, int width, int threads);
 
 }  // namespace meshsmooth::flows

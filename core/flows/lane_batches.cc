@@ -1,7 +1,6 @@
-#include "core/flows/lane_ring.h"
+#include "core/flows/lane_batches.h"
 
 #include <algorithm>
-#include <limits>
 
 #include "core/flows/kernel.h"
 
@@ -10,7 +9,7 @@ namespace meshsmooth::flows {
 LaneBatches BuildLaneBatches(const Topology& topo, const uint8_t* role, int width, int threads) {
   LaneBatches out;
   const int32_t n = topo.num_vertices();
-  if (n == 0 || int64_t{n} * 3 > std::numeric_limits<int32_t>::max()) return out;
+  if (n == 0) return out;  // 3n fits in int32: Smooth() refuses larger meshes (ValidateFlowParams)
   const int32_t* const offsets = topo.ring_offsets.data();
   const int32_t* const ring = topo.ring.data();
   auto valence = [&](int32_t v) { return offsets[v + 1] - offsets[v]; };
