@@ -4,6 +4,7 @@
 #include <cstring>
 #include <exception>
 #include <memory>
+#include <utility>
 #include <variant>
 
 #include "absl/strings/str_cat.h"
@@ -166,6 +167,7 @@ absl::StatusOr<Mesh> DecodeDraco(std::string_view bytes) {
 struct DracoMesh::Impl {
   std::unique_ptr<draco::Mesh> draco;
   Mesh welded;
+  int64_t num_vertices = 0;  // of welded, also once it has been taken
   std::vector<int32_t> point_to_vertex;
   int64_t seam_points = 0;
 };
@@ -184,6 +186,7 @@ absl::StatusOr<DracoMesh> DracoMesh::Decode(std::string_view bytes) {
   impl->draco = std::move(dm).value();
   Welded welded = WeldPoints(points->positions);
   impl->welded.positions = std::move(welded.positions);
+  impl->num_vertices = impl->welded.num_vertices();
   impl->point_to_vertex = std::move(welded.point_to_vertex);
   impl->seam_points = welded.merged;
   impl->welded.triangles = std::move(points->triangles);
@@ -194,6 +197,7 @@ absl::StatusOr<DracoMesh> DracoMesh::Decode(std::string_view bytes) {
 }
 
 const Mesh& DracoMesh::welded() const { return impl_->welded; }
+Mesh DracoMesh::TakeWelded() { return std::exchange(impl_->welded, Mesh{}); }
 int64_t DracoMesh::num_points() const { return impl_->draco->num_points(); }
 int64_t DracoMesh::seam_points() const { return impl_->seam_points; }
 
@@ -226,8 +230,8 @@ absl::StatusOr<std::vector<float>> DecodeDracoAttribute(std::string_view bytes, 
 
 absl::StatusOr<std::string> DracoMesh::Encode(const Mesh& smoothed, const DracoOptions& options,
                                               const std::vector<GenericAttribute>& extra) {
-  if (smoothed.positions.size() != impl_->welded.positions.size()) {
-    return absl::InvalidArgumentError(absl::StrCat("expected ", impl_->welded.positions.size(),
+  if (static_cast<int64_t>(smoothed.positions.size()) != impl_->num_vertices) {
+    return absl::InvalidArgumentError(absl::StrCat("expected ", impl_->num_vertices,
                                                    " positions, got ", smoothed.positions.size()));
   }
   draco::Mesh& dm = *impl_->draco;

@@ -65,13 +65,16 @@ class DracoMesh {
 
   // One vertex per distinct position; faces over those vertices, in Draco's face order.
   const Mesh& welded() const;
+  // Moves welded() out instead of copying it (a job smooths that mesh in place); welded() is
+  // empty afterwards. Encode() still expects a mesh with welded()'s vertex count.
+  Mesh TakeWelded();
   int64_t num_points() const;
   // Points that share their position with an earlier point (welded into it).
   int64_t seam_points() const;
   // Names of the attributes besides positions, e.g. "NORMAL", "TEX_COORD", "COLOR", "GENERIC".
   std::vector<std::string> attribute_names() const;
 
-  // Sets the positions from `smoothed` (same vertex count as welded()), recomputes normals
+  // Sets the positions from `smoothed` (same vertex count as welded() had), recomputes normals
   // from them (area-weighted over each point's faces, so hard edges split at seams stay hard),
   // keeps every other attribute unchanged, and encodes. Quantization applies to positions
   // only; other attributes are stored losslessly. `extra` attributes (one value per vertex of

@@ -74,7 +74,7 @@ void SmoothJob::Run() {
   absl::StatusOr<DracoMesh> draco = DracoMesh::Decode(upload);
   std::string().swap(upload);  // the bytes are not needed past decoding
   if (!draco.ok()) return fail(draco.status(), 0, 0, Seconds(start, Clock::now()), 0);
-  Mesh mesh = draco->welded();
+  Mesh mesh = draco->TakeWelded();
   if (mesh.num_vertices() > options_.max_vertices) {
     return fail(absl::ResourceExhaustedError(absl::StrCat("the mesh has ", mesh.num_vertices(),
                                                           " vertices, above this server's limit of ",

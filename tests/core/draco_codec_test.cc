@@ -124,6 +124,43 @@ TEST(DracoCodecTest, MeshWithoutFacesIsRefusedAsEmpty) {
   EXPECT_NE(s.message().find("empty"), std::string::npos) << s;
 }
 
+// A job takes the welded mesh instead of copying it; Encode() then still knows the vertex
+// count and writes each vertex back to every point welded into it.
+TEST(DracoCodecTest, TakenWeldedMeshEncodesBackToEveryPoint) {
+  Mesh m = FloatNoisySphere(1);
+  const int32_t n = m.num_vertices();
+  m.positions.push_back(m.positions[0]);  // point n: a seam copy of vertex 0 for half its faces
+  int32_t split = 0;
+  for (Triangle& t : m.triangles) {
+    for (int32_t& v : t) {
+      if (v == 0 && split++ % 2 == 0) v = n;
+    }
+  }
+  ASSERT_GT(split, 1);
+  absl::StatusOr<std::string> bytes = EncodeDraco(m);
+  ASSERT_TRUE(bytes.ok()) << bytes.status();
+  absl::StatusOr<DracoMesh> dm = DracoMesh::Decode(*bytes);
+  ASSERT_TRUE(dm.ok()) << dm.status();
+  EXPECT_EQ(dm->seam_points(), 1);
+
+  Mesh welded = dm->TakeWelded();
+  ASSERT_EQ(welded.num_vertices(), n);
+  EXPECT_EQ(dm->welded().num_vertices(), 0);
+  for (Vec3& p : welded.positions) p *= 2.0;
+  absl::StatusOr<std::string> out = dm->Encode(welded);
+  ASSERT_TRUE(out.ok()) << out.status();
+  absl::StatusOr<Mesh> back = DecodeDraco(*out);
+  ASSERT_TRUE(back.ok()) << back.status();
+  ASSERT_EQ(back->num_vertices(), n + 1);
+  for (int32_t v = 0; v < n; ++v) EXPECT_EQ(back->positions[v], m.positions[v] * 2.0) << v;
+  EXPECT_EQ(back->positions[n], back->positions[0]);
+
+  welded.positions.push_back({});
+  const absl::Status wrong = dm->Encode(welded).status();
+  EXPECT_EQ(wrong.code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_NE(wrong.message().find("expected " + std::to_string(n) + " positions"), std::string::npos) << wrong;
+}
+
 // Draco's own bitstreams, versions 0.9 to 2.2 (counts from shared/data/draco/SOURCES.md).
 TEST(DracoCodecTest, DecodesDracosOwnTestFiles) {
   MESHSMOOTH_REQUIRE_SHARED("draco");
