@@ -52,6 +52,14 @@ enum class AdaptiveMode {
   kRing2,     // T(P) = mean |H| over the first and second rings of P
 };
 
+// Whether Smooth() runs a large mesh on a Morton-ordered copy of its vertices (MortonOrder()),
+// undone on return. Positions are identical either way.
+enum class ReorderMode {
+  kAuto,    // when MortonOrderPaysOff(topology, iterations)
+  kAlways,  // for every mesh of 100k .. 2^25 vertices (tests and measurements)
+  kNever,
+};
+
 struct FlowParams {
   std::string flow = "median";
   int iterations = 20;  // 1 .. kMaxIterations
@@ -83,9 +91,9 @@ struct FlowParams {
   double tolerance = 0.0;
 
   int threads = 0;  // worker threads for the per-vertex loops; 0 = all hardware threads
-  // Large meshes (>= 100k vertices) run on a Morton-ordered copy of the vertices, undone on
-  // return: neighbours then sit close in memory. Positions are identical either way.
-  bool reorder = true;
+  // Large meshes whose own vertex order leaves neighbours far apart in memory run on a
+  // Morton-ordered copy, when the run is long enough to repay the copy (ReorderMode).
+  ReorderMode reorder = ReorderMode::kAuto;
 };
 
 inline constexpr int kMaxIterations = 100000;
@@ -141,6 +149,13 @@ absl::StatusOr<FlowResult> Smooth(Mesh& mesh, const FlowParams& p, const RunCont
 // in Morton (Z-)order of their positions, so that a vertex's neighbours sit close to it in
 // memory. new -> old; the identity above 2^25 vertices. The keys are computed on `threads`.
 std::vector<int32_t> MortonOrder(const std::vector<Vec3>& positions, int threads = 1);
+
+// ReorderMode::kAuto's choice: a mesh of 100k .. 2^25 vertices whose order leaves more than 3%
+// of its neighbours over 4096 indices away from their vertex (a Morton order leaves about 2%),
+// for a run of at least 5 / (that share) iterations: reordering costs about as much as a few
+// iterations in a scattered order lose (docs/performance.md). The share is counted on the
+// rings of one vertex in 32 (runs of 64 in every 2048).
+bool MortonOrderPaysOff(const Topology& topo, int iterations);
 
 // Per-vertex mean-curvature normal H n (eq. 8 with the mixed Voronoi area, so |H| = 1/r on a
 // sphere; points towards the centre of curvature). Zero for vertices that are not interior.
