@@ -496,10 +496,22 @@ absl::StatusOr<FlowResult> Smooth(Mesh& mesh, const Topology& topo, const FlowPa
   t.ring.resize(topo.ring.size());
   FlowParams q = p;
   if (!p.locked.empty()) q.locked.resize(n);
+  // The loops below read the caller's arrays in the new order, scattered: they prefetch what
+  // vertex i + 16 reads and the ring of vertex i + 8 (whose offset is then in cache). At 655k
+  // and 2.6M vertices in the icosphere's order the copy took 9-10 -> 5.5 ms and 39-40 -> 24 ms.
+  constexpr int32_t kAhead = 16;
   t.ring_offsets[0] = 0;
-  for (int32_t i = 0; i < n; ++i) t.ring_offsets[i + 1] = t.ring_offsets[i] + topo.valence(order[i]);
+  for (int32_t i = 0; i < n; ++i) {
+    if (i + kAhead < n) __builtin_prefetch(&topo.ring_offsets[order[i + kAhead]]);
+    t.ring_offsets[i + 1] = t.ring_offsets[i] + topo.valence(order[i]);
+  }
 #pragma omp parallel for schedule(static) num_threads(threads)
   for (int32_t i = 0; i < n; ++i) {
+    if (i + kAhead < n) {
+      __builtin_prefetch(&mesh.positions[order[i + kAhead]]);
+      __builtin_prefetch(&topo.ring_offsets[order[i + kAhead]]);
+    }
+    if (i + kAhead / 2 < n) __builtin_prefetch(&topo.ring[topo.ring_offsets[order[i + kAhead / 2]]]);
     const int32_t old = order[i];
     local.positions[i] = mesh.positions[old];
     t.kind[i] = topo.kind[old];
