@@ -34,6 +34,11 @@ struct EdgeLengthSums {
   int64_t count = 0;
 };
 
+// Rings are contiguous but the positions they name are scattered in a mesh's own order: the
+// edge pass prefetches the position of the ring entry this far ahead. MeanEdgeLength of the
+// Draco-decoded 2.6M icosphere, 2 threads: 29-31 -> 20-21 ms (655k: 4.1-5.5 -> 4.1-4.2).
+constexpr int32_t kEdgePrefetchEntries = 64;
+
 // The lengths of the edges (a < b) of the vertices' rings, summed in fixed blocks of vertices:
 // one pass serves the mean and the spread.
 EdgeLengthSums SumEdgeLengths(const Mesh& mesh, const Topology& topo) {
@@ -41,8 +46,10 @@ EdgeLengthSums SumEdgeLengths(const Mesh& mesh, const Topology& topo) {
       topo.num_vertices(),
       [&](int64_t begin, int64_t end) {
         EdgeLengthSums p;
+        const int32_t ring_end = topo.ring_offsets[end];
         for (int32_t v = static_cast<int32_t>(begin); v < end; ++v) {
           for (int32_t i = topo.ring_offsets[v]; i < topo.ring_offsets[v + 1]; ++i) {
+            if (i + kEdgePrefetchEntries < ring_end) __builtin_prefetch(&mesh.positions[topo.ring[i + kEdgePrefetchEntries]]);
             if (v < topo.ring[i]) {
               const double len = Norm(mesh.positions[v] - mesh.positions[topo.ring[i]]);
               p.sum += len;
