@@ -386,10 +386,11 @@ constexpr int32_t kLocalitySampleStride = 32;
 constexpr int32_t kLocalitySampleRun = 64;
 // Up to this share an order is as local as a Morton order would make it.
 constexpr double kLocalFarShare = 0.03;
-// Reordering repays itself after about this many iterations divided by the share: with half
-// the neighbours far (laplacian U0, 2 threads) after 12 iterations at 655k vertices and 7 at
-// 2.6M (mcf: 18 at 655k); on the dragon after 140.
-constexpr double kRepayingFarShareIterations = 5.0;
+// Reordering repays itself after about this many iterations divided by the share. Measured
+// (laplacian U0, 2 threads) with half the neighbours far: after 12 iterations at 655k vertices
+// and 7 at 2.6M (mcf: 18 at 655k); on the dragon after 140 in one hour and ~20 in another (the
+// machine's memory was slower), so this is the middle: the dragon reorders from 52 iterations.
+constexpr double kRepayingFarShareIterations = 2.5;
 
 }  // namespace
 

@@ -105,8 +105,8 @@ TEST(FlowInvariantsTest, MortonOrderPaysOffForScatteredOrdersOnLongRuns) {
   const Mesh noisy = NoisySphere(7);
   const Topology topo = BuildTopology(noisy);
   EXPECT_TRUE(MortonOrderPaysOff(topo, 20));
-  EXPECT_TRUE(MortonOrderPaysOff(topo, 10));
-  EXPECT_FALSE(MortonOrderPaysOff(topo, 5));
+  EXPECT_TRUE(MortonOrderPaysOff(topo, 5));
+  EXPECT_FALSE(MortonOrderPaysOff(topo, 4));
   EXPECT_FALSE(MortonOrderPaysOff(topo, 1));
 
   const std::vector<int32_t> order = MortonOrder(noisy.positions);
