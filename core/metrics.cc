@@ -49,7 +49,8 @@ EdgeLengthSums SumEdgeLengths(const Mesh& mesh, const Topology& topo) {
         const int32_t ring_end = topo.ring_offsets[end];
         for (int32_t v = static_cast<int32_t>(begin); v < end; ++v) {
           for (int32_t i = topo.ring_offsets[v]; i < topo.ring_offsets[v + 1]; ++i) {
-            if (i + kEdgePrefetchEntries < ring_end) __builtin_prefetch(&mesh.positions[topo.ring[i + kEdgePrefetchEntries]]);
+            const int32_t ahead = i + kEdgePrefetchEntries;
+            if (ahead < ring_end) __builtin_prefetch(&mesh.positions[topo.ring[ahead]]);
             if (v < topo.ring[i]) {
               const double len = Norm(mesh.positions[v] - mesh.positions[topo.ring[i]]);
               p.sum += len;

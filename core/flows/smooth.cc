@@ -378,8 +378,8 @@ constexpr int32_t kReorderMaxVertices = 1 << 25;
 
 // MortonOrderPaysOff(): neighbours further than kNearIndices from their vertex count as far;
 // one in kLocalitySampleStride vertices is counted, in runs of kLocalitySampleRun consecutive
-// ones (contiguous reads: single vertices measured 1.2-1.7 ms on the dragon). Shares of far neighbours
-// measured: generated icospheres (the benchmark's meshes) 0.51, their Morton order
+// ones (contiguous reads: single vertices measured 1.2-1.7 ms on the dragon). Shares of far
+// neighbours measured: generated icospheres (the benchmark's meshes) 0.51, their Morton order
 // 0.016-0.019, the Stanford dragon in file order 0.049.
 constexpr int32_t kNearIndices = 4096;
 constexpr int32_t kLocalitySampleStride = 32;
@@ -458,7 +458,9 @@ bool MortonOrderPaysOff(const Topology& topo, int iterations) {
   int64_t far = 0, sampled = 0;
   for (int32_t block = 0; block < n; block += kLocalitySampleStride * kLocalitySampleRun) {
     for (int32_t v = block; v < std::min(n, block + kLocalitySampleRun); ++v) {
-      for (int32_t k = topo.ring_offsets[v]; k < topo.ring_offsets[v + 1]; ++k) far += std::abs(topo.ring[k] - v) > kNearIndices;
+      for (int32_t k = topo.ring_offsets[v]; k < topo.ring_offsets[v + 1]; ++k) {
+        far += std::abs(topo.ring[k] - v) > kNearIndices;
+      }
       sampled += topo.valence(v);
     }
   }
@@ -479,8 +481,9 @@ absl::StatusOr<FlowResult> Smooth(Mesh& mesh, const Topology& topo, const FlowPa
   }
   // h from the caller's order: the same value whatever the internal order.
   const double h = MeanEdgeLength(mesh, topo);
-  const bool reorder = p.reorder == ReorderMode::kAlways ? n >= kReorderThreshold && n <= kReorderMaxVertices
-                                                        : p.reorder == ReorderMode::kAuto && MortonOrderPaysOff(topo, p.iterations);
+  const bool reorder = p.reorder == ReorderMode::kAlways
+                           ? n >= kReorderThreshold && n <= kReorderMaxVertices
+                           : p.reorder == ReorderMode::kAuto && MortonOrderPaysOff(topo, p.iterations);
   if (!reorder) return Run(mesh, topo, p, control, h);
 
   // A pure permutation, so it runs on the job's threads without changing a bit.
