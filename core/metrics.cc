@@ -1,5 +1,7 @@
 #include "core/metrics.h"
 
+#include <omp.h>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -15,15 +17,25 @@ namespace {
 
 // Fixed blocks of this many items, reduced in block order: sums do not depend on threads.
 constexpr int64_t kMetricBlock = 16384;
+// Blocks go to at most this many tasks inside ComputeMetricsBeside.
+constexpr int64_t kMetricTasks = 32;
 
 // fn(begin, end) -> Partial for each block of [0, n), on all cores when n is large; the
-// partials are merged in block order.
+// partials are merged in block order. Inside a team (ComputeMetricsBeside) the blocks are
+// tasks, taken by whichever of its threads is free.
 template <typename Partial, typename Fn, typename Merge>
 Partial BlockReduce(int64_t n, Fn&& fn, Merge&& merge) {
   const int64_t blocks = (n + kMetricBlock - 1) / kMetricBlock;
   std::vector<Partial> parts(static_cast<size_t>(blocks));
+  if (omp_in_parallel()) {
+    // At most kMetricTasks tasks: libgomp runs tasks beyond 64 per thread at once on the thread
+    // that makes them, which then leaves nothing for a thread that comes free.
+#pragma omp taskloop num_tasks(std::min<int64_t>(blocks, kMetricTasks)) default(shared)
+    for (int64_t b = 0; b < blocks; ++b) parts[b] = fn(b * kMetricBlock, std::min(n, (b + 1) * kMetricBlock));
+  } else {
 #pragma omp parallel for schedule(static) if (blocks > 4)
-  for (int64_t b = 0; b < blocks; ++b) parts[b] = fn(b * kMetricBlock, std::min(n, (b + 1) * kMetricBlock));
+    for (int64_t b = 0; b < blocks; ++b) parts[b] = fn(b * kMetricBlock, std::min(n, (b + 1) * kMetricBlock));
+  }
   Partial total{};
   for (const Partial& p : parts) merge(total, p);
   return total;
@@ -146,6 +158,20 @@ MeshMetrics ComputeMetrics(const Mesh& mesh, const Topology& topo) {
     const double mean_sq = edges.sum_sq / static_cast<double>(edges.count);
     const double variance = std::max(0.0, mean_sq - m.edge_length_mean * m.edge_length_mean);
     m.edge_length_cv = std::sqrt(variance) / m.edge_length_mean;
+  }
+  return m;
+}
+
+MeshMetrics ComputeMetricsBeside(const Mesh& mesh, const Topology& topo, const std::function<void()>& beside,
+                                 int threads) {
+  MeshMetrics m;
+  const int team = std::max(2, threads > 0 ? threads : omp_get_max_threads());
+#pragma omp parallel num_threads(team)
+#pragma omp single
+  {
+#pragma omp task default(shared)
+    beside();
+    m = ComputeMetrics(mesh, topo);
   }
   return m;
 }

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <string>
 
 #include "absl/status/statusor.h"
@@ -22,6 +23,13 @@ struct MeshMetrics {
 
 // Metrics of the usable faces and edges of `topo` (built from `mesh`).
 MeshMetrics ComputeMetrics(const Mesh& mesh, const Topology& topo);
+
+// ComputeMetrics() while `beside` runs on one thread of the same team of max(2, threads)
+// threads (0 = hardware threads): the others start on the metrics' blocks, and the thread that
+// ran `beside` takes blocks too once it returns (a job encodes beside them). The same bits as
+// ComputeMetrics(): the blocks are merged in the same order.
+MeshMetrics ComputeMetricsBeside(const Mesh& mesh, const Topology& topo, const std::function<void()>& beside,
+                                 int threads = 0);
 
 struct Displacement {
   double rms = 0.0;             // RMS of |after_i - before_i| over all vertices

@@ -1,7 +1,6 @@
 #include "server/smooth_job.h"
 
 #include <cstdio>
-#include <thread>
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
@@ -134,13 +133,19 @@ void SmoothJob::Run() {
     attributes = FeatureAttributes(features);
     counts.set_detect_seconds(Seconds(t0, Clock::now()));
   }
-  // Draco encodes on one thread: the summary's "after" metrics and the displacement are
-  // computed meanwhile (they only read the mesh).
+  // Draco encodes on one thread, then the displacement follows there; the summary's "after"
+  // metrics take the job's other threads meanwhile, and that one once it is free (all only read
+  // the mesh). Scratch, this step alone: the encoder's own thread beside the metrics on all
+  // cores took 78-83 ms at 655k vertices and 231 at 2.6M, ComputeMetricsBeside 62-65 and 193.
   absl::StatusOr<std::string> encoded;
-  std::thread encoder([&] { encoded = draco->Encode(mesh, params_.output, attributes); });
-  const MeshMetrics after = ComputeMetrics(mesh, topo);
-  const absl::StatusOr<Displacement> displacement = CompareMeshes(input, mesh);
-  encoder.join();
+  absl::StatusOr<Displacement> displacement;
+  const MeshMetrics after = ComputeMetricsBeside(
+      mesh, topo,
+      [&] {
+        encoded = draco->Encode(mesh, params_.output, attributes);
+        displacement = CompareMeshes(input, mesh);
+      },
+      options_.threads_per_job);
   const Clock::time_point done = Clock::now();
   if (!encoded.ok()) {
     return fail(encoded.status(), mesh.num_vertices(), result->iterations_run, decode_seconds, smooth_seconds);
