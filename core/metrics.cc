@@ -27,14 +27,15 @@ template <typename Partial, typename Fn, typename Merge>
 Partial BlockReduce(int64_t n, Fn&& fn, Merge&& merge) {
   const int64_t blocks = (n + kMetricBlock - 1) / kMetricBlock;
   std::vector<Partial> parts(static_cast<size_t>(blocks));
+  auto block = [&](int64_t b) { parts[b] = fn(b * kMetricBlock, std::min(n, (b + 1) * kMetricBlock)); };
   if (omp_in_parallel()) {
     // At most kMetricTasks tasks: libgomp runs tasks beyond 64 per thread at once on the thread
     // that makes them, which then leaves nothing for a thread that comes free.
 #pragma omp taskloop num_tasks(std::min<int64_t>(blocks, kMetricTasks)) default(shared)
-    for (int64_t b = 0; b < blocks; ++b) parts[b] = fn(b * kMetricBlock, std::min(n, (b + 1) * kMetricBlock));
+    for (int64_t b = 0; b < blocks; ++b) block(b);
   } else {
 #pragma omp parallel for schedule(static) if (blocks > 4)
-    for (int64_t b = 0; b < blocks; ++b) parts[b] = fn(b * kMetricBlock, std::min(n, (b + 1) * kMetricBlock));
+    for (int64_t b = 0; b < blocks; ++b) block(b);
   }
   Partial total{};
   for (const Partial& p : parts) merge(total, p);
