@@ -15,6 +15,7 @@
 #include "core/flows/flow.h"
 #include "core/flows/kernel.h"
 #include "core/flows/lane_batches.h"
+#include "core/radix_sort.h"
 #include "core/metrics.h"
 
 namespace meshsmooth {
@@ -376,6 +377,9 @@ constexpr int32_t kReorderThreshold = 100000;
 // Morton keys hold 25 bits of vertex index.
 constexpr int32_t kReorderMaxVertices = 1 << 25;
 
+// Sizes Smooth() may reorder: large enough to outgrow the caches, small enough for the keys.
+bool ReorderableSize(int32_t n) { return n >= kReorderThreshold && n <= kReorderMaxVertices; }
+
 // MortonOrderPaysOff(): neighbours further than kNearIndices from their vertex count as far;
 // one in kLocalitySampleStride vertices is counted, in runs of kLocalitySampleRun consecutive
 // ones (contiguous reads: single vertices measured 1.2-1.7 ms on the dragon). Shares of far
@@ -395,7 +399,7 @@ constexpr double kRepayingFarShareIterations = 2.5;
 }  // namespace
 
 // Keys pack a 39-bit Morton code (13 bits per axis) above a 25-bit vertex index and are
-// sorted by three 13-bit LSD radix passes.
+// sorted by three 13-bit LSD radix passes (RadixSortBits, stable: ties keep index order).
 std::vector<int32_t> MortonOrder(const std::vector<Vec3>& pos, int threads) {
   const int32_t n = static_cast<int32_t>(pos.size());
   if (n > kReorderMaxVertices) {  // the keys have no room for the index: keep the order
@@ -414,38 +418,15 @@ std::vector<int32_t> MortonOrder(const std::vector<Vec3>& pos, int threads) {
     const double c = (v - origin) * scale;
     return static_cast<uint64_t>(std::clamp(std::isfinite(c) ? c : 0.0, 0.0, 8191.0));
   };
-  std::vector<uint64_t> keys(n), tmp(n);
+  std::vector<uint64_t> keys(n);
 #pragma omp parallel for schedule(static) num_threads(threads)
   for (int32_t i = 0; i < n; ++i) {
     const uint64_t code = Spread3(cell(pos[i].x, lo.x)) | Spread3(cell(pos[i].y, lo.y)) << 1 |
                           Spread3(cell(pos[i].z, lo.z)) << 2;
     keys[i] = code << 25 | static_cast<uint64_t>(i);
   }
-  // Each pass: one histogram per contiguous chunk of keys (one chunk per thread), bucket
-  // offsets taken bucket by bucket and chunk by chunk, then each chunk scatters its keys in
-  // order. The sort stays stable, so the order does not depend on the number of chunks.
-  constexpr int kBuckets = 1 << 13;
   const int chunks = threads > 1 && n >= kReorderThreshold ? threads : 1;
-  auto chunk_begin = [&](int c) { return static_cast<int32_t>(int64_t{n} * c / chunks); };
-  std::vector<uint32_t> count(static_cast<size_t>(chunks) * kBuckets);
-  for (int shift = 25; shift < 64; shift += 13) {
-#pragma omp parallel for schedule(static, 1) num_threads(chunks) if (chunks > 1)
-    for (int c = 0; c < chunks; ++c) {
-      uint32_t* h = &count[static_cast<size_t>(c) * kBuckets];
-      std::fill(h, h + kBuckets, 0u);
-      for (int32_t i = chunk_begin(c); i < chunk_begin(c + 1); ++i) ++h[(keys[i] >> shift) & 0x1fff];
-    }
-    uint32_t sum = 0;
-    for (int b = 0; b < kBuckets; ++b) {
-      for (int c = 0; c < chunks; ++c) sum += std::exchange(count[static_cast<size_t>(c) * kBuckets + b], sum);
-    }
-#pragma omp parallel for schedule(static, 1) num_threads(chunks) if (chunks > 1)
-    for (int c = 0; c < chunks; ++c) {
-      uint32_t* h = &count[static_cast<size_t>(c) * kBuckets];
-      for (int32_t i = chunk_begin(c); i < chunk_begin(c + 1); ++i) tmp[h[(keys[i] >> shift) & 0x1fff]++] = keys[i];
-    }
-    keys.swap(tmp);
-  }
+  RadixSortBits(keys, 25, 13, 3, chunks);
   std::vector<int32_t> order(n);
 #pragma omp parallel for schedule(static) num_threads(chunks)
   for (int32_t i = 0; i < n; ++i) order[i] = static_cast<int32_t>(keys[i] & 0x1ffffff);
@@ -454,7 +435,7 @@ std::vector<int32_t> MortonOrder(const std::vector<Vec3>& pos, int threads) {
 
 bool MortonOrderPaysOff(const Topology& topo, int iterations) {
   const int32_t n = topo.num_vertices();
-  if (n < kReorderThreshold || n > kReorderMaxVertices) return false;
+  if (!ReorderableSize(n)) return false;
   int64_t far = 0, sampled = 0;
   for (int32_t block = 0; block < n; block += kLocalitySampleStride * kLocalitySampleRun) {
     for (int32_t v = block; v < std::min(n, block + kLocalitySampleRun); ++v) {
@@ -482,7 +463,7 @@ absl::StatusOr<FlowResult> Smooth(Mesh& mesh, const Topology& topo, const FlowPa
   // h from the caller's order: the same value whatever the internal order.
   const double h = MeanEdgeLength(mesh, topo);
   const bool reorder = p.reorder == ReorderMode::kAlways
-                           ? n >= kReorderThreshold && n <= kReorderMaxVertices
+                           ? ReorderableSize(n)
                            : p.reorder == ReorderMode::kAuto && MortonOrderPaysOff(topo, p.iterations);
   if (!reorder) return Run(mesh, topo, p, control, h);
 
