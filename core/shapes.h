@@ -9,7 +9,9 @@
 namespace meshsmooth {
 
 // Unit icosphere: the icosahedron subdivided `level` times, vertices on the unit sphere,
-// faces outward. 10*4^level + 2 vertices. Same vertex order as ../shared/reference/paper_flows.py.
+// faces outward. 10*4^level + 2 vertices. Vertex order: the 12 icosahedron vertices, then each
+// level's edge midpoints in order of first use (faces in order, edges ab, bc, ca of each), so
+// another implementation built the same way numbers the vertices alike.
 Mesh Icosphere(int level);
 
 // Torus with two sampling rates (the paper's Fig. 4): half of it (the u in [0, pi) half

@@ -37,7 +37,7 @@ struct Topology {
   int32_t valence(int32_t v) const { return ring_offsets[v + 1] - ring_offsets[v]; }
 };
 
-// What a mesh holds, counted with the definitions of ../shared/data/meshes/SOURCES.md:
+// What a mesh holds, counted with the definitions the real test meshes' reference figures use:
 // edges are undirected vertex pairs of usable faces; a boundary edge has one face, a
 // non-manifold edge more than two; a non-manifold vertex has incident faces forming more than
 // one fan across manifold edges; components are vertex-connected groups of faces; boundary

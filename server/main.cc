@@ -62,7 +62,7 @@ int main(int argc, char** argv) {
   }
 
   // Block the shutdown signals before gRPC starts its threads, then wait for them on one
-  // thread of our own (RECIPES.md #5).
+  // thread of our own: a handler installed after BuildAndStart is ignored.
   sigset_t signals;
   sigemptyset(&signals);
   sigaddset(&signals, SIGINT);

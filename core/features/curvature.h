@@ -1,7 +1,7 @@
 // Per-vertex normal, principal curvatures and principal directions after Taubin
 // ("Estimating the tensor of curvature of a surface from a polyhedral approximation", ICCV
-// 1995), the estimator the paper uses before ridge and ravine detection (Section 5 of
-// ../shared/paper/polyhedral-surface-smoothing.md).
+// 1995), the estimator the paper uses before ridge and ravine detection (Section 5; see
+// docs/paper.md, "Ridges and ravines").
 //
 // It uses Taubin's directional curvatures kappa_j and weights w_j, but fits the tangent-plane
 // tensor to them by weighted least squares instead of Taubin's trace relation

@@ -1,5 +1,5 @@
-// Ridge and ravine vertices, Section 5 of ../shared/paper/polyhedral-surface-smoothing.md
-// (see also ../shared/paper/NOTES.md, "Ridges and ravines"): a ridge is where the maximal
+// Ridge and ravine vertices, Section 5 of the paper (docs/paper.md, "Ridges and ravines", says
+// what the code chose where the paper is silent): a ridge is where the maximal
 // principal curvature attains a positive maximum along its curvature line, a ravine where the
 // minimal principal curvature attains a negative minimum along its curvature line. The paper
 // smooths the mesh first (e.g. Smooth() with flow "median") and then detects.

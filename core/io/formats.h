@@ -23,7 +23,7 @@ absl::StatusOr<std::string> WritePly(const Mesh& mesh, bool binary);
 std::string WriteOff(const Mesh& mesh);
 std::string WriteStl(const Mesh& mesh);
 
-// Debian's Abseil has its own string_view (RECIPES.md #2): StrCat needs this bridge.
+// Debian's Abseil is built with its own string_view, not std::string_view: StrCat needs this bridge.
 inline absl::string_view Sv(std::string_view s) { return {s.data(), s.size()}; }
 
 // Splits text into lines (LF or CRLF) and whitespace-separated tokens.

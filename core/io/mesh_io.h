@@ -1,7 +1,7 @@
 // Mesh files: OBJ, PLY (ASCII and binary), OFF, STL and Draco (.drc), chosen by extension.
 //
 // Why meshsmooth parses OBJ/PLY/OFF/STL itself instead of calling OpenMesh's readers: those
-// readers drop degenerate faces and split vertices at non-manifold edges (RECIPES.md #6), and
+// readers drop degenerate faces and split vertices at non-manifold edges, and
 // the mesh that is validated, smoothed and returned must be the one the user sent, index for
 // index. Here every vertex and every face of the file is kept in file order; polygons are
 // fanned into triangles (counted in ReadInfo). OpenMesh's readers serve as the cross-check in
