@@ -161,8 +161,8 @@ OurTiming TimeOurs(const Mesh& mesh, const Topology& topo, FlowParams p, int ite
     return ms;
   };
   // One untimed call first: otherwise the first run's T(K) pays for memory the allocator had
-  // not yet taken from the system, and T(K) - T(1) overstates an iteration (2.6M vertices
-  // after the 655k ones: laplacian U0 measured 39 ms per iteration, 23 ms when run alone).
+  // not yet taken from the system, and T(K) - T(1) overstates an iteration (most for a large
+  // mesh run after a smaller one; docs/performance.md).
   if (once(1) < 0) return {};
   std::vector<double> per, setup;
   for (int r = 0; r < runs; ++r) {

@@ -91,9 +91,8 @@ absl::StatusOr<Mesh> PointMesh(const draco::Mesh& dm) {
   Mesh mesh;
   const uint32_t n = dm.num_points();
   mesh.positions.resize(n);
-  // Plain float32 xyz (what a lossless encoder writes) is read directly; ConvertValue's
-  // per-value type switch gives the same doubles (DecodeDraco of 2.6M points 95.0 / 98.0 ->
-  // 79.8 / 79.6 ms, of 655k 36.0 -> 29.8).
+  // Plain float32 xyz (what a lossless encoder writes) is read directly, one copy per point;
+  // ConvertValue's per-value type switch gives the same doubles, slower (docs/performance.md).
   const bool float_xyz = pos->data_type() == draco::DT_FLOAT32 && pos->num_components() == 3;
   for (uint32_t i = 0; i < n; ++i) {
     const draco::AttributeValueIndex avi = pos->mapped_index(draco::PointIndex(i));

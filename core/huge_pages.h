@@ -1,13 +1,13 @@
 // Large buffers backed by transparent huge pages, for the whole process.
 //
-// On the virtual machines meshsmooth runs on, a first touch of a 4 KiB page costs ~10 us (a
-// fresh 16 MB vector of 655k positions: ~40 ms before any work), and a job allocates tens of
+// On the virtual machines meshsmooth runs on, a first touch of a 4 KiB page is slow enough that
+// a fresh buffer costs more to fault in than the work done in it, and a job allocates tens of
 // such buffers: Draco's decode, the welded mesh, the topology, the flow's double buffer, the
 // encoded result. Where the kernel gives transparent huge pages on request
 // (/sys/kernel/mm/transparent_hugepage/enabled is "madvise"), glibc's malloc asks for them when
-// the tunable glibc.malloc.hugetlb=1 is set, and the same faults cost ~50x less
-// (docs/performance.md); with glibc.malloc.arena_max=1 the worker threads allocate from the
-// main arena too, which measured 1.5-2x faster for a job's steps than their own arenas.
+// the tunable glibc.malloc.hugetlb=1 is set, and the same memory costs a small fraction of
+// that; with glibc.malloc.arena_max=1 the worker threads allocate from the main arena too, where
+// a job's steps run faster than in their own arenas (figures in docs/performance.md).
 // Tunables are read when a program starts, so the binaries call this first thing in main().
 #pragma once
 

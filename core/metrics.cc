@@ -48,8 +48,8 @@ struct EdgeLengthSums {
 };
 
 // Rings are contiguous but the positions they name are scattered in a mesh's own order: the
-// edge pass prefetches the position of the ring entry this far ahead. MeanEdgeLength of the
-// Draco-decoded 2.6M icosphere, 2 threads: 29-31 -> 20-21 ms (655k: 4.1-5.5 -> 4.1-4.2).
+// edge pass prefetches the position of the ring entry this far ahead (it pays on meshes too
+// large for the caches; docs/performance.md).
 constexpr int32_t kEdgePrefetchEntries = 64;
 
 // The lengths of the edges (a < b) of the vertices' rings, summed in fixed blocks of vertices:
@@ -123,8 +123,7 @@ MeshMetrics ComputeMetrics(const Mesh& mesh, const Topology& topo) {
           const double lab = SquaredNorm(ab), lbc = SquaredNorm(bc), lca = SquaredNorm(ca);
           const double d = lbc <= lab && lbc <= lca ? dots[0] : (lca <= lab ? dots[1] : dots[2]);
           // The smallest angle is at most 60 degrees, so d > 0 but for degenerate corners, where
-          // atan(cross / d) is atan2's value (to an ulp) for less time: ComputeMetrics of a
-          // 655k-vertex mesh, 2 threads, 38.1/38.5 -> 35.8/35.9 ms. atan2 keeps the degenerate
+          // atan(cross / d) is atan2's value (to an ulp) and cheaper. atan2 keeps the degenerate
           // cases (d = 0 with cross = 0 gives 0, not NaN).
           const double face_min = d > 0.0 ? std::atan(cross / d) : std::atan2(cross, d);
           q.min_angle = std::min(q.min_angle, face_min);
@@ -151,8 +150,8 @@ MeshMetrics ComputeMetrics(const Mesh& mesh, const Topology& topo) {
   }
 
   // One pass over the edges: the variance as E[l^2] - E[l]^2 (edge lengths of one mesh have a
-  // CV well above the 1e-8 where that would lose digits). A second pass for the deviations
-  // from the mean took ~6 ms of a 655k-vertex mesh's ~40.
+  // CV well above the 1e-8 where that would lose digits), without a second pass over the edges
+  // for the deviations from the mean.
   const EdgeLengthSums edges = SumEdgeLengths(mesh, topo);
   m.edge_length_mean = MeanOf(edges);
   if (edges.count > 0 && m.edge_length_mean > 0.0) {

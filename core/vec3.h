@@ -37,8 +37,8 @@ struct BoundingBox {
   Vec3 lo{HUGE_VAL, HUGE_VAL, HUGE_VAL};
   Vec3 hi{-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
 
-  // Comparisons rather than std::fmin/fmax, which glibc does not inline (a serial bounding box
-  // of 655k vertices took 6 ms). A NaN coordinate is skipped, as fmin/fmax skip it.
+  // Comparisons rather than std::fmin/fmax, which glibc does not inline (a call per coordinate
+  // of every vertex). A NaN coordinate is skipped, as fmin/fmax skip it.
   void Add(const Vec3& p) {
     lo = {p.x < lo.x ? p.x : lo.x, p.y < lo.y ? p.y : lo.y, p.z < lo.z ? p.z : lo.z};
     hi = {hi.x < p.x ? p.x : hi.x, hi.y < p.y ? p.y : hi.y, hi.z < p.z ? p.z : hi.z};

@@ -135,8 +135,8 @@ void SmoothJob::Run() {
   }
   // Draco encodes on one thread, then the displacement follows there; the summary's "after"
   // metrics take the job's other threads meanwhile, and that one once it is free (all only read
-  // the mesh). Scratch, this step alone: the encoder's own thread beside the metrics on all
-  // cores took 78-83 ms at 655k vertices and 231 at 2.6M, ComputeMetricsBeside 62-65 and 193.
+  // the mesh). The metrics on every core beside the encoder's thread would put one thread more
+  // than there are cores (docs/performance.md has the figures).
   absl::StatusOr<std::string> encoded;
   absl::StatusOr<Displacement> displacement;
   const MeshMetrics after = ComputeMetricsBeside(
