@@ -200,16 +200,6 @@ Mesh DracoMesh::TakeWelded() { return std::exchange(impl_->welded, Mesh{}); }
 int64_t DracoMesh::num_points() const { return impl_->draco->num_points(); }
 int64_t DracoMesh::seam_points() const { return impl_->seam_points; }
 
-std::vector<std::string> DracoMesh::attribute_names() const {
-  std::vector<std::string> names;
-  for (int32_t i = 0; i < impl_->draco->num_attributes(); ++i) {
-    const draco::PointAttribute* a = impl_->draco->attribute(i);
-    if (a->attribute_type() == draco::GeometryAttribute::POSITION) continue;
-    names.push_back(a->TypeToString(a->attribute_type()));
-  }
-  return names;
-}
-
 absl::StatusOr<std::vector<float>> DecodeDracoAttribute(std::string_view bytes, std::string_view name) {
   absl::StatusOr<std::unique_ptr<draco::Mesh>> dm = DecodeToDraco(bytes);
   if (!dm.ok()) return dm.status();

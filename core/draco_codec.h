@@ -71,8 +71,6 @@ class DracoMesh {
   int64_t num_points() const;
   // Points that share their position with an earlier point (welded into it).
   int64_t seam_points() const;
-  // Names of the attributes besides positions, e.g. "NORMAL", "TEX_COORD", "COLOR", "GENERIC".
-  std::vector<std::string> attribute_names() const;
 
   // Sets the positions from `smoothed` (same vertex count as welded() had), recomputes normals
   // from them (area-weighted over each point's faces, so hard edges split at seams stay hard),

@@ -323,8 +323,6 @@ grpc::ServerUnaryReactor* MeshSmootherService::ListFlows(grpc::CallbackServerCon
   return reactor;
 }
 
-void MeshSmootherService::StartDraining() { draining_.store(true); }
-
 void MeshSmootherService::DrainAndStop(double grace_seconds) {
   draining_.store(true);
   const auto deadline = Clock::now() + std::chrono::duration<double>(grace_seconds);

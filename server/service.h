@@ -27,11 +27,9 @@ class MeshSmootherService final : public v1::MeshSmoother::CallbackService {
 
   // Shutdown, in order: refuse new jobs, wait up to `grace` for running ones, then end the rest
   // with UNAVAILABLE and stop the workers.
-  void StartDraining();
   void DrainAndStop(double grace_seconds);
 
-  // Calls open now (for tests and the shutdown drain).
-  int active_calls() const { return active_.load(); }
+  // Jobs waiting for a worker now (for tests).
   int queued_jobs() { return pool_.queued(); }
 
  private:

@@ -27,7 +27,6 @@ class WorkerPool {
   // and joins the workers after their current task.
   void Stop();
 
-  int workers() const { return static_cast<int>(threads_.size()); }
   // Tasks waiting for a worker now.
   int queued();
 
