@@ -36,6 +36,7 @@
 #include "core/draco_codec.h"
 #include "core/flows/flow.h"
 #include "core/huge_pages.h"
+#include "core/io/file_bytes.h"
 #include "core/io/mesh_io.h"
 #include "core/metrics.h"
 #include "core/shapes.h"
@@ -239,13 +240,9 @@ double StatusKb(const char* key) {
 }
 
 int PeakChild(const std::string& draco_path) {
-  std::string draco;
-  {
-    std::ifstream in(draco_path, std::ios::binary);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    draco = ss.str();
-  }
+  absl::StatusOr<std::string> bytes = ReadFileBytes(draco_path);
+  if (!bytes.ok()) return 1;
+  std::string draco = std::move(*bytes);
   { std::ofstream("/proc/self/clear_refs") << "5"; }
   const double base = StatusKb("VmRSS:");
   std::string upload = draco;  // the job's own copy of the upload
@@ -270,10 +267,7 @@ double PeakBytesPerVertex(const Mesh& mesh, const std::string& self) {
   Mesh fm = mesh;
   for (Vec3& p : fm.positions) p = RoundToFloat(p);
   const std::string path = "/tmp/meshsmooth_bench_peak.drc";
-  {
-    const std::string bytes = *EncodeDraco(fm);
-    std::ofstream(path, std::ios::binary).write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-  }
+  if (!WriteFileBytes(path, *EncodeDraco(fm)).ok()) return -1.0;
   double value = -1.0;
   if (std::FILE* f = popen((self + " --peak-child " + path).c_str(), "r")) {
     if (std::fscanf(f, "%lf", &value) != 1) value = -1.0;

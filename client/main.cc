@@ -21,7 +21,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <iostream>
 #include <map>
 #include <sstream>
@@ -29,11 +28,13 @@
 #include <thread>
 
 #include "CLI/CLI.hpp"
+#include "absl/strings/str_cat.h"
 #include "client/inputs.h"
 #include "client/smooth_client.h"
 #include "core/draco_codec.h"
 #include "core/features/ridges.h"
 #include "core/huge_pages.h"
+#include "core/io/file_bytes.h"
 #include "core/io/mesh_io.h"
 #include "core/metrics.h"
 #include "core/render/png.h"
@@ -76,14 +77,6 @@ struct SmoothOptions {
   double ridge_threshold = 0.0;
 };
 
-std::string ReadFile(const std::string& path, bool* ok) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  *ok = static_cast<bool>(in);
-  return ss.str();
-}
-
 // The channel to a server, or to an in-process one started here (kept alive in `embedded`).
 absl::StatusOr<std::shared_ptr<grpc::Channel>> Connect(const ConnectionOptions& c,
                                                        std::unique_ptr<server::Server>& embedded) {
@@ -98,10 +91,10 @@ absl::StatusOr<std::shared_ptr<grpc::Channel>> Connect(const ConnectionOptions& 
   }
   std::shared_ptr<grpc::ChannelCredentials> creds = grpc::InsecureChannelCredentials();
   if (!c.tls_ca.empty()) {
-    bool ok = false;
+    absl::StatusOr<std::string> ca = ReadFileBytes(c.tls_ca);
+    if (!ca.ok()) return absl::InvalidArgumentError(absl::StrCat("the CA file: ", ca.status().message()));
     grpc::SslCredentialsOptions ssl;
-    ssl.pem_root_certs = ReadFile(c.tls_ca, &ok);
-    if (!ok) return absl::InvalidArgumentError("cannot read the CA file '" + c.tls_ca + "'");
+    ssl.pem_root_certs = std::move(*ca);
     creds = grpc::SslCredentials(ssl);
   }
   return grpc::CreateChannel(c.server, creds);
@@ -111,10 +104,10 @@ absl::Status PrepareContext(const ConnectionOptions& c, grpc::ClientContext& ctx
   ctx.set_deadline(std::chrono::system_clock::now() +
                    std::chrono::milliseconds(static_cast<int64_t>(c.timeout_seconds * 1000)));
   if (!c.token_file.empty()) {
-    bool ok = false;
-    std::string token = ReadFile(c.token_file, &ok);
+    absl::StatusOr<std::string> bytes = ReadFileBytes(c.token_file);
+    std::string token = bytes.ok() ? *bytes : std::string();
     while (!token.empty() && std::isspace(static_cast<unsigned char>(token.back()))) token.pop_back();
-    if (!ok || token.empty()) return absl::InvalidArgumentError("cannot read a token from '" + c.token_file + "'");
+    if (token.empty()) return absl::InvalidArgumentError("cannot read a token from '" + c.token_file + "'");
     ctx.AddMetadata("authorization", "Bearer " + token);
   }
   return absl::OkStatus();
@@ -260,9 +253,9 @@ int RunSmooth(const SmoothOptions& o, const ConnectionOptions& c) {
   std::vector<Rgb> input_colors;  // carried to PLY output (vertex i of the result is vertex i)
   const bool drc_input = FormatFromPath(o.input).ok() && *FormatFromPath(o.input) == MeshFormat::kDraco;
   if (drc_input) {
-    bool ok = false;
-    draco = ReadFile(o.input, &ok);
-    if (!ok) return err("", absl::NotFoundError("cannot open '" + o.input + "'"));
+    absl::StatusOr<std::string> bytes = ReadFileBytes(o.input);
+    if (!bytes.ok()) return err("", bytes.status());
+    draco = std::move(*bytes);
   } else {
     absl::StatusOr<Mesh> mesh = LoadInput(o.input);
     if (!mesh.ok()) return err("", mesh.status());

@@ -3,9 +3,9 @@
 #include <unistd.h>
 
 #include <cstdlib>
-#include <fstream>
-#include <iterator>
 #include <string>
+
+#include "core/io/file_bytes.h"
 
 namespace meshsmooth {
 
@@ -17,10 +17,9 @@ void UseHugePagesForLargeBuffers(char** argv) {
   const char* tunables = std::getenv("GLIBC_TUNABLES");
   // Already set (by an earlier pass through here, or by the user): never exec twice.
   if (tunables != nullptr && std::string(tunables).find("glibc.malloc.hugetlb") != std::string::npos) return;
-  std::ifstream thp("/sys/kernel/mm/transparent_hugepage/enabled");
-  const std::string mode((std::istreambuf_iterator<char>(thp)), std::istreambuf_iterator<char>());
   // "always" needs no request and "never" grants none.
-  if (mode.find("[madvise]") == std::string::npos) return;
+  absl::StatusOr<std::string> mode = ReadFileBytes("/sys/kernel/mm/transparent_hugepage/enabled");
+  if (!mode.ok() || mode->find("[madvise]") == std::string::npos) return;
   std::string value = tunables != nullptr && *tunables != '\0' ? std::string(tunables) + ":" : std::string();
   // One arena: glibc gives each allocating thread an arena of its own, and a job runs on a
   // worker thread, where its decode, topology and encode ran slower than the same steps on the

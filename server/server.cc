@@ -1,25 +1,13 @@
 #include "server/server.h"
 
 #include <chrono>
-#include <fstream>
-#include <sstream>
 
 #include "absl/strings/str_cat.h"
+#include "core/io/file_bytes.h"
 #include "grpcpp/ext/proto_server_reflection_plugin.h"
 #include "grpcpp/health_check_service_interface.h"
 
 namespace meshsmooth::server {
-namespace {
-
-absl::StatusOr<std::string> ReadAll(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return absl::FailedPreconditionError(absl::StrCat("cannot read '", path, "'"));
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
-}  // namespace
 
 absl::StatusOr<std::unique_ptr<Server>> Server::Start(const ServerOptions& options, bool listen) {
   std::unique_ptr<Server> s(new Server());
@@ -29,9 +17,10 @@ absl::StatusOr<std::unique_ptr<Server>> Server::Start(const ServerOptions& optio
     if (options.tls_cert_file.empty() || options.tls_key_file.empty()) {
       return absl::FailedPreconditionError("TLS needs both --tls-cert and --tls-key");
     }
-    absl::StatusOr<std::string> cert = ReadAll(options.tls_cert_file), key = ReadAll(options.tls_key_file);
-    if (!cert.ok()) return cert.status();
-    if (!key.ok()) return key.status();
+    absl::StatusOr<std::string> cert = ReadFileBytes(options.tls_cert_file), key = ReadFileBytes(options.tls_key_file);
+    // FailedPrecondition whatever errno said: the server cannot start as configured.
+    if (!cert.ok()) return absl::FailedPreconditionError(cert.status().message());
+    if (!key.ok()) return absl::FailedPreconditionError(key.status().message());
     grpc::SslServerCredentialsOptions ssl;
     ssl.pem_key_cert_pairs.push_back({*key, *cert});
     creds = grpc::SslServerCredentials(ssl);

@@ -2,8 +2,6 @@
 #pragma once
 
 #include <filesystem>
-#include <fstream>
-#include <sstream>
 #include <string>
 
 #include "gtest/gtest.h"
@@ -12,14 +10,6 @@ namespace meshsmooth::testing {
 
 inline std::filesystem::path SharedData(const std::string& sub) {
   return std::filesystem::path(MESHSMOOTH_SHARED_DIR) / "data" / sub;
-}
-
-// A whole file as bytes (empty when it cannot be read).
-inline std::string ReadFileBytes(const std::filesystem::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
 }
 
 }  // namespace meshsmooth::testing

@@ -2,10 +2,9 @@
 
 #include <algorithm>
 #include <cctype>
-#include <fstream>
-#include <sstream>
 
 #include "absl/strings/str_cat.h"
+#include "core/io/file_bytes.h"
 #include "core/io/formats.h"
 
 namespace meshsmooth {
@@ -40,11 +39,9 @@ absl::StatusOr<Mesh> ParseMesh(std::string_view data, MeshFormat format, ReadInf
 absl::StatusOr<Mesh> ReadMesh(const std::string& path, ReadInfo* info) {
   absl::StatusOr<MeshFormat> format = FormatFromPath(path);
   if (!format.ok()) return format.status();
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return absl::NotFoundError(absl::StrCat("cannot open '", path, "'"));
-  std::ostringstream buf;
-  buf << in.rdbuf();
-  absl::StatusOr<Mesh> mesh = ParseMesh(buf.str(), *format, info);
+  absl::StatusOr<std::string> bytes = ReadFileBytes(path);
+  if (!bytes.ok()) return bytes.status();
+  absl::StatusOr<Mesh> mesh = ParseMesh(*bytes, *format, info);
   if (!mesh.ok()) {
     return absl::Status(mesh.status().code(), absl::StrCat(path, ": ", mesh.status().message()));
   }
@@ -68,15 +65,6 @@ absl::Status WriteMesh(const std::string& path, const Mesh& mesh, const WriteOpt
   absl::StatusOr<std::string> bytes = SerializeMesh(mesh, *format, options);
   if (!bytes.ok()) return bytes.status();
   return WriteFileBytes(path, *bytes);
-}
-
-absl::Status WriteFileBytes(const std::string& path, std::string_view bytes) {
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  if (!out) return absl::PermissionDeniedError(absl::StrCat("cannot write '", path, "'"));
-  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-  out.close();
-  if (!out) return absl::DataLossError(absl::StrCat("writing '", path, "' failed"));
-  return absl::OkStatus();
 }
 
 }  // namespace meshsmooth

@@ -43,7 +43,7 @@ struct ReadInfo {
 // malformed data; never crashes on arbitrary bytes.
 absl::StatusOr<Mesh> ParseMesh(std::string_view data, MeshFormat format, ReadInfo* info = nullptr);
 
-// Reads a file; NotFound when it cannot be opened.
+// Reads a file; ReadFileBytes' errors (NotFound for a missing file) when it cannot be read.
 absl::StatusOr<Mesh> ReadMesh(const std::string& path, ReadInfo* info = nullptr);
 
 struct WriteOptions {
@@ -55,10 +55,6 @@ struct WriteOptions {
 // one per vertex.
 absl::StatusOr<std::string> SerializeMesh(const Mesh& mesh, MeshFormat format,
                                           const WriteOptions& options = {});
-
-// Writes `bytes` to `path` (created or truncated): PermissionDenied when it cannot be opened,
-// DataLoss when writing fails.
-absl::Status WriteFileBytes(const std::string& path, std::string_view bytes);
 
 // Writes a file in the format its extension names.
 absl::Status WriteMesh(const std::string& path, const Mesh& mesh, const WriteOptions& options = {});

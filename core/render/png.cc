@@ -3,7 +3,7 @@
 #include <png.h>
 
 #include "absl/strings/str_cat.h"
-#include "core/io/mesh_io.h"
+#include "core/io/file_bytes.h"
 
 namespace meshsmooth {
 

@@ -1,9 +1,8 @@
 #include "core/draco_codec.h"
 
 #include <cmath>
-#include <fstream>
-#include <sstream>
 
+#include "core/io/file_bytes.h"
 #include "core/shapes.h"
 #include "draco/compression/encode.h"
 #include "draco/mesh/mesh.h"
@@ -193,7 +192,9 @@ TEST(DracoCodecTest, DecodesDracosOwnTestFiles) {
   };
   for (const Expect& e : meshes) {
     SCOPED_TRACE(e.file);
-    absl::StatusOr<Mesh> m = DecodeDraco(testing::ReadFileBytes(testing::SharedData("draco") / e.file));
+    absl::StatusOr<std::string> bytes = ReadFileBytes((testing::SharedData("draco") / e.file).string());
+    ASSERT_TRUE(bytes.ok()) << bytes.status();
+    absl::StatusOr<Mesh> m = DecodeDraco(*bytes);
     ASSERT_TRUE(m.ok()) << m.status();
     EXPECT_GE(m->positions.size(), e.vertices_min);
     EXPECT_LE(m->positions.size(), e.vertices_max);
@@ -203,7 +204,9 @@ TEST(DracoCodecTest, DecodesDracosOwnTestFiles) {
     EXPECT_EQ(r.non_finite_vertices, 0);
   }
   for (const char* pc : {"cube_pc.drc", "pc_color.drc", "pc_kd_color.drc", "point_cloud_no_qp.drc"}) {
-    const absl::Status s = DecodeDraco(testing::ReadFileBytes(testing::SharedData("draco") / pc)).status();
+    absl::StatusOr<std::string> bytes = ReadFileBytes((testing::SharedData("draco") / pc).string());
+    ASSERT_TRUE(bytes.ok()) << bytes.status();
+    const absl::Status s = DecodeDraco(*bytes).status();
     EXPECT_EQ(s.code(), absl::StatusCode::kInvalidArgument) << pc;
     EXPECT_NE(s.message().find("point cloud"), std::string::npos) << pc << ": " << s;
   }

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <numbers>
 
+#include "core/io/file_bytes.h"
 #include "core/io/mesh_io.h"
 #include "core/render/png.h"
 #include "core/shapes.h"
@@ -368,7 +369,9 @@ TEST(RenderTest, PngEncodesAndDecodesBack) {
 
   const fs::path path = fs::path(::testing::TempDir()) / "render.png";
   ASSERT_TRUE(WritePng(path.string(), img).ok());
-  EXPECT_EQ(testing::ReadFileBytes(path), *bytes);
+  absl::StatusOr<std::string> written = ReadFileBytes(path.string());
+  ASSERT_TRUE(written.ok()) << written.status();
+  EXPECT_EQ(*written, *bytes);
   fs::remove(path);
   EXPECT_EQ(WritePng("/nonexistent/dir/x.png", img).code(), absl::StatusCode::kPermissionDenied);
 

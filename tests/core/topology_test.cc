@@ -1,13 +1,12 @@
 #include "core/topology.h"
 
 #include <cmath>
-#include <fstream>
 #include <limits>
 #include <map>
 #include <regex>
 #include <set>
-#include <sstream>
 
+#include "core/io/file_bytes.h"
 #include "core/io/mesh_io.h"
 #include "core/shapes.h"
 #include "gtest/gtest.h"
@@ -249,10 +248,9 @@ int64_t StatsField(const std::string& json, const std::string& file, const std::
 TEST(TopologyTest, SharedMeshesMatchStatsJson) {
   MESHSMOOTH_REQUIRE_SHARED("meshes");
   const auto dir = testing::SharedData("meshes");
-  std::ifstream in(dir / "stats.json");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  const std::string json = ss.str();
+  absl::StatusOr<std::string> stats = ReadFileBytes((dir / "stats.json").string());
+  ASSERT_TRUE(stats.ok()) << stats.status();
+  const std::string& json = *stats;
   int checked = 0;
   for (const char* file : {"stanford-bunny.ply", "bunny-small.obj", "max-planck.obj", "fandisk.obj",
                            "camelhead.obj", "turbine.obj", "beetle.obj", "nefertiti.obj",

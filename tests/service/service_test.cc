@@ -11,6 +11,7 @@
 
 #include "client/smooth_client.h"
 #include "core/draco_codec.h"
+#include "core/io/file_bytes.h"
 #include "core/features/ridges.h"
 #include "draco/compression/decode.h"
 #include "draco/compression/encode.h"
@@ -366,7 +367,9 @@ TEST(ServiceTest, DracosOwnFilesKeepAttributesAndSeams) {
     if (entry.path().extension() != ".drc") continue;
     const std::string name = entry.path().filename().string();
     SCOPED_TRACE(name);
-    const std::string bytes = ReadFileBytes(entry.path());
+    absl::StatusOr<std::string> read = ReadFileBytes(entry.path().string());
+    ASSERT_TRUE(read.ok()) << read.status();
+    const std::string& bytes = *read;
     draco::DecoderBuffer buf;
     buf.Init(bytes.data(), bytes.size());
     const bool is_cloud = draco::Decoder::GetEncodedGeometryType(&buf).value() == draco::POINT_CLOUD;
@@ -742,7 +745,9 @@ TEST(ServiceTlsTest, TlsServerAcceptsTlsClientsOnly) {
   ASSERT_TRUE(server);
   const std::string target = "localhost:" + std::to_string(server->port());
   grpc::SslCredentialsOptions ssl;
-  ssl.pem_root_certs = ReadFileBytes(cert);
+  absl::StatusOr<std::string> pem = ReadFileBytes(cert);
+  ASSERT_TRUE(pem.ok()) << pem.status();
+  ssl.pem_root_certs = *pem;
   auto tls = grpc::CreateChannel(target, grpc::SslCredentials(ssl));
   absl::StatusOr<SmoothOutcome> out = Call(tls, Spec("median", 2), *EncodeDraco(Icosphere(2)));
   EXPECT_TRUE(out.ok()) << out.status();
