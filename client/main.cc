@@ -12,9 +12,6 @@
 //
 // Exit codes: 0 success; 1 the job or the input failed; 2 bad command line; 3 the server
 // could not be reached; 130 interrupted (Ctrl-C cancels the job on the server).
-#include <google/protobuf/util/json_util.h>
-#include <pthread.h>
-#include <signal.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -30,6 +27,7 @@
 #include "CLI/CLI.hpp"
 #include "absl/strings/str_cat.h"
 #include "client/inputs.h"
+#include "client/json.h"
 #include "client/smooth_client.h"
 #include "core/draco_codec.h"
 #include "core/features/ridges.h"
@@ -37,6 +35,7 @@
 #include "core/io/file_bytes.h"
 #include "core/io/mesh_io.h"
 #include "core/metrics.h"
+#include "core/shutdown_signals.h"
 #include "core/render/png.h"
 #include "core/render/render.h"
 #include "core/topology.h"
@@ -104,11 +103,9 @@ absl::Status PrepareContext(const ConnectionOptions& c, grpc::ClientContext& ctx
   ctx.set_deadline(std::chrono::system_clock::now() +
                    std::chrono::milliseconds(static_cast<int64_t>(c.timeout_seconds * 1000)));
   if (!c.token_file.empty()) {
-    absl::StatusOr<std::string> bytes = ReadFileBytes(c.token_file);
-    std::string token = bytes.ok() ? *bytes : std::string();
-    while (!token.empty() && std::isspace(static_cast<unsigned char>(token.back()))) token.pop_back();
-    if (token.empty()) return absl::InvalidArgumentError("cannot read a token from '" + c.token_file + "'");
-    ctx.AddMetadata("authorization", "Bearer " + token);
+    absl::StatusOr<std::string> token = ReadTokenFile(c.token_file);
+    if (!token.ok()) return token.status();
+    ctx.AddMetadata("authorization", "Bearer " + *token);
   }
   return absl::OkStatus();
 }
@@ -124,13 +121,8 @@ class InterruptWatcher {
  public:
   explicit InterruptWatcher(grpc::ClientContext* ctx) : ctx_(ctx) {
     thread_ = std::thread([this] {
-      sigset_t set;
-      sigemptyset(&set);
-      sigaddset(&set, SIGINT);
-      sigaddset(&set, SIGTERM);
-      const timespec tick{0, 100'000'000};
       while (!stop_.load()) {
-        if (sigtimedwait(&set, nullptr, &tick) > 0) {
+        if (WaitForShutdownSignal(std::chrono::milliseconds(100)) != 0) {
           interrupted_.store(true);
           ctx_->TryCancel();
           return;
@@ -308,12 +300,7 @@ int RunSmooth(const SmoothOptions& o, const ConnectionOptions& c) {
     if (absl::Status s = WriteMesh(o.output, *result); !s.ok()) return err("", s);
   }
   if (o.json) {
-    std::string json;
-    google::protobuf::util::JsonPrintOptions jo;
-    jo.add_whitespace = true;
-    jo.preserve_proto_field_names = true;
-    (void)google::protobuf::util::MessageToJsonString(outcome->summary, &json, jo);
-    std::printf("%s", json.c_str());
+    std::printf("%s", ToJson(outcome->summary).c_str());
   } else if (!o.quiet) {
     PrintSummary(outcome->summary);
     std::printf("wrote %s\n", o.output.c_str());
@@ -341,12 +328,7 @@ int RunFlows(const ConnectionOptions& c, bool json) {
     return ExitCodeFor(FromGrpc(s));
   }
   if (json) {
-    std::string out;
-    google::protobuf::util::JsonPrintOptions jo;
-    jo.add_whitespace = true;
-    jo.preserve_proto_field_names = true;
-    (void)google::protobuf::util::MessageToJsonString(flows, &out, jo);
-    std::printf("%s", out.c_str());
+    std::printf("%s", ToJson(flows).c_str());
     return 0;
   }
   auto range = [](const v1::ParameterInfo& p) {
@@ -474,11 +456,7 @@ int main(int argc, char** argv) {
   meshsmooth::UseHugePagesForLargeBuffers(argv);  // first: may re-execute the program
   using namespace meshsmooth::cli;
   // Before any thread exists: Ctrl-C is handled by InterruptWatcher, not by a handler.
-  sigset_t set;
-  sigemptyset(&set);
-  sigaddset(&set, SIGINT);
-  sigaddset(&set, SIGTERM);
-  pthread_sigmask(SIG_BLOCK, &set, nullptr);
+  meshsmooth::BlockShutdownSignals();
 
   CLI::App app{"meshsmooth: smooth noisy triangle meshes while making them more regular"};
   app.require_subcommand(1);

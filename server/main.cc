@@ -3,17 +3,15 @@
 // Prints "meshsmoothd listening on HOST:PORT" on stdout once it serves (with --listen
 // HOST:0 the port is the one the system picked). SIGINT/SIGTERM shut it down gracefully.
 // Exit codes: 0 after a clean shutdown; 1 when it cannot start; 2 for a bad command line.
-#include <pthread.h>
 #include <signal.h>
 
 #include <cstdio>
-#include <fstream>
 #include <iostream>
-#include <sstream>
-#include <thread>
 
 #include "CLI/CLI.hpp"
 #include "core/huge_pages.h"
+#include "core/io/file_bytes.h"
+#include "core/shutdown_signals.h"
 #include "server/server.h"
 
 int main(int argc, char** argv) {
@@ -48,26 +46,17 @@ int main(int argc, char** argv) {
     return app.exit(e) == 0 ? 0 : 2;
   }
   if (!token_file.empty()) {
-    std::ifstream in(token_file);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    std::string token = ss.str();
-    while (!token.empty() && std::isspace(static_cast<unsigned char>(token.back()))) token.pop_back();
-    while (!token.empty() && std::isspace(static_cast<unsigned char>(token.front()))) token.erase(0, 1);
-    if (!in || token.empty()) {
-      std::cerr << "meshsmoothd: cannot read a token from '" << token_file << "'\n";
+    absl::StatusOr<std::string> token = meshsmooth::ReadTokenFile(token_file);
+    if (!token.ok()) {
+      std::cerr << "meshsmoothd: " << token.status().message() << "\n";
       return 1;
     }
-    o.auth_token = token;
+    o.auth_token = *std::move(token);
   }
 
   // Block the shutdown signals before gRPC starts its threads, then wait for them on one
   // thread of our own: a handler installed after BuildAndStart is ignored.
-  sigset_t signals;
-  sigemptyset(&signals);
-  sigaddset(&signals, SIGINT);
-  sigaddset(&signals, SIGTERM);
-  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+  meshsmooth::BlockShutdownSignals();
 
   auto server = meshsmooth::server::Server::Start(o);
   if (!server.ok()) {
@@ -78,8 +67,7 @@ int main(int argc, char** argv) {
   std::printf("meshsmoothd listening on %s:%d\n", host.c_str(), (*server)->port());
   std::fflush(stdout);
 
-  int sig = 0;
-  sigwait(&signals, &sig);
+  const int sig = meshsmooth::WaitForShutdownSignal();
   std::fprintf(stderr, "meshsmoothd: %s, shutting down (grace %g s)\n", sig == SIGINT ? "SIGINT" : "SIGTERM",
                o.grace_seconds);
   (*server)->Shutdown();

@@ -7,6 +7,7 @@
 #include <cerrno>
 #include <fstream>
 
+#include "absl/strings/ascii.h"
 #include "absl/strings/str_cat.h"
 
 namespace meshsmooth {
@@ -41,6 +42,18 @@ absl::Status WriteFileBytes(const std::string& path, std::string_view bytes) {
   out.close();
   if (!out) return absl::DataLossError(absl::StrCat("writing '", path, "' failed"));
   return absl::OkStatus();
+}
+
+absl::StatusOr<std::string> ReadTokenFile(const std::string& path) {
+  absl::StatusOr<std::string> bytes = ReadFileBytes(path);
+  if (!bytes.ok()) {
+    return absl::InvalidArgumentError(absl::StrCat("cannot read a token: ", bytes.status().message()));
+  }
+  const std::string token(absl::StripAsciiWhitespace(*bytes));
+  if (token.empty()) {
+    return absl::InvalidArgumentError(absl::StrCat("cannot read a token from '", path, "': it holds only whitespace"));
+  }
+  return token;
 }
 
 }  // namespace meshsmooth

@@ -19,4 +19,10 @@ absl::StatusOr<std::string> ReadFileBytes(const std::string& path);
 // DataLoss when writing fails.
 absl::Status WriteFileBytes(const std::string& path, std::string_view bytes);
 
+// A secret kept in a text file, such as a bearer token: the file's content without the
+// whitespace at either end (editors add a final newline; the rule is the same for the server
+// and the client). InvalidArgument naming the path when the file cannot be read or holds
+// nothing but whitespace.
+absl::StatusOr<std::string> ReadTokenFile(const std::string& path);
+
 }  // namespace meshsmooth

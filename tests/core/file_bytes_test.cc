@@ -45,5 +45,23 @@ TEST(FileBytesTest, ReadsFilesThatReportNoSize) {
   EXPECT_NE(status->find("VmRSS:"), std::string::npos);
 }
 
+TEST(FileBytesTest, TokenFilesLoseWhitespaceAtBothEnds) {
+  const std::string path = (fs::path(::testing::TempDir()) / "token").string();
+  for (const char* content : {"s3cret", "s3cret\n", "  s3cret \t\r\n", "\n\ns3cret\n\n"}) {
+    ASSERT_TRUE(WriteFileBytes(path, content).ok());
+    absl::StatusOr<std::string> token = ReadTokenFile(path);
+    ASSERT_TRUE(token.ok()) << token.status();
+    EXPECT_EQ(*token, "s3cret") << "file content '" << content << "'";
+  }
+  ASSERT_TRUE(WriteFileBytes(path, " \n\t\n").ok());
+  const absl::Status blank = ReadTokenFile(path).status();
+  EXPECT_EQ(blank.code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_NE(blank.message().find(path), absl::string_view::npos) << blank;
+  fs::remove(path);
+  const absl::Status missing = ReadTokenFile(path).status();
+  EXPECT_EQ(missing.code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_NE(missing.message().find("No such file or directory"), absl::string_view::npos) << missing;
+}
+
 }  // namespace
 }  // namespace meshsmooth

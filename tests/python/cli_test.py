@@ -362,6 +362,41 @@ def main():
         except subprocess.TimeoutExpired:
             server.kill()
 
+    def token_files_trimmed_alike():
+        # The server and the CLI read a token file by one rule: whitespace at both ends dropped.
+        server_token = os.path.join(tmp, "server.token")
+        with open(server_token, "w") as f:
+            f.write("s3cret-token\n")
+        client_token = os.path.join(tmp, "client.token")
+        with open(client_token, "w") as f:
+            f.write("  s3cret-token \t \n")
+        wrong_token = os.path.join(tmp, "wrong.token")
+        with open(wrong_token, "w") as f:
+            f.write("s3cret-tokem\n")
+        guarded = subprocess.Popen([a.server, "--listen", "127.0.0.1:0", "--quiet", "--auth-token-file", server_token],
+                                   stdout=subprocess.PIPE, text=True)
+        try:
+            guarded_address = guarded.stdout.readline().strip().rsplit(" ", 1)[-1]
+            out = os.path.join(tmp, "with_token.ply")
+            r = run([cli, "smooth", "builtin:noisy-sphere", "-o", out, "--iterations", "3", "--server", guarded_address,
+                     "--token-file", client_token])
+            assert r.returncode == 0, (r.returncode, r.stderr)
+            assert ply_counts(out) == (2562, 5120), ply_counts(out)
+            assert "3 of 3 iterations" in r.stdout, r.stdout
+            r = run([cli, "smooth", "builtin:noisy-sphere", "-o", os.path.join(tmp, "wrong_token.ply"), "--iterations",
+                     "3", "--server", guarded_address, "--token-file", wrong_token])
+            assert r.returncode == 1, (r.returncode, r.stderr)
+            assert "UNAUTHENTICATED" in r.stderr, r.stderr
+            assert not os.path.exists(os.path.join(tmp, "wrong_token.ply"))
+        finally:
+            guarded.send_signal(signal.SIGTERM)
+            try:
+                guarded.wait(timeout=15)
+            except subprocess.TimeoutExpired:
+                guarded.kill()
+    check("a token file with spaces around the token works from the CLI; a wrong token exits 1 (UNAUTHENTICATED)",
+          token_files_trimmed_alike)
+
     print(f"{passed} passed, {failed} failed")
     return 1 if failed else 0
 
