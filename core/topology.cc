@@ -12,10 +12,17 @@
 namespace meshsmooth {
 namespace {
 
-// Union-find with path halving; indices are int32 like the rest of the mesh.
+// Union-find with path halving; indices are int32 like the rest of the mesh. Serves the
+// boundary loops and components of the mesh, and the fans around one vertex (Reset() reuses
+// the buffer from vertex to vertex, so that per-vertex work allocates nothing).
 class DisjointSets {
  public:
-  explicit DisjointSets(size_t n) : parent_(n) { std::iota(parent_.begin(), parent_.end(), 0); }
+  explicit DisjointSets(size_t n = 0) { Reset(n); }
+  // n singletons 0 .. n-1.
+  void Reset(size_t n) {
+    parent_.resize(n);
+    std::iota(parent_.begin(), parent_.end(), 0);
+  }
   int32_t Find(int32_t x) {
     while (parent_[x] != x) {
       parent_[x] = parent_[parent_[x]];
@@ -48,14 +55,9 @@ struct Incidence {
 struct Scratch {
   std::vector<LocalFace> faces;
   std::vector<Incidence> inc;
-  std::vector<int32_t> fan_parent;
+  DisjointSets fans;  // of the vertex's faces, joined across its manifold edges
   std::vector<int32_t> ring;
 };
-
-int32_t FanFind(std::vector<int32_t>& p, int32_t x) {
-  while (p[x] != x) x = p[x] = p[p[x]];
-  return x;
-}
 
 // Range of incidences of neighbour w in the sorted list.
 std::pair<int32_t, int32_t> FacesOf(const std::vector<Incidence>& inc, int32_t w) {
@@ -166,8 +168,7 @@ void ProcessVertices(const std::vector<int32_t>& vf_offsets, const std::vector<L
       s.inc.push_back({s.faces[i].b, i});
     }
     std::sort(s.inc.begin(), s.inc.end());
-    s.fan_parent.resize(nf);
-    std::iota(s.fan_parent.begin(), s.fan_parent.end(), 0);
+    s.fans.Reset(nf);
 
     int32_t distinct = 0, boundary_start = -1, boundary_start_face = -1;
     bool has_nonmanifold_edge = false, has_boundary_edge = false;
@@ -190,7 +191,7 @@ void ProcessVertices(const std::vector<int32_t>& vf_offsets, const std::vector<L
         }
       } else if (count == 2) {
         const int32_t f0 = s.inc[i].face, f1 = s.inc[i + 1].face;
-        s.fan_parent[FanFind(s.fan_parent, f0)] = FanFind(s.fan_parent, f1);
+        s.fans.Union(f0, f1);
         if (v < w && (s.faces[f0].a == w) == (s.faces[f1].a == w)) {
           ++r.inconsistently_oriented_edges;
         }
@@ -202,7 +203,7 @@ void ProcessVertices(const std::vector<int32_t>& vf_offsets, const std::vector<L
       i = j;
     }
     int32_t fans = 0;
-    for (int32_t i = 0; i < nf; ++i) fans += FanFind(s.fan_parent, i) == i;
+    for (int32_t i = 0; i < nf; ++i) fans += s.fans.Find(i) == i;
     if (fans > 1) ++r.nonmanifold_vertices;
 
     bool walked = false;
