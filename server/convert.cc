@@ -1,6 +1,7 @@
 #include "server/convert.h"
 
 #include <cmath>
+#include <cstdio>
 
 #include "absl/strings/str_cat.h"
 
@@ -127,6 +128,44 @@ void ToProto(const JobParams& params, const FlowResult& result, v1::EffectivePar
   out->set_tangential_weight(p.tangential_weight);
   out->mutable_output()->set_quantization_bits(static_cast<uint32_t>(params.output.quantization_bits));
   out->mutable_output()->set_edgebreaker(params.output.method == DracoMethod::kEdgebreaker);
+}
+
+v1::Summary MakeSummary(const JobReport& report, const JobParams& params) {
+  v1::Summary summary;
+  summary.set_job_id(report.job_id);
+  ToProto(report.before, summary.mutable_before());
+  ToProto(report.after, summary.mutable_after());
+  if (report.displacement.has_value()) {
+    summary.set_rms_displacement(report.displacement->rms);
+    summary.set_max_displacement(report.displacement->max);
+    summary.set_flipped_normals(report.displacement->flipped_normals);
+  }
+  v1::Timings* t = summary.mutable_timings();
+  t->set_decode_seconds(report.decode_seconds);
+  t->set_queue_seconds(report.queue_seconds);
+  t->set_smooth_seconds(report.smooth_seconds);
+  t->set_encode_seconds(report.encode_seconds);
+  t->set_total_seconds(report.total_seconds);
+  ToProto(params, report.flow, summary.mutable_parameters());
+  summary.set_result_bytes(report.result_bytes);
+  if (report.features.has_value()) {
+    v1::FeatureCounts* f = summary.mutable_features();
+    f->set_ridge_vertices(report.features->ridges);
+    f->set_ravine_vertices(report.features->ravines);
+    f->set_classified_vertices(report.features->classified);
+    f->set_detect_seconds(report.features->detect_seconds);
+  }
+  return summary;
+}
+
+std::string JobLogLine(const JobReport& report, const JobParams& params) {
+  // printf's own rounding of the times, as the log has always had it.
+  char seconds[128];
+  std::snprintf(seconds, sizeof seconds, "decode=%.3fs queue=%.3fs smooth=%.3fs encode=%.3fs", report.decode_seconds,
+                report.queue_seconds, report.smooth_seconds, report.encode_seconds);
+  return absl::StrCat("meshsmoothd job=", report.job_id, " flow=", params.flow.flow, " vertices=", report.vertices,
+                      " iterations=", report.flow.iterations_run, "/", params.flow.iterations,
+                      " status=", report.status, " ", seconds);
 }
 
 }  // namespace meshsmooth::server

@@ -1,6 +1,10 @@
 // Conversions between meshsmooth.v1 messages and the core's structs, in one place.
 #pragma once
 
+#include <cstdint>
+#include <optional>
+#include <string>
+
 #include "absl/status/statusor.h"
 #include "core/draco_codec.h"
 #include "core/features/ridges.h"
@@ -19,6 +23,34 @@ struct JobParams {
   bool detect_features = false;
   FeatureOptions features;
 };
+
+// Ridges and ravines a job found (Features without the per-vertex data).
+struct FeatureSummary {
+  int64_t ridges = 0, ravines = 0, classified = 0;
+  double detect_seconds = 0.0;
+};
+
+// What a job measured as it ran: the one source of its summary and of its log line.
+struct JobReport {
+  std::string job_id;
+  std::string status = "OK";  // the status code's name when the job failed
+  int64_t vertices = 0;       // of the welded mesh; 0 when it did not decode
+  FlowResult flow;            // iterations_run 0 until the flow ran to its end
+  double decode_seconds = 0.0, queue_seconds = 0.0, smooth_seconds = 0.0, encode_seconds = 0.0;
+  double total_seconds = 0.0;  // from the call's arrival
+  // Known once the job got that far.
+  MeshMetrics before, after;
+  std::optional<Displacement> displacement;
+  std::optional<FeatureSummary> features;  // when the spec asked for them
+  uint64_t result_bytes = 0;
+};
+
+// The summary of a job that succeeded.
+v1::Summary MakeSummary(const JobReport& report, const JobParams& params);
+
+// The job's log line, without a newline: "meshsmoothd job=ID flow=NAME vertices=N
+// iterations=RUN/ASKED status=CODE decode=Ss queue=Ss smooth=Ss encode=Ss".
+std::string JobLogLine(const JobReport& report, const JobParams& params);
 
 // InvalidArgument naming the field for anything out of range (iterations above
 // `max_iterations` included); the flow's own checks run here too, so a bad spec is refused

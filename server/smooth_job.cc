@@ -4,7 +4,6 @@
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
-#include "core/draco_codec.h"
 #include "core/features/ridges.h"
 #include "core/flows/flow.h"
 #include "core/metrics.h"
@@ -43,28 +42,17 @@ void SmoothJob::Detach() {
   std::string().swap(upload_);
 }
 
-void SmoothJob::Log(const std::string& status, int64_t vertices, int iterations, double decode, double queue,
-                    double smooth, double encode) const {
-  if (!options_.log_jobs) return;
-  std::fprintf(stderr,
-               "meshsmoothd job=%s flow=%s vertices=%lld iterations=%d/%d status=%s decode=%.3fs queue=%.3fs "
-               "smooth=%.3fs encode=%.3fs\n",
-               id_.c_str(), params_.flow.flow.c_str(), static_cast<long long>(vertices), iterations,
-               params_.flow.iterations, status.c_str(), decode, queue, smooth, encode);
+void SmoothJob::Log(const JobReport& report) const {
+  if (options_.log_jobs) std::fprintf(stderr, "%s\n", JobLogLine(report, params_).c_str());
 }
 
-void SmoothJob::Run() {
-  const Clock::time_point start = Clock::now();
-  const double queue_seconds = Seconds(submitted_, start);
-  auto fail = [&](const absl::Status& s, int64_t vertices, int iterations, double decode, double smooth) {
-    Emit([&](JobSink& sink) { sink.OnError(s); });
-    Log(std::string(absl::StatusCodeToString(s.code())), vertices, iterations, decode, queue_seconds, smooth, 0.0);
-  };
-  if (cancel_.load()) {
-    Log("CANCELLED", 0, 0, 0, queue_seconds, 0, 0);
-    return;
-  }
+void SmoothJob::Fail(JobReport& report, const absl::Status& status) {
+  Emit([&](JobSink& sink) { sink.OnError(status); });
+  report.status = std::string(absl::StatusCodeToString(status.code()));
+  Log(report);
+}
 
+absl::StatusOr<DracoMesh> SmoothJob::DecodeUpload() {
   std::string upload;
   {
     std::lock_guard<std::mutex> lock(mu_);
@@ -72,28 +60,19 @@ void SmoothJob::Run() {
   }
   absl::StatusOr<DracoMesh> draco = DracoMesh::Decode(upload);
   std::string().swap(upload);  // the bytes are not needed past decoding
-  if (!draco.ok()) return fail(draco.status(), 0, 0, Seconds(start, Clock::now()), 0);
-  Mesh mesh = draco->TakeWelded();
-  if (mesh.num_vertices() > options_.max_vertices) {
-    return fail(absl::ResourceExhaustedError(absl::StrCat("the mesh has ", mesh.num_vertices(),
-                                                          " vertices, above this server's limit of ",
-                                                          options_.max_vertices)),
-                mesh.num_vertices(), 0, Seconds(start, Clock::now()), 0);
-  }
-  ValidationReport report;
-  const Topology topo = BuildTopology(mesh, &report);
-  const MeshMetrics before = ComputeMetrics(mesh, topo);
-  const Clock::time_point decoded = Clock::now();
-  const double decode_seconds = Seconds(start, decoded);
+  return draco;
+}
 
+void SmoothJob::SendAccepted(const ValidationReport& validation, int64_t seam_points) {
   v1::Accepted accepted;
   accepted.set_job_id(id_);
   accepted.set_queue_position(static_cast<uint32_t>(queue_position_.load()));
-  ToProto(report, accepted.mutable_input());
-  accepted.mutable_input()->set_seam_points(draco->seam_points());
+  ToProto(validation, accepted.mutable_input());
+  accepted.mutable_input()->set_seam_points(seam_points);
   Emit([&](JobSink& sink) { sink.OnAccepted(accepted); });
+}
 
-  const std::vector<Vec3> input = mesh.positions;  // for the displacement; the triangles stay put
+absl::StatusOr<FlowResult> SmoothJob::SmoothMesh(Mesh& mesh, const Topology& topo, Clock::time_point decoded) {
   FlowParams flow = params_.flow;
   flow.threads = options_.threads_per_job;
   RunControl control;
@@ -109,67 +88,94 @@ void SmoothJob::Run() {
     msg.set_elapsed_seconds(Seconds(decoded, now));
     Emit([&](JobSink& sink) { sink.OnProgress(msg); });
   };
-  absl::StatusOr<FlowResult> result = Smooth(mesh, topo, flow, control);
-  const Clock::time_point smoothed = Clock::now();
-  const double smooth_seconds = Seconds(decoded, smoothed);
-  if (!result.ok()) return fail(result.status(), mesh.num_vertices(), 0, decode_seconds, smooth_seconds);
-  if (result->stop_reason == StopReason::kTimeBudget) {
-    return fail(absl::DeadlineExceededError(absl::StrFormat(
-                    "the job ran out of this server's time limit of %g s after %d of %d iterations",
-                    options_.max_job_seconds, result->iterations_run, flow.iterations)),
-                mesh.num_vertices(), result->iterations_run, decode_seconds, smooth_seconds);
-  }
+  return Smooth(mesh, topo, flow, control);
+}
 
-  // Section 5 of the paper: ridges and ravines of the smoothed mesh (same connectivity, so
-  // the input's topology serves), sent as generic attributes.
-  v1::FeatureCounts counts;
-  std::vector<GenericAttribute> attributes;
-  if (params_.detect_features) {
-    const Clock::time_point t0 = Clock::now();
-    const Features features = DetectFeatures(mesh, topo, params_.features);
-    counts.set_ridge_vertices(features.ridges);
-    counts.set_ravine_vertices(features.ravines);
-    counts.set_classified_vertices(features.classified);
-    attributes = FeatureAttributes(features);
-    counts.set_detect_seconds(Seconds(t0, Clock::now()));
-  }
+std::vector<GenericAttribute> SmoothJob::DetectFeaturesIfAsked(const Mesh& mesh, const Topology& topo,
+                                                              JobReport& report) const {
+  if (!params_.detect_features) return {};
+  const Clock::time_point t0 = Clock::now();
+  const Features features = DetectFeatures(mesh, topo, params_.features);
+  report.features = FeatureSummary{features.ridges, features.ravines, features.classified, 0.0};
+  std::vector<GenericAttribute> attributes = FeatureAttributes(features);
+  report.features->detect_seconds = Seconds(t0, Clock::now());
+  return attributes;
+}
+
+absl::StatusOr<std::string> SmoothJob::EncodeAndMeasure(DracoMesh& draco, const Mesh& mesh, const Topology& topo,
+                                                        const std::vector<Vec3>& input,
+                                                        const std::vector<GenericAttribute>& attributes,
+                                                        JobReport& report) const {
   // Draco encodes on one thread, then the displacement follows there; the summary's "after"
   // metrics take the job's other threads meanwhile, and that one once it is free (all only read
   // the mesh). The metrics on every core beside the encoder's thread would put one thread more
   // than there are cores (docs/performance.md has the figures).
   absl::StatusOr<std::string> encoded;
   absl::StatusOr<Displacement> displacement;
-  const MeshMetrics after = ComputeMetricsBeside(
+  report.after = ComputeMetricsBeside(
       mesh, topo,
       [&] {
-        encoded = draco->Encode(mesh, params_.output, attributes);
+        encoded = draco.Encode(mesh, params_.output, attributes);
         displacement = CompareMeshes(input, mesh);
       },
       options_.threads_per_job);
+  if (displacement.ok()) report.displacement = *displacement;
+  return encoded;
+}
+
+void SmoothJob::Run() {
+  const Clock::time_point start = Clock::now();
+  JobReport report;
+  report.job_id = id_;
+  report.queue_seconds = Seconds(submitted_, start);
+  if (cancel_.load()) {
+    report.status = "CANCELLED";
+    return Log(report);
+  }
+
+  absl::StatusOr<DracoMesh> draco = DecodeUpload();
+  if (!draco.ok()) {
+    report.decode_seconds = Seconds(start, Clock::now());
+    return Fail(report, draco.status());
+  }
+  Mesh mesh = draco->TakeWelded();
+  report.vertices = mesh.num_vertices();
+  if (mesh.num_vertices() > options_.max_vertices) {
+    report.decode_seconds = Seconds(start, Clock::now());
+    return Fail(report, absl::ResourceExhaustedError(absl::StrCat("the mesh has ", mesh.num_vertices(),
+                                                                  " vertices, above this server's limit of ",
+                                                                  options_.max_vertices)));
+  }
+  ValidationReport validation;
+  const Topology topo = BuildTopology(mesh, &validation);
+  report.before = ComputeMetrics(mesh, topo);
+  const Clock::time_point decoded = Clock::now();
+  report.decode_seconds = Seconds(start, decoded);
+  SendAccepted(validation, draco->seam_points());
+
+  const std::vector<Vec3> input = mesh.positions;  // for the displacement; the triangles stay put
+  absl::StatusOr<FlowResult> result = SmoothMesh(mesh, topo, decoded);
+  const Clock::time_point smoothed = Clock::now();
+  report.smooth_seconds = Seconds(decoded, smoothed);
+  if (!result.ok()) return Fail(report, result.status());
+  report.flow = *result;
+  if (result->stop_reason == StopReason::kTimeBudget) {
+    return Fail(report, absl::DeadlineExceededError(absl::StrFormat(
+                            "the job ran out of this server's time limit of %g s after %d of %d iterations",
+                            options_.max_job_seconds, result->iterations_run, params_.flow.iterations)));
+  }
+
+  // Section 5 of the paper: ridges and ravines of the smoothed mesh (same connectivity, so
+  // the input's topology serves), sent as generic attributes.
+  const std::vector<GenericAttribute> attributes = DetectFeaturesIfAsked(mesh, topo, report);
+  absl::StatusOr<std::string> encoded = EncodeAndMeasure(*draco, mesh, topo, input, attributes, report);
   const Clock::time_point done = Clock::now();
-  if (!encoded.ok()) {
-    return fail(encoded.status(), mesh.num_vertices(), result->iterations_run, decode_seconds, smooth_seconds);
-  }
-  v1::Summary summary;
-  summary.set_job_id(id_);
-  ToProto(before, summary.mutable_before());
-  ToProto(after, summary.mutable_after());
-  if (displacement.ok()) {
-    summary.set_rms_displacement(displacement->rms);
-    summary.set_max_displacement(displacement->max);
-    summary.set_flipped_normals(displacement->flipped_normals);
-  }
-  v1::Timings* t = summary.mutable_timings();
-  t->set_decode_seconds(decode_seconds);
-  t->set_queue_seconds(queue_seconds);
-  t->set_smooth_seconds(smooth_seconds);
-  t->set_encode_seconds(Seconds(smoothed, done));
-  t->set_total_seconds(Seconds(received_, done));
-  ToProto(params_, *result, summary.mutable_parameters());
-  summary.set_result_bytes(encoded->size());
-  if (params_.detect_features) *summary.mutable_features() = counts;
-  Log("OK", mesh.num_vertices(), result->iterations_run, decode_seconds, queue_seconds, smooth_seconds,
-      Seconds(smoothed, done));
+  if (!encoded.ok()) return Fail(report, encoded.status());
+  report.encode_seconds = Seconds(smoothed, done);
+  report.total_seconds = Seconds(received_, done);
+  report.result_bytes = encoded->size();
+  const v1::Summary summary = MakeSummary(report, params_);
+  Log(report);
   Emit([&](JobSink& sink) { sink.OnResult(std::move(*encoded), summary); });
 }
 

@@ -7,8 +7,14 @@
 #include <memory>
 #include <mutex>
 #include <string>
+#include <vector>
 
 #include "absl/status/status.h"
+#include "absl/status/statusor.h"
+#include "core/draco_codec.h"
+#include "core/flows/flow.h"
+#include "core/mesh.h"
+#include "core/topology.h"
 #include "meshsmooth/v1/smoothing.pb.h"
 #include "server/convert.h"
 #include "server/options.h"
@@ -45,10 +51,27 @@ class SmoothJob {
   void Detach();
 
  private:
+  // Calls `fn(sink)` unless the job was detached.
   template <typename Fn>
   void Emit(Fn&& fn);
-  void Log(const std::string& status, int64_t vertices, int iterations, double decode, double queue,
-           double smooth, double encode) const;
+  // The job's log line (unless options.log_jobs is off).
+  void Log(const JobReport& report) const;
+  // Sends `status` to the sink and logs the job with its code.
+  void Fail(JobReport& report, const absl::Status& status);
+
+  // The steps of Run(), in order.
+  absl::StatusOr<DracoMesh> DecodeUpload();  // takes the upload and frees it
+  void SendAccepted(const ValidationReport& validation, int64_t seam_points);
+  // The flow under the job's cancel flag and time limit, progress throttled to ~10/s.
+  absl::StatusOr<FlowResult> SmoothMesh(Mesh& mesh, const Topology& topo, Clock::time_point decoded);
+  // Ridges and ravines as the result's attributes when the spec asks; counts in `report`.
+  std::vector<GenericAttribute> DetectFeaturesIfAsked(const Mesh& mesh, const Topology& topo,
+                                                      JobReport& report) const;
+  // The result's Draco bytes; the after metrics and the displacement go to `report`.
+  absl::StatusOr<std::string> EncodeAndMeasure(DracoMesh& draco, const Mesh& mesh, const Topology& topo,
+                                               const std::vector<Vec3>& input,
+                                               const std::vector<GenericAttribute>& attributes,
+                                               JobReport& report) const;
 
   const std::string id_;
   const JobParams params_;
