@@ -35,6 +35,7 @@
 #include "client/smooth_client.h"
 #include "core/draco_codec.h"
 #include "core/flows/flow.h"
+#include "core/flows/reorder.h"
 #include "core/huge_pages.h"
 #include "core/io/file_bytes.h"
 #include "core/io/mesh_io.h"
@@ -111,10 +112,10 @@ double Triad(size_t bytes, int threads) {
 // positions read (24), ring offsets (4), neighbour indices (4 x valence), role (1), positions
 // written (24); neighbour positions are assumed to hit cache. Taubin and bilaplacian make two
 // such passes; taubin also a displacement pass over the iteration start (48).
-double BytesPerVertex(const std::string& flow, double mean_valence) {
+double BytesPerVertex(FlowId flow, double mean_valence) {
   const double pass = 24 + 4 + 4 * mean_valence + 1 + 24;
-  if (flow == "taubin") return 2 * pass + 48;
-  if (flow == "bilaplacian") return 2 * pass;
+  if (flow == FlowId::kTaubin) return 2 * pass + 48;
+  if (flow == FlowId::kBilaplacian) return 2 * pass;
   return pass;
 }
 
@@ -126,7 +127,7 @@ struct Variant {
 std::vector<Variant> Variants() {
   auto make = [](const std::string& flow) {
     FlowParams p;
-    p.flow = flow;
+    p.flow = ParseFlowName(flow).value();
     return p;
   };
   FlowParams u1 = make("laplacian"), taubin_u1 = make("taubin");
@@ -156,7 +157,7 @@ OurTiming TimeOurs(const Mesh& mesh, const Topology& topo, FlowParams p, int ite
     absl::StatusOr<FlowResult> res = Smooth(m, topo, p);
     const double ms = Ms(t0, Clock::now());
     if (!res.ok()) {
-      std::fprintf(stderr, "bench: %s failed: %s\n", p.flow.c_str(), std::string(res.status().message()).c_str());
+      std::fprintf(stderr, "bench: %s failed: %s\n", std::string(FlowOf(p.flow).name).c_str(), std::string(res.status().message()).c_str());
       return -1.0;
     }
     return ms;
@@ -254,7 +255,7 @@ int PeakChild(const std::string& draco_path) {
   const Topology topo = BuildTopology(mesh);
   const std::vector<Vec3> input = mesh.positions;  // the job keeps the input positions for the displacement
   FlowParams p;
-  p.flow = "median";
+  p.flow = FlowId::kMedian;
   p.iterations = 5;
   if (!Smooth(mesh, topo, p).ok()) return 1;
   absl::StatusOr<std::string> out = dm->Encode(mesh);
@@ -564,7 +565,7 @@ int main(int argc, char** argv) {
     }
     {
       const double t1 = PlainU0Ms(nm.mesh, iterations, 1, opt.runs), t2 = PlainU0Ms(nm.mesh, iterations, std::min(2, hw), opt.runs);
-      const double bytes = BytesPerVertex("laplacian", valence);
+      const double bytes = BytesPerVertex(FlowId::kLaplacian, valence);
       std::printf("| (reference) plain CSR U0 loop, same order, no checks | %.2f | %.2f | %.2fx | %.0f | %.0f | %.0f%% | - |\n", t1,
                   t2, t1 / t2, n / (t2 / 1000.0) / 1e6, bytes, 100.0 * bytes * n / (t2 / 1000.0) / 1e9 / bw2);
     }

@@ -28,7 +28,7 @@ struct Variant {
 std::vector<Variant> Variants(int iterations) {
   auto make = [iterations](const std::string& flow) {
     FlowParams p;
-    p.flow = flow;
+    p.flow = ParseFlowName(flow).value();
     p.iterations = iterations;
     return p;
   };

@@ -10,7 +10,11 @@ namespace meshsmooth::server {
 absl::StatusOr<JobParams> FromProto(const v1::JobSpec& spec, int max_iterations) {
   JobParams j;
   FlowParams& p = j.flow;
-  p.flow = spec.flow().empty() ? "median" : spec.flow();
+  if (!spec.flow().empty()) {
+    absl::StatusOr<FlowId> flow = ParseFlowName(spec.flow());
+    if (!flow.ok()) return flow.status();
+    p.flow = *flow;
+  }
   if (spec.iterations() > static_cast<uint32_t>(max_iterations)) {
     return absl::InvalidArgumentError(
         absl::StrCat("iterations ", spec.iterations(), " is above this server's limit of ", max_iterations));
@@ -104,10 +108,10 @@ void ToProto(const ParameterInfo& p, v1::ParameterInfo* out) {
 
 void ToProto(const JobParams& params, const FlowResult& result, v1::EffectiveParameters* out) {
   const FlowParams& p = params.flow;
-  out->set_flow(p.flow);
+  out->set_flow(std::string(FlowOf(p.flow).name));
   out->set_iterations_requested(static_cast<uint32_t>(p.iterations));
   out->set_iterations_run(static_cast<uint32_t>(result.iterations_run));
-  out->set_step(p.step.value_or(DefaultStep(p.flow)));
+  out->set_step(p.step.value_or(FlowOf(p.flow).default_step));
   out->set_effective_step(result.effective_step);
   out->set_taubin_mu(result.effective_mu);
   out->set_mean_edge_length(result.mean_edge_length);
@@ -163,7 +167,7 @@ std::string JobLogLine(const JobReport& report, const JobParams& params) {
   char seconds[128];
   std::snprintf(seconds, sizeof seconds, "decode=%.3fs queue=%.3fs smooth=%.3fs encode=%.3fs", report.decode_seconds,
                 report.queue_seconds, report.smooth_seconds, report.encode_seconds);
-  return absl::StrCat("meshsmoothd job=", report.job_id, " flow=", params.flow.flow, " vertices=", report.vertices,
+  return absl::StrCat("meshsmoothd job=", report.job_id, " flow=", std::string(FlowOf(params.flow.flow).name), " vertices=", report.vertices,
                       " iterations=", report.flow.iterations_run, "/", params.flow.iterations,
                       " status=", report.status, " ", seconds);
 }

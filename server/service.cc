@@ -316,6 +316,7 @@ grpc::ServerUnaryReactor* MeshSmootherService::ListFlows(grpc::CallbackServerCon
     out->set_description(f.description);
     out->set_equations(f.equations);
     for (const ParameterInfo& p : f.parameters) ToProto(p, out->add_parameters());
+    for (const std::string& c : f.constraints) out->add_constraints(c);
   }
   for (const ParameterInfo& p : CommonParameters(options_.max_iterations)) ToProto(p, response->add_common_parameters());
   response->set_max_iterations(static_cast<uint32_t>(options_.max_iterations));

@@ -72,7 +72,7 @@ inline Mesh Smoothed(Mesh m, FlowParams p) {
 
 inline FlowParams Params(const std::string& flow, int iterations, std::optional<double> step = std::nullopt) {
   FlowParams p;
-  p.flow = flow;
+  p.flow = ParseFlowName(flow).value();
   p.iterations = iterations;
   p.step = step;
   return p;

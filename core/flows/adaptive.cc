@@ -8,16 +8,15 @@
 #include <algorithm>
 #include <limits>
 
-#include "core/flows/kernel.h"
+#include "core/flows/step_loops.h"
 
 namespace meshsmooth::flows {
 
 void RingThresholds(const StepContext& c, const Vec3* pos, int32_t n, int rings, int threads, std::vector<double>& t) {
   // |H| per vertex, NaN where undefined (so it is skipped below). The free vertices in the
   // step's lane batches when there are some (the same bits: see MeanCurvatureLanes), the rest
-  // one by one. The second ring is gathered with marks (it was made unique by a search of the
-  // list so far). Median + ring2 at 655k vertices, 1 thread: 31.0-31.5 -> 22.2-22.7 ms per
-  // iteration (the thresholds are recomputed every 10 iterations).
+  // one by one. The second ring is made unique with a mark per vertex, not a
+  // search of the list so far.
   std::vector<double> h(n);
   const bool batched = c.batches != nullptr && c.batches->width == LaneWidthOf(c.isa);
   ForBlocks(n, threads, [&](int32_t block, int32_t begin, int32_t end) {

@@ -1,15 +1,14 @@
 // Bilaplacian flow: P <- P - lambda U0^2(P), U0^2(P) = (1/n) sum_i U0(Q_i) - U0(P).
 // The paper prints "+ lambda U^2"; the stable sign (thin-plate gradient descent, Taubin with
-// mu = lambda) is minus (NOTES.md). Uses the plain umbrella U0 as the paper does. lambda is
+// mu = lambda) is minus (docs/paper.md). Uses the plain umbrella U0 as the paper does. lambda is
 // dimensionless, (0, 0.5] (U0^2 has eigenvalues up to 4); default 0.2.
-#include "core/flows/kernel.h"
+#include "core/flows/step_loops.h"
 
 namespace meshsmooth::flows {
 namespace {
 
 class Bilaplacian final : public FlowKernel {
  public:
-  bool curvature_units() const override { return false; }
   // U0 at every vertex with a ring (fixed ones too: their U0 enters their neighbours' U0^2).
   void Prepare(const StepContext& c, const Vec3* cur, int32_t n, int threads) override {
     u_.resize(n);
@@ -36,6 +35,6 @@ class Bilaplacian final : public FlowKernel {
 
 }  // namespace
 
-std::unique_ptr<FlowKernel> MakeBilaplacian(const FlowParams&) { return std::make_unique<Bilaplacian>(); }
+std::unique_ptr<FlowKernel> MakeBilaplacian(const FlowParams&, double) { return std::make_unique<Bilaplacian>(); }
 
 }  // namespace meshsmooth::flows

@@ -1,6 +1,6 @@
-// The paper's smoothing flows behind one small interface: a flow name, a parameter struct and
-// a run control. See ../shared/paper/polyhedral-surface-smoothing.md (equation numbers below)
-// and ../shared/paper/NOTES.md for the paper's slips and the choices made where it is silent.
+// The paper's smoothing flows behind one small interface: a flow (FlowId, from the flow table
+// in core/flows/flow_table.h), a parameter struct and a run control. Equation numbers are the
+// paper's; docs/paper.md says where it slips and what we chose where it is silent.
 //
 // Every flow is an explicit Jacobi iteration: each iteration reads the old positions and
 // writes new ones, so the result is bit-identical whatever the number of threads.
@@ -10,7 +10,7 @@
 //   laplacian       P += lambda U(P), U = U0 (eq. 3) or U1 (eq. 4)                    eq. (2)
 //   taubin          P += lambda U(P) over the whole mesh, then P -= mu U(P): one
 //                   iteration is one lambda pass plus one mu pass                     eq. (6)
-//   bilaplacian     P -= lambda U0^2(P) (the stable sign, NOTES.md)
+//   bilaplacian     P -= lambda U0^2(P) (the stable sign, docs/paper.md)
 //   mcf             P += lambda H n, cotangent weights, H the true mean curvature     eqs. (7)-(8)
 //   mcf_tangential  P += lambda H n + step C (U0 - (U0.n) n)                          eq. (11)
 //   median          P += lambda F, F of eq. (13) with epsilon                         eqs. (12)-(13)
@@ -30,6 +30,7 @@
 #include <vector>
 
 #include "absl/status/statusor.h"
+#include "core/flows/flow_table.h"
 #include "core/mesh.h"
 #include "core/topology.h"
 
@@ -61,7 +62,7 @@ enum class ReorderMode {
 };
 
 struct FlowParams {
-  std::string flow = "median";
+  FlowId flow = FlowId::kMedian;
   int iterations = 20;  // 1 .. kMaxIterations
   // The paper's lambda: dimensionless for the umbrella flows, relative to h^2 for the
   // curvature flows. Unset = the flow's default (DefaultStep); set, it must be > 0.
@@ -125,12 +126,6 @@ struct FlowResult {
   Progress last;
 };
 
-// The flows' names, in a stable order.
-const std::vector<std::string>& FlowNames();
-
-// The default step of a flow (dimensionless or relative to h^2, as above).
-double DefaultStep(const std::string& flow);
-
 // InvalidArgument with a message naming the parameter when `p` is out of range for `mesh`.
 absl::Status ValidateFlowParams(const FlowParams& p, int32_t num_vertices);
 
@@ -144,18 +139,6 @@ absl::StatusOr<FlowResult> Smooth(Mesh& mesh, const Topology& topo, const FlowPa
 
 // Same, building the topology itself.
 absl::StatusOr<FlowResult> Smooth(Mesh& mesh, const FlowParams& p, const RunControl& control = {});
-
-// The order Smooth() runs meshes of 100k vertices or more in (FlowParams::reorder): vertices
-// in Morton (Z-)order of their positions, so that a vertex's neighbours sit close to it in
-// memory. new -> old; the identity above 2^25 vertices. The keys are computed on `threads`.
-std::vector<int32_t> MortonOrder(const std::vector<Vec3>& positions, int threads = 1);
-
-// ReorderMode::kAuto's choice: a mesh of 100k .. 2^25 vertices whose order leaves more than 3%
-// of its neighbours over 4096 indices away from their vertex (a Morton order leaves about 2%),
-// for a run of at least 2.5 / (that share) iterations: reordering costs about as much as a few
-// iterations in a scattered order lose (docs/performance.md). The share is counted on the
-// rings of one vertex in 32 (runs of 64 in every 2048).
-bool MortonOrderPaysOff(const Topology& topo, int iterations);
 
 // Per-vertex mean-curvature normal H n (eq. 8 with the mixed Voronoi area, so |H| = 1/r on a
 // sphere; points towards the centre of curvature). Zero for vertices that are not interior.

@@ -1,54 +1,32 @@
 #include "core/flows/flow_info.h"
 
 #include <limits>
+#include <utility>
 
 #include "core/flows/flow.h"
+#include "core/flows/flow_table.h"
 
 namespace meshsmooth {
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-ParameterInfo Step(const std::string& flow, double max, const std::string& what) {
-  return {"step", what, DefaultStep(flow), 0.0, max, true, false, {}};
-}
-
-ParameterInfo Weights() {
-  return {"weights", "umbrella operator: U0 uniform (eq. 3) or U1 inverse distance (eq. 4)", 0, 0, 0, false, false,
-          {"UMBRELLA_WEIGHTS_UNIFORM", "UMBRELLA_WEIGHTS_INVERSE_DISTANCE"}};
+ParameterInfo Step(const FlowRow& row) {
+  return {"step",
+          row.kind == FlowKind::kCurvature ? "lambda relative to the squared mean edge length" : "lambda, dimensionless",
+          row.default_step, 0.0, row.max_step, true, false, {}};
 }
 
 }  // namespace
 
 std::vector<FlowInfo> DescribeFlows() {
-  const FlowParams d;
   std::vector<FlowInfo> flows;
-  flows.push_back({"laplacian", "Laplacian smoothing: regularises the sampling but shrinks and flattens", "eqs. (2)-(4)",
-                   {Step("laplacian", 1.0, "lambda, dimensionless"), Weights()}});
-  flows.push_back({"taubin",
-                   "Taubin lambda|mu smoothing: no shrinkage, but turns noise into low-frequency waves; one "
-                   "iteration is a lambda pass and a mu pass",
-                   "eq. (6)",
-                   {Step("taubin", 1.0, "lambda, dimensionless"), Weights(),
-                    {"taubin_mu", "mu (> lambda, <= 1); unset = from the pass band", 0.0, 0.0, 1.0, true, false, {}},
-                    {"taubin_pass_band", "k_PB = 1/lambda - 1/mu, used when mu is unset", d.taubin_pass_band, 0.0,
-                     kInf, true, true, {}}}});
-  flows.push_back({"bilaplacian", "Bilaplacian flow P -= lambda U0^2(P): smooth, slight deformation", "Section 2 (sign: NOTES.md)",
-                   {Step("bilaplacian", 0.5, "lambda, dimensionless")}});
-  flows.push_back({"mcf", "Mean curvature flow with cotangent weights: smooths well, sampling gets irregular",
-                   "eqs. (7)-(8)", {Step("mcf", 10.0, "lambda relative to the squared mean edge length")}});
-  flows.push_back({"mcf_tangential",
-                   "Mean curvature flow plus a tangential umbrella that evens out the sampling", "eq. (11)",
-                   {Step("mcf_tangential", 10.0, "lambda relative to the squared mean edge length"),
-                    {"tangential_weight", "C: the tangential part moves a vertex by step * C * U0_t (step * C <= 1)",
-                     d.tangential_weight, 0.0, kInf, false, true, {}}}});
-  flows.push_back({"median",
-                   "The paper's flow: moves along the umbrella direction with normal speed equal to the mean "
-                   "curvature; smooths like mcf and keeps the mesh regular",
-                   "eqs. (12)-(13)",
-                   {Step("median", 10.0, "lambda relative to the squared mean edge length"),
-                    {"epsilon", "vertices with |cos(theta)| <= epsilon do not move", d.epsilon, 0.0, 1.0, true, true,
-                     {}}}});
+  for (const FlowRow& row : FlowTable()) {
+    FlowInfo f{std::string(row.name), std::string(row.description), std::string(row.equations), {Step(row)},
+               row.constraints};
+    f.parameters.insert(f.parameters.end(), row.parameters.begin(), row.parameters.end());
+    flows.push_back(std::move(f));
+  }
   return flows;
 }
 

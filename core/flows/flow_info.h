@@ -23,9 +23,10 @@ struct FlowInfo {
   std::string description;
   std::string equations;
   std::vector<ParameterInfo> parameters;  // flow-specific, step first
+  std::vector<std::string> constraints;   // between parameters, beyond their ranges
 };
 
-// Every flow, in FlowNames() order.
+// Every flow, in FlowNames() order, from the flow table (core/flows/flow_table.h).
 std::vector<FlowInfo> DescribeFlows();
 
 // Parameters every flow takes: iterations, adaptive mode/threshold/interval, boundary,

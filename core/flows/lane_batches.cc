@@ -2,7 +2,7 @@
 
 #include <algorithm>
 
-#include "core/flows/kernel.h"
+#include "core/flows/flow_kernel.h"
 
 namespace meshsmooth::flows {
 

@@ -9,13 +9,11 @@
 
 namespace meshsmooth::flows {
 
-// The free vertices of each block of kBlock vertices (core/flows/kernel.h), in batches of
+// The free vertices of each block of kBlock vertices (core/flows/flow_kernel.h), in batches of
 // `width` for MeanCurvatureLanes: a batch takes as many kernel steps as its largest valence,
 // so the free vertices of a block are sorted by valence (stably) before they are cut into
-// batches. On the dragon scan that is 25% fewer steps than batches of consecutive vertices
-// (nefertiti 23%, bunny 13%; none on an icosphere, whose valences are all 6 but twelve), and
-// mcf went from 9.77-10.22 to 8.53-8.72 ms per iteration (1 thread). The rows replace the
-// gathers of ring indices: mcf at 655k vertices 14.3-14.5 -> 11.9-12.0 ms.
+// batches: on scans that saves a quarter of the steps (docs/performance.md). The rows replace
+// the gathers of ring indices.
 //
 // Batch j (of lanes[j] <= width vertices; a block's last batch may be short) starts at
 // data[offsets[j]] and has 3 + its largest valence rows of `width` entries:

@@ -2,7 +2,7 @@
 // (eq. 4, inverse-distance weights). U0 improves the sampling rate but shrinks and flattens the
 // shape; U1 worsens the sampling rate (the paper's eq. (5) argument). lambda is dimensionless,
 // (0, 1]; default 0.5.
-#include "core/flows/kernel.h"
+#include "core/flows/step_loops.h"
 
 namespace meshsmooth::flows {
 namespace {
@@ -10,7 +10,6 @@ namespace {
 template <bool kInverseDistance>
 class Laplacian final : public FlowKernel {
  public:
-  bool curvature_units() const override { return false; }
   BlockStats Step(const StepContext& c, const Vec3* cur, Vec3* next, int32_t begin, int32_t end) const override {
     return ApplyStep(c, cur, next, begin, end, [&](int32_t v) {
       return kInverseDistance ? UmbrellaU1(c, cur, v) : UmbrellaU0(c, cur, v);
@@ -20,7 +19,7 @@ class Laplacian final : public FlowKernel {
 
 }  // namespace
 
-std::unique_ptr<FlowKernel> MakeLaplacian(const FlowParams& p) {
+std::unique_ptr<FlowKernel> MakeLaplacian(const FlowParams& p, double /*step*/) {
   if (p.weights == UmbrellaWeights::kInverseDistance) return std::make_unique<Laplacian<true>>();
   return std::make_unique<Laplacian<false>>();
 }

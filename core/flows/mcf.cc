@@ -1,16 +1,15 @@
 // Mean curvature flow, eqs. (7)-(8): P <- P + lambda H n, explicit Euler, cotangent weights
 // recomputed every iteration. H n uses the mixed Voronoi area (Meyer et al. 2003) instead of
 // the whole one-ring area of eq. (8), so H is the true mean curvature (1/r on a sphere of
-// radius r; NOTES.md) and a sphere follows r(t)^2 = r0^2 - 2t. Smooths well but makes the
+// radius r; docs/paper.md) and a sphere follows r(t)^2 = r0^2 - 2t. Smooths well but makes the
 // sampling more irregular. lambda = step * h^2; default step 0.1.
-#include "core/flows/kernel.h"
+#include "core/flows/step_loops.h"
 
 namespace meshsmooth::flows {
 namespace {
 
 class Mcf final : public FlowKernel {
  public:
-  bool curvature_units() const override { return true; }
   BlockStats Step(const StepContext& c, const Vec3* cur, Vec3* next, int32_t begin, int32_t end) const override {
     return ApplyCurvatureStep(c, cur, next, begin, end,
                               [](const auto& k) __attribute__((always_inline)) { return k.hn; });
@@ -19,6 +18,6 @@ class Mcf final : public FlowKernel {
 
 }  // namespace
 
-std::unique_ptr<FlowKernel> MakeMcf(const FlowParams&) { return std::make_unique<Mcf>(); }
+std::unique_ptr<FlowKernel> MakeMcf(const FlowParams&, double) { return std::make_unique<Mcf>(); }
 
 }  // namespace meshsmooth::flows

@@ -1,12 +1,13 @@
 // Mean curvature flow with a tangential Laplacian component, eq. (11):
 //   P <- P + lambda { H n + C [U0 - (U0 . n) n] }
 // The paper prints "(U0 . n) U0"; the projection onto the tangent plane is (U0 . n) n
-// (NOTES.md). The normal speed smooths, the tangential umbrella evens out the sampling.
+// (docs/paper.md). The normal speed smooths, the tangential umbrella evens out the sampling.
 // Units: lambda = step * h^2 for H n; C is taken relative to 1/h^2 so that the tangential part
 // moves a vertex by step * C * U0_t (dimensionless, like a Laplacian step; must be <= 1).
 // n is the unit area-weighted normal of the one-ring. Defaults: step 0.1, C 5 (tangential
 // step 0.5, as the Laplacian default).
-#include "core/flows/kernel.h"
+#include "absl/strings/str_format.h"
+#include "core/flows/step_loops.h"
 
 namespace meshsmooth::flows {
 namespace {
@@ -14,7 +15,6 @@ namespace {
 class McfTangential final : public FlowKernel {
  public:
   explicit McfTangential(double c) : c_(c) {}
-  bool curvature_units() const override { return true; }
   BlockStats Step(const StepContext& c, const Vec3* cur, Vec3* next, int32_t begin, int32_t end) const override {
     const double weight = c_ * c.inv_h2;
     return ApplyCurvatureStep(c, cur, next, begin, end, [&](const auto& k) __attribute__((always_inline)) {
@@ -39,7 +39,16 @@ class McfTangential final : public FlowKernel {
 
 }  // namespace
 
-std::unique_ptr<FlowKernel> MakeMcfTangential(const FlowParams& p) {
+absl::Status ValidateMcfTangential(const FlowParams& p, double step) {
+  if (!(p.tangential_weight >= 0.0) || !(step * p.tangential_weight <= 1.0)) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "mcf_tangential needs C >= 0 and step * C <= 1 (the tangential umbrella step), got C %g, step %g",
+        p.tangential_weight, step));
+  }
+  return absl::OkStatus();
+}
+
+std::unique_ptr<FlowKernel> MakeMcfTangential(const FlowParams& p, double) {
   return std::make_unique<McfTangential>(p.tangential_weight);
 }
 

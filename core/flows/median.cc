@@ -5,8 +5,8 @@
 //   F = 0                              if |cos(theta)| <= epsilon
 // with cos(theta) = m . Hn / |Hn|. Smooths like the mean curvature flow and keeps or improves
 // the regularity. Where |Hn| or |U0| is (numerically) zero the vertex does not move that
-// iteration (NOTES.md). lambda = step * h^2; defaults step 0.1, epsilon 0.1.
-#include "core/flows/kernel.h"
+// iteration (docs/paper.md). lambda = step * h^2; defaults step 0.1, epsilon 0.1.
+#include "core/flows/step_loops.h"
 
 namespace meshsmooth::flows {
 namespace {
@@ -14,7 +14,6 @@ namespace {
 class Median final : public FlowKernel {
  public:
   explicit Median(double epsilon) : epsilon_(epsilon) {}
-  bool curvature_units() const override { return true; }
   BlockStats Step(const StepContext& c, const Vec3* cur, Vec3* next, int32_t begin, int32_t end) const override {
     const double eps2 = epsilon_ * epsilon_;
     const double tiny_h = 1e-12 / c.h, tiny_u = 1e-12 * c.h;
@@ -50,6 +49,6 @@ class Median final : public FlowKernel {
 
 }  // namespace
 
-std::unique_ptr<FlowKernel> MakeMedian(const FlowParams& p) { return std::make_unique<Median>(p.epsilon); }
+std::unique_ptr<FlowKernel> MakeMedian(const FlowParams& p, double) { return std::make_unique<Median>(p.epsilon); }
 
 }  // namespace meshsmooth::flows

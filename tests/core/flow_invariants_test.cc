@@ -5,8 +5,14 @@
 #include <atomic>
 #include <cstdlib>
 #include <cstring>
+#include <string>
+#include <utility>
+#include <vector>
 
+#include "core/flows/flow_info.h"
 #include "core/flows/lane_batches.h"
+#include "core/flows/reorder.h"
+#include "core/flows/vector_isa.h"
 #include "core/io/mesh_io.h"
 #include "gtest/gtest.h"
 #include "tests/flow_fixtures.h"
@@ -94,7 +100,7 @@ TEST(FlowInvariantsTest, InternalReorderingChangesNoPosition) {
     ASSERT_TRUE(Smooth(a, topo, p).ok());
     p.reorder = ReorderMode::kNever;
     ASSERT_TRUE(Smooth(b, topo, p).ok());
-    EXPECT_TRUE(SameBytes(a, b)) << p.flow;
+    EXPECT_TRUE(SameBytes(a, b)) << FlowOf(p.flow).name;
   }
 }
 
@@ -162,6 +168,18 @@ Mesh SplitEverySeventhFace(Mesh m) {
 // bytes of the x86-64 baseline build. (On a CPU without AVX2 every run below is the baseline
 // and the test cannot tell them apart.)
 TEST(FlowInvariantsTest, InstructionSetChangesNoPosition) {
+  // The builds of the cotangent kernel this CPU can run, by MESHSMOOTH_VECTOR_ISA ("" = the
+  // widest): SSE2 always, AVX2 and AVX-512 when the CPU has them.
+  unsetenv("MESHSMOOTH_VECTOR_ISA");
+  const flows::VectorIsa widest = flows::BestVectorIsa();
+  std::vector<std::pair<std::string, const char*>> isas = {{"sse2", "sse2"}};
+  if (widest != flows::VectorIsa::kSse2) isas.push_back({"avx2", "avx2"});
+  if (widest == flows::VectorIsa::kAvx512) isas.push_back({"avx512", ""});
+  if (isas.size() == 1) GTEST_SKIP() << "this CPU has neither AVX2 nor AVX-512: nothing to compare SSE2 with";
+  std::string compared = "sse2";
+  for (size_t i = 1; i < isas.size(); ++i) compared += " = " + isas[i].first;
+  std::printf("comparing the positions of %s\n", compared.c_str());
+  RecordProperty("instruction_sets", compared);
   std::vector<Case> cases = Meshes();  // with boundaries (fixed vertices beside free ones) and the real scans
   Mesh split = SplitEverySeventhFace(Icosphere(5));
   AddUniformNoise(split, 0.3, 3);
@@ -172,7 +190,7 @@ TEST(FlowInvariantsTest, InstructionSetChangesNoPosition) {
       SCOPED_TRACE(c.name + " / " + flow);
       FlowParams p = Params(flow, 5);
       std::vector<Mesh> runs;
-      for (const char* isa : {"sse2", "avx2", ""}) {  // "": the widest this CPU has
+      for (const auto& [name, isa] : isas) {
         setenv("MESHSMOOTH_VECTOR_ISA", isa, 1);
         Mesh m = c.mesh;
         ASSERT_TRUE(Smooth(m, topo, p).ok());
@@ -180,8 +198,7 @@ TEST(FlowInvariantsTest, InstructionSetChangesNoPosition) {
       }
       unsetenv("MESHSMOOTH_VECTOR_ISA");
       EXPECT_FALSE(SameBytes(runs[0], c.mesh));
-      EXPECT_TRUE(SameBytes(runs[0], runs[1])) << "sse2 and avx2 differ";
-      EXPECT_TRUE(SameBytes(runs[0], runs[2])) << "sse2 and the widest differ";
+      for (size_t i = 1; i < isas.size(); ++i) EXPECT_TRUE(SameBytes(runs[0], runs[i])) << "sse2 and " << isas[i].first << " differ";
     }
   }
 }
@@ -366,6 +383,45 @@ TEST(FlowInvariantsTest, ProgressCancelToleranceAndTimeBudget) {
   }
 }
 
+// The flow table resolves each name to its own row, and what it lists for ListFlows holds:
+// every flow's default step is inside its listed range, and parameters inside the ranges are
+// refused only for a constraint that ListFlows states.
+TEST(FlowInvariantsTest, FlowTableRowsResolveAndTheirLimitsHold) {
+  ASSERT_EQ(FlowNames().size(), FlowTable().size());
+  const std::vector<FlowInfo> described = DescribeFlows();
+  ASSERT_EQ(described.size(), FlowTable().size());
+  for (size_t i = 0; i < FlowTable().size(); ++i) {
+    const FlowRow& row = FlowTable()[i];
+    SCOPED_TRACE(std::string(row.name));
+    EXPECT_EQ(static_cast<size_t>(row.id), i);
+    EXPECT_EQ(ParseFlowName(row.name).value(), row.id);
+    EXPECT_EQ(FlowNames()[i], row.name);
+    EXPECT_EQ(described[i].name, row.name);
+    EXPECT_EQ(described[i].parameters.front().name, "step");
+    EXPECT_EQ(described[i].parameters.front().max_value, row.max_step);
+    EXPECT_EQ(described[i].constraints, row.constraints);
+    EXPECT_GT(row.default_step, 0.0);
+    EXPECT_LE(row.default_step, row.max_step);
+    EXPECT_NE(row.make_kernel, nullptr);
+    EXPECT_EQ(row.validate != nullptr, !row.constraints.empty());
+  }
+  // taubin at step 1.0 is inside the step range but not its pass-band constraint, which
+  // ListFlows states; mcf_tangential at step 10 needs C <= 0.1.
+  FlowParams taubin = Params("taubin", 1, 1.0);
+  const absl::Status band = ValidateFlowParams(taubin, 100);
+  EXPECT_EQ(band.code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_NE(band.message().find("pass band"), std::string::npos) << band;
+  taubin.taubin_mu = 1.0;
+  taubin.step = 0.99;
+  EXPECT_TRUE(ValidateFlowParams(taubin, 100).ok());
+  FlowParams tangential = Params("mcf_tangential", 1, 10.0);
+  const absl::Status weight = ValidateFlowParams(tangential, 100);
+  EXPECT_EQ(weight.code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_NE(weight.message().find("step * C <= 1"), std::string::npos) << weight;
+  tangential.tangential_weight = 0.1;
+  EXPECT_TRUE(ValidateFlowParams(tangential, 100).ok());
+}
+
 TEST(FlowInvariantsTest, BadParametersAndInputsAreRefusedClearly) {
   const Mesh m0 = Icosphere(2);
   struct Bad {
@@ -373,7 +429,14 @@ TEST(FlowInvariantsTest, BadParametersAndInputsAreRefusedClearly) {
     std::string expect;
   };
   std::vector<Bad> bad;
-  bad.push_back({Params("laplacien", 1), "unknown flow 'laplacien'"});
+  // A name is resolved where a request enters (ParseFlowName); an id outside the table is
+  // refused by Smooth() itself.
+  const absl::Status unknown = ParseFlowName("laplacien").status();
+  EXPECT_EQ(unknown.code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_NE(unknown.message().find("unknown flow 'laplacien' (laplacian, taubin,"), std::string::npos) << unknown;
+  FlowParams stray = Params("median", 1);
+  stray.flow = static_cast<FlowId>(99);
+  bad.push_back({stray, "unknown flow id 99"});
   bad.push_back({Params("median", 0), "iterations"});
   bad.push_back({Params("median", kMaxIterations + 1), "iterations"});
   bad.push_back({Params("mcf", 1, -1.0), "step"});

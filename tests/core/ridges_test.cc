@@ -115,7 +115,7 @@ TEST(RidgesTest, MedianSmoothingRecoversTheCrestsOfANoisyWave) {
   AddUniformNoise(noisy, 0.5, 1);
   Mesh smoothed = noisy;
   FlowParams p;
-  p.flow = "median";
+  p.flow = FlowId::kMedian;
   p.iterations = 120;
   ASSERT_TRUE(Smooth(smoothed, topo, p).ok());
 

@@ -307,7 +307,14 @@ TEST(ServiceTest, BearerTokenIsRequiredWhenConfigured) {
   grpc::ClientContext with_token;
   with_token.AddMetadata("authorization", "Bearer s3cret-token");
   EXPECT_TRUE(stub->ListFlows(&with_token, {}, &flows).ok());
-  EXPECT_EQ(flows.flows_size(), 6);
+  ASSERT_EQ(flows.flows_size(), static_cast<int>(FlowTable().size()));
+  for (const v1::FlowInfo& f : flows.flows()) {  // the constraints beyond the ranges, as the table states them
+    const FlowRow& row = FlowOf(ParseFlowName(f.name()).value());
+    EXPECT_EQ(f.constraints_size(), static_cast<int>(row.constraints.size())) << f.name();
+  }
+  EXPECT_EQ(flows.flows(1).name(), "taubin");
+  ASSERT_EQ(flows.flows(1).constraints_size(), 2);
+  EXPECT_NE(flows.flows(1).constraints(1).find("taubin_pass_band < 1/step - 1"), std::string::npos);
 }
 
 TEST(ServiceTest, SixteenConcurrentClientsAgainstTwoWorkers) {

@@ -1,0 +1,302 @@
+#include "core/flows/driver.h"
+
+#include <omp.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+#include "core/flows/flow_kernel.h"
+#include "core/flows/lane_batches.h"
+#include "core/flows/step_loops.h"
+#include "core/metrics.h"
+
+namespace meshsmooth::flows {
+namespace {
+
+// Explicit curvature flows are only stable for lambda ~ (local edge)^2, and real scans hold
+// needles and coincident vertices whose cotangent sums are huge. A free vertex of a curvature
+// flow therefore moves at most one mean edge length h per pass: this touches only such
+// degenerate places (a stable step moves a vertex ~0.01-0.5 h). When the step itself is too
+// large, most vertices hit the cap: the run fails as diverging when more than half of the
+// movable vertices are capped in one iteration, or more than 5% in 3 iterations running (the
+// dirty beetle scan caps 7% in its first median iteration at the default step, then ~2%).
+constexpr double kCappedShareAtOnce = 0.5;
+constexpr double kCappedSharePersistent = 0.05;
+constexpr int kCappedPersistentIterations = 3;
+
+BlockStats Reduce(const std::vector<BlockStats>& blocks) {
+  BlockStats total;
+  for (const BlockStats& b : blocks) {
+    total.max_sq = std::max(total.max_sq, b.max_sq);
+    total.sum += b.sum;
+    total.moved += b.moved;
+    total.movable += b.movable;
+    total.capped += b.capped;
+    total.non_finite |= b.non_finite;
+  }
+  return total;
+}
+
+// The diagonal of the bounding box of the vertices in use, or InvalidArgument when one of
+// them is not finite or the mesh has no edge to smooth.
+absl::StatusOr<double> CheckInput(const Mesh& mesh, const Topology& topo, double h) {
+  BoundingBox box;
+  int64_t non_finite = 0;
+  for (int32_t v = 0; v < mesh.num_vertices(); ++v) {
+    if (topo.kind[v] == VertexKind::kIsolated) continue;
+    const Vec3& q = mesh.positions[v];
+    if (!IsFinite(q)) {
+      ++non_finite;
+      continue;
+    }
+    box.Add(q);
+  }
+  if (non_finite > 0) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("the mesh has ", non_finite, " vertices with NaN or infinite coordinates"));
+  }
+  if (!(h > 0.0) || !std::isfinite(h)) {
+    return absl::InvalidArgumentError("the mesh has no edge of non-zero length to smooth");
+  }
+  return box.diagonal();
+}
+
+// One run of a flow: its set-up, then one call of Iterate() per iteration.
+class FlowRun {
+ public:
+  FlowRun(const Topology& topo, const FlowParams& p, double h, double diagonal)
+      : topo_(topo), p_(p), row_(FlowOf(p.flow)), n_(topo.num_vertices()), h_(h), diagonal_(diagonal) {}
+
+  // Kernel, roles, step context, lane batches and the constant threshold.
+  void SetUp(FlowResult& result) {
+    curvature_ = row_.kind == FlowKind::kCurvature;
+    step_ = p_.step.value_or(row_.default_step);
+    lambda_ = curvature_ ? step_ * h_ * h_ : step_;
+    kernel_ = row_.make_kernel(p_, step_);
+    result.mean_edge_length = h_;
+    result.effective_step = lambda_;
+    result.effective_mu = kernel_->mu();
+    AssignRoles();
+    threads_ = ThreadsFor(n_, p_);
+    MakeContext();
+    // Curvature flows move a boundary curve like the curve-shortening flow with the same time
+    // step (kappa ~ 2 U / h^2), capped at the stable umbrella step 0.5.
+    curve_step_ = curvature_ ? std::min(2.0 * step_, 0.5) : step_;
+    // Eq. (14): T in the flow's speed units (see FlowParams).
+    t_scale_ = p_.adaptive == AdaptiveMode::kConstant ? (curvature_ ? 1.0 : h_) : (curvature_ ? 1.0 : 0.5 * h_ * h_);
+    if (p_.adaptive == AdaptiveMode::kConstant) threshold_.assign(n_, p_.adaptive_threshold * t_scale_);
+    stats_.resize(blocks_);
+  }
+
+  int passes() const { return kernel_->passes(); }
+
+  // Iteration `it` from `cur` into `*out` (one of next / mid): its displacement statistics.
+  BlockStats Iterate(int it, const std::vector<Vec3>& cur, std::vector<Vec3>& next, std::vector<Vec3>& mid,
+                     std::vector<Vec3>*& out) {
+    UpdateRingThresholds(it, cur);
+    ctx_.threshold = threshold_.empty() ? nullptr : threshold_.data();
+    const Vec3* in = cur.data();
+    const int passes = kernel_->passes();
+    for (int pass = 0; pass < passes; ++pass) {
+      out = pass % 2 == 0 ? &next : &mid;
+      const double factor = kernel_->pass_factor(pass);
+      ctx_.lambda = lambda_ * factor;
+      ctx_.curve_lambda = curve_step_ * factor;
+      kernel_->Prepare(ctx_, in, n_, threads_);
+      const FlowKernel& k = *kernel_;
+      Vec3* const dst = out->data();
+      ForBlocks(n_, threads_, [&](int32_t b, int32_t begin, int32_t end) { stats_[b] = k.Step(ctx_, in, dst, begin, end); });
+      in = dst;
+    }
+    if (passes > 1) MeasureWholeIteration(cur.data(), in);
+    return Reduce(stats_);
+  }
+
+  // The progress report of an iteration from its statistics.
+  Progress ToProgress(int it, const BlockStats& total) const {
+    Progress progress;
+    progress.iteration = it;
+    progress.total = p_.iterations;
+    progress.max_displacement = std::sqrt(total.max_sq);
+    progress.mean_displacement = movable_ > 0 ? total.sum / static_cast<double>(movable_) : 0.0;
+    progress.moved_share = movable_ > 0 ? static_cast<double>(total.moved) / static_cast<double>(movable_) : 0.0;
+    return progress;
+  }
+
+  // FailedPrecondition when iteration `it` diverged (a non-finite coordinate, a vertex moved
+  // further than the mesh's size, or too many vertices capped), else OK.
+  absl::Status CheckDivergence(int it, const BlockStats& total, const Progress& progress) {
+    const double capped_share = movable_ > 0 ? static_cast<double>(total.capped) / static_cast<double>(movable_) : 0.0;
+    capped_run_ = capped_share > kCappedSharePersistent ? capped_run_ + 1 : 0;
+    const bool too_many_capped = capped_share > kCappedShareAtOnce || capped_run_ >= kCappedPersistentIterations;
+    if (!total.non_finite && progress.max_displacement <= diagonal_ && !too_many_capped) return absl::OkStatus();
+    return absl::FailedPreconditionError(absl::StrFormat(
+        "%s diverged at iteration %d (%s); try a smaller step than %g", row_.name, it,
+        total.non_finite ? "a coordinate became NaN or infinite"
+        : too_many_capped
+            ? absl::StrFormat("%d of %d vertices tried to move more than a mean edge length", total.capped, movable_)
+            : absl::StrFormat("a vertex moved %g, more than the mesh's size %g", progress.max_displacement, diagonal_),
+        step_));
+  }
+
+ private:
+  // Free (interior), curve (boundary in BoundaryMode::kCurve) or fixed, and which blocks are
+  // all free.
+  void AssignRoles() {
+    role_.assign(n_, kFixed);
+    for (int32_t v = 0; v < n_; ++v) {
+      if (!p_.locked.empty() && p_.locked[v] != 0) continue;
+      if (topo_.kind[v] == VertexKind::kInterior) {
+        role_[v] = kFree;
+      } else if (topo_.kind[v] == VertexKind::kBoundary && p_.boundary == BoundaryMode::kCurve) {
+        role_[v] = kCurve;
+      }
+      movable_ += role_[v] != kFixed;
+    }
+    blocks_ = (n_ + kBlock - 1) / kBlock;
+    all_free_.assign(blocks_, 1);
+    for (int32_t v = 0; v < n_; ++v) {
+      if (role_[v] != kFree) all_free_[v / kBlock] = 0;
+    }
+  }
+
+  void MakeContext() {
+    ctx_.num_vertices = n_;
+    ctx_.offsets = topo_.ring_offsets.data();
+    ctx_.ring = topo_.ring.data();
+    ctx_.role = role_.data();
+    ctx_.all_free = all_free_.data();
+    ctx_.kind = topo_.kind.data();
+    ctx_.h = h_;
+    ctx_.inv_h2 = 1.0 / (h_ * h_);
+    ctx_.isa = BestVectorIsa();
+    if (curvature_) ctx_.max_step_sq = h_ * h_;
+    // The cotangent flows run their free vertices in batches (lane_batches.h);
+    // MESHSMOOTH_LANE_BATCHES=0 makes them go vertex by vertex (for tests and measurements).
+    const char* want_batches = std::getenv("MESHSMOOTH_LANE_BATCHES");
+    if (curvature_ && (want_batches == nullptr || std::string_view(want_batches) != "0")) {
+      batches_ = BuildLaneBatches(topo_, role_.data(), LaneWidthOf(ctx_.isa), threads_);
+      if (!batches_.data.empty()) ctx_.batches = &batches_;
+    }
+  }
+
+  // Eq. (14)'s T(P), every K iterations from the first.
+  void UpdateRingThresholds(int it, const std::vector<Vec3>& cur) {
+    if (p_.adaptive != AdaptiveMode::kRing1 && p_.adaptive != AdaptiveMode::kRing2) return;
+    if ((it - 1) % p_.adaptive_recompute_every != 0) return;
+    RingThresholds(ctx_, cur.data(), n_, p_.adaptive == AdaptiveMode::kRing1 ? 1 : 2, threads_, threshold_);
+    for (double& t : threshold_) t *= t_scale_;
+  }
+
+  // The statistics of a several-pass iteration are of its whole displacement, not its last
+  // pass's.
+  void MeasureWholeIteration(const Vec3* start, const Vec3* end_pos) {
+    ForBlocks(n_, threads_, [&](int32_t b, int32_t begin, int32_t end) {
+      BlockStats s;
+      for (int32_t v = begin; v < end; ++v) {
+        if (role_[v] == kFixed) continue;
+        const double d2 = SquaredNorm(end_pos[v] - start[v]);
+        s.max_sq = std::max(s.max_sq, d2);
+        s.sum += std::sqrt(d2);
+        s.moved += d2 > 0.0;
+        ++s.movable;
+        s.non_finite |= !IsFinite(end_pos[v]);
+      }
+      stats_[b] = s;
+    });
+  }
+
+  const Topology& topo_;
+  const FlowParams& p_;
+  const FlowRow& row_;
+  const int32_t n_;
+  const double h_, diagonal_;
+  bool curvature_ = false;
+  double step_ = 0.0, lambda_ = 0.0, curve_step_ = 0.0, t_scale_ = 1.0;
+  std::unique_ptr<FlowKernel> kernel_;
+  std::vector<uint8_t> role_, all_free_;
+  int64_t movable_ = 0;
+  int32_t blocks_ = 0;
+  int threads_ = 1;
+  StepContext ctx_;
+  LaneBatches batches_;
+  std::vector<double> threshold_;
+  std::vector<BlockStats> stats_;
+  int capped_run_ = 0;  // consecutive iterations with more than kCappedSharePersistent capped
+};
+
+}  // namespace
+
+int ThreadsFor(int32_t n, const FlowParams& p) {
+  return n < kParallelThreshold ? 1 : (p.threads > 0 ? p.threads : omp_get_max_threads());
+}
+
+VectorIsa BestVectorIsa() {
+  VectorIsa best = VectorIsa::kSse2;
+  if (__builtin_cpu_supports("avx2")) best = VectorIsa::kAvx2;
+  if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl") && __builtin_cpu_supports("avx512dq")) {
+    best = VectorIsa::kAvx512;
+  }
+  if (const char* want = std::getenv("MESHSMOOTH_VECTOR_ISA")) {  // never wider than the CPU
+    const std::string w = want;
+    if (w == "sse2") best = VectorIsa::kSse2;
+    if (w == "avx2" && best == VectorIsa::kAvx512) best = VectorIsa::kAvx2;
+  }
+  return best;
+}
+
+absl::StatusOr<FlowResult> RunIterations(Mesh& mesh, const Topology& topo, const FlowParams& p,
+                                         const RunControl& control, double h) {
+  const absl::StatusOr<double> diagonal = CheckInput(mesh, topo, h);
+  if (!diagonal.ok()) return diagonal.status();
+  FlowResult result;
+  FlowRun run(topo, p, h, *diagonal);
+  run.SetUp(result);
+
+  // The positions move into `cur` for the run (no copy; the mesh gets them back on every return
+  // below). `cur` keeps the iteration's start until the iteration is accepted; passes write
+  // `next`, then alternate with `mid` (taubin: cur -> next -> mid), so measuring the
+  // displacement of a whole iteration needs no copy of the start.
+  const int32_t n = mesh.num_vertices();
+  std::vector<Vec3> cur = std::move(mesh.positions), next(n), mid;
+  if (run.passes() > 1) mid.resize(n);
+  const auto t0 = std::chrono::steady_clock::now();
+  for (int it = 1; it <= p.iterations; ++it) {
+    if (control.cancel != nullptr && control.cancel->load(std::memory_order_relaxed)) {
+      mesh.positions = std::move(cur);
+      return absl::CancelledError(absl::StrCat("cancelled after ", it - 1, " iterations"));
+    }
+    std::vector<Vec3>* out = &next;
+    const BlockStats total = run.Iterate(it, cur, next, mid, out);
+    const Progress progress = run.ToProgress(it, total);
+    if (absl::Status s = run.CheckDivergence(it, total, progress); !s.ok()) {
+      mesh.positions = std::move(cur);  // the last iteration before the failure
+      return s;
+    }
+    cur.swap(*out);  // the iteration is accepted
+    result.iterations_run = it;
+    result.last = progress;
+    if (control.on_progress) control.on_progress(progress);
+    if (p.tolerance > 0.0 && progress.max_displacement < p.tolerance * h) {
+      result.stop_reason = StopReason::kTolerance;
+      break;
+    }
+    if (control.time_budget_seconds > 0.0 &&
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() > control.time_budget_seconds) {
+      result.stop_reason = StopReason::kTimeBudget;
+      break;
+    }
+  }
+  mesh.positions = std::move(cur);
+  return result;
+}
+
+}  // namespace meshsmooth::flows
