@@ -358,7 +358,7 @@ double ServiceRow(const NamedMesh& nm, int iterations, int runs) {
   for (int r = 0; r < runs; ++r) {
     grpc::ClientContext ctx;
     const auto t0 = Clock::now();
-    absl::StatusOr<cli::SmoothOutcome> out = cli::CallSmooth(*stub, ctx, spec, draco);
+    absl::StatusOr<client::SmoothOutcome> out = client::CallSmooth(*stub, ctx, spec, draco);
     const double ms = Ms(t0, Clock::now());
     if (!out.ok()) {
       std::printf("| %s | failed: %s |\n", nm.name.c_str(), std::string(out.status().message()).c_str());

@@ -5,7 +5,7 @@
 #include "core/io/mesh_io.h"
 #include "core/shapes.h"
 
-namespace meshsmooth::cli {
+namespace meshsmooth::client {
 
 std::vector<std::pair<std::string, std::string>> BuiltinInputs() {
   return {
@@ -39,4 +39,4 @@ absl::StatusOr<Mesh> LoadInput(const std::string& spec) {
   return mesh;
 }
 
-}  // namespace meshsmooth::cli
+}  // namespace meshsmooth::client

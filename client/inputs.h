@@ -7,7 +7,7 @@
 #include "absl/status/statusor.h"
 #include "core/mesh.h"
 
-namespace meshsmooth::cli {
+namespace meshsmooth::client {
 
 // Names accepted after "builtin:", with a one-line description each.
 std::vector<std::pair<std::string, std::string>> BuiltinInputs();
@@ -15,4 +15,4 @@ std::vector<std::pair<std::string, std::string>> BuiltinInputs();
 // Loads `spec`: "builtin:NAME" generates the shape, anything else is read as a mesh file.
 absl::StatusOr<Mesh> LoadInput(const std::string& spec);
 
-}  // namespace meshsmooth::cli
+}  // namespace meshsmooth::client

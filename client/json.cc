@@ -2,7 +2,7 @@
 
 #include <google/protobuf/util/json_util.h>
 
-namespace meshsmooth::cli {
+namespace meshsmooth::client {
 
 std::string ToJson(const google::protobuf::Message& message) {
   google::protobuf::util::JsonPrintOptions options;
@@ -14,4 +14,4 @@ std::string ToJson(const google::protobuf::Message& message) {
   return json;
 }
 
-}  // namespace meshsmooth::cli
+}  // namespace meshsmooth::client

@@ -5,10 +5,10 @@
 
 #include "google/protobuf/message.h"
 
-namespace meshsmooth::cli {
+namespace meshsmooth::client {
 
 // `message` as indented JSON with the .proto field names (job_id, not jobId), as proto3's
 // JSON mapping writes it (64-bit integers as strings, fields at their default left out).
 std::string ToJson(const google::protobuf::Message& message);
 
-}  // namespace meshsmooth::cli
+}  // namespace meshsmooth::client

@@ -42,7 +42,7 @@
 #include "grpcpp/grpcpp.h"
 #include "server/server.h"
 
-namespace meshsmooth::cli {
+namespace meshsmooth::client {
 namespace {
 
 constexpr int kExitFailure = 1;
@@ -450,11 +450,11 @@ void AddConnectionOptions(CLI::App* app, ConnectionOptions& c) {
 }
 
 }  // namespace
-}  // namespace meshsmooth::cli
+}  // namespace meshsmooth::client
 
 int main(int argc, char** argv) {
   meshsmooth::UseHugePagesForLargeBuffers(argv);  // first: may re-execute the program
-  using namespace meshsmooth::cli;
+  using namespace meshsmooth::client;
   // Before any thread exists: Ctrl-C is handled by InterruptWatcher, not by a handler.
   meshsmooth::BlockShutdownSignals();
 

@@ -2,7 +2,7 @@
 
 #include <algorithm>
 
-namespace meshsmooth::cli {
+namespace meshsmooth::client {
 
 absl::Status FromGrpc(const grpc::Status& status) {
   return absl::Status(static_cast<absl::StatusCode>(status.error_code()), status.error_message());
@@ -66,4 +66,4 @@ absl::StatusOr<SmoothOutcome> CallSmooth(v1::MeshSmoother::StubInterface& stub, 
   return out;
 }
 
-}  // namespace meshsmooth::cli
+}  // namespace meshsmooth::client

@@ -9,7 +9,7 @@
 #include "absl/status/statusor.h"
 #include "meshsmooth/v1/smoothing.grpc.pb.h"
 
-namespace meshsmooth::cli {
+namespace meshsmooth::client {
 
 struct SmoothOutcome {
   v1::Accepted accepted;
@@ -30,4 +30,4 @@ absl::StatusOr<SmoothOutcome> CallSmooth(v1::MeshSmoother::StubInterface& stub, 
 // gRPC status -> absl::Status (the codes share their numbers).
 absl::Status FromGrpc(const grpc::Status& status);
 
-}  // namespace meshsmooth::cli
+}  // namespace meshsmooth::client

@@ -24,8 +24,8 @@
 namespace meshsmooth {
 namespace {
 
-using cli::CallSmooth;
-using cli::SmoothOutcome;
+using client::CallSmooth;
+using client::SmoothOutcome;
 using server::Server;
 using server::ServerOptions;
 using namespace meshsmooth::testing;
