@@ -190,6 +190,25 @@ def main():
         assert names == ["laplacian", "taubin", "bilaplacian", "mcf", "mcf_tangential", "median"], names
     check("flows --json lists the six flows", flows_json)
 
+    def flow_choices_are_the_flows():
+        # --flow's choices and help come from the flow table: every flow ListFlows names is
+        # offered, accepted and runs; a name it does not list is refused.
+        r = run([cli, "flows", "--json"])
+        assert r.returncode == 0, r.stderr
+        names = [f["name"] for f in json.loads(r.stdout)["flows"]]
+        r = run([cli, "smooth", "--help"])
+        assert r.returncode == 0, r.returncode
+        assert "{" + ",".join(names) + "}" in r.stdout, r.stdout
+        assert " | ".join(names) in r.stdout, r.stdout
+        for name in names:
+            out = os.path.join(tmp, f"flow_{name}.ply")
+            r = run([cli, "smooth", "builtin:sphere", "-o", out, "--flow", name, "--iterations", "1", "--json"])
+            assert r.returncode == 0, (name, r.returncode, r.stderr)
+            assert json.loads(r.stdout)["parameters"]["flow"] == name, (name, r.stdout)
+        r = run([cli, "smooth", "builtin:sphere", "-o", os.path.join(tmp, "flow_x.ply"), "--flow", names[0] + "x"])
+        assert r.returncode == 2 and "--flow" in r.stderr, (r.returncode, r.stderr)
+    check("--flow offers and accepts exactly the flows ListFlows names", flow_choices_are_the_flows)
+
     def bad_usage():
         r = run([cli, "smooth", "builtin:noisy-sphere", "-o", out_ply, "--flow", "nope"])
         assert r.returncode == 2, r.returncode

@@ -1,0 +1,275 @@
+#include "client/commands.h"
+
+#include <cmath>
+#include <cstdio>
+#include <functional>
+#include <iostream>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "absl/strings/str_cat.h"
+#include "client/inputs.h"
+#include "client/json.h"
+#include "client/report.h"
+#include "client/smooth_client.h"
+#include "core/draco_codec.h"
+#include "core/features/ridges.h"
+#include "core/io/file_bytes.h"
+#include "core/io/mesh_io.h"
+#include "core/metrics.h"
+#include "core/render/png.h"
+#include "core/render/render.h"
+#include "core/topology.h"
+
+namespace meshsmooth::client {
+namespace {
+
+int ExitCodeFor(const absl::Status& s) {
+  if (s.code() == absl::StatusCode::kUnavailable) return kExitUnavailable;
+  return kExitFailure;
+}
+
+// Prints "meshsmooth: <what><message>" and returns the exit code for `s`.
+int Fail(const std::string& what, const absl::Status& s) {
+  std::cerr << "meshsmooth: " << what << s.message() << "\n";
+  return ExitCodeFor(s);
+}
+
+v1::JobSpec SpecFrom(const SmoothOptions& o) {
+  v1::JobSpec spec;
+  spec.set_flow(o.flow);
+  spec.set_iterations(o.iterations);
+  spec.set_step(o.step);
+  spec.set_weights(o.weights == "u1" ? v1::UMBRELLA_WEIGHTS_INVERSE_DISTANCE : v1::UMBRELLA_WEIGHTS_UNIFORM);
+  if (o.mu > 0) spec.set_taubin_mu(o.mu);
+  if (o.pass_band > 0) spec.set_taubin_pass_band(o.pass_band);
+  if (o.tangential_weight >= 0) spec.set_tangential_weight(o.tangential_weight);
+  if (o.epsilon > 0) spec.set_epsilon(o.epsilon);
+  static const std::map<std::string, v1::AdaptiveMode> kModes = {{"none", v1::ADAPTIVE_MODE_NONE},
+                                                                 {"constant", v1::ADAPTIVE_MODE_CONSTANT},
+                                                                 {"ring1", v1::ADAPTIVE_MODE_RING1},
+                                                                 {"ring2", v1::ADAPTIVE_MODE_RING2}};
+  spec.mutable_adaptive()->set_mode(kModes.at(o.adaptive));
+  spec.mutable_adaptive()->set_threshold(o.threshold);
+  spec.mutable_adaptive()->set_recompute_every(o.recompute_every);
+  spec.set_boundary(o.boundary == "curve" ? v1::BOUNDARY_MODE_CURVE : v1::BOUNDARY_MODE_FIXED);
+  spec.set_tolerance(o.tolerance);
+  spec.mutable_output()->set_quantization_bits(o.quantization_bits);
+  spec.mutable_output()->set_edgebreaker(o.edgebreaker);
+  if (o.ridges) {
+    spec.mutable_features()->set_enabled(true);
+    spec.mutable_features()->set_min_abs_curvature(o.ridge_threshold);
+  }
+  return spec;
+}
+
+// What goes to the service: the input's Draco bytes, and its vertex colours for a PLY output.
+struct Upload {
+  std::string draco;
+  std::vector<Rgb> colors;
+};
+
+// Draco input goes as it is (all its attributes travel along); anything else is encoded
+// losslessly and sequentially, so vertex i of the result is vertex i of the input.
+absl::StatusOr<Upload> PrepareUpload(const std::string& input) {
+  Upload upload;
+  const absl::StatusOr<MeshFormat> format = FormatFromPath(input);
+  if (format.ok() && *format == MeshFormat::kDraco) {
+    absl::StatusOr<std::string> bytes = ReadFileBytes(input);
+    if (!bytes.ok()) return bytes.status();
+    upload.draco = std::move(*bytes);
+    return upload;
+  }
+  absl::StatusOr<Mesh> mesh = LoadInput(input);
+  if (!mesh.ok()) return mesh.status();
+  const ValidationReport r = Validate(*mesh);
+  if (r.faces_out_of_range > 0) {
+    std::cerr << "meshsmooth: warning: " << r.faces_out_of_range
+              << " faces reference vertices that do not exist; they cannot be sent and are left out\n";
+  }
+  absl::StatusOr<std::string> bytes = EncodeDraco(*mesh);
+  if (!bytes.ok()) return bytes.status();
+  upload.draco = std::move(*bytes);
+  upload.colors = std::move(mesh->colors);
+  return upload;
+}
+
+// Writes the result in `format`: Draco bytes as they came, anything else decoded, with the
+// ridge labels (--ridges) or the input's colours (vertex i of the result is vertex i) as vertex
+// colours. Errors about the result itself start with "the result: ".
+absl::Status WriteResult(const SmoothOptions& o, MeshFormat format, const std::string& draco,
+                         std::vector<Rgb> input_colors) {
+  if (format == MeshFormat::kDraco) return WriteFileBytes(o.output, draco);
+  auto about_result = [](const absl::Status& s) {
+    return absl::Status(s.code(), absl::StrCat("the result: ", s.message()));
+  };
+  absl::StatusOr<Mesh> result = DecodeDraco(draco);
+  if (!result.ok()) return about_result(result.status());
+  if (o.ridges) {
+    absl::StatusOr<std::vector<float>> labels = DecodeDracoAttribute(draco, kFeatureLabelAttribute);
+    if (!labels.ok()) return about_result(labels.status());
+    result->colors = FeatureColors(std::vector<uint8_t>(labels->begin(), labels->end()));
+  } else if (input_colors.size() == result->positions.size()) {
+    result->colors = std::move(input_colors);
+  }
+  return WriteMesh(o.output, *result);
+}
+
+}  // namespace
+
+int RunSmooth(const SmoothOptions& o, const ConnectionOptions& c) {
+  absl::StatusOr<MeshFormat> out_format = FormatFromPath(o.output);
+  if (!out_format.ok()) return Fail("", out_format.status());
+  if (o.ridges && *out_format != MeshFormat::kPly && *out_format != MeshFormat::kDraco) {
+    std::cerr << "meshsmooth: warning: --ridges labels are kept only in .ply (vertex colours) and .drc "
+                 "(attributes) output; the summary still counts them\n";
+  }
+  absl::StatusOr<Upload> upload = PrepareUpload(o.input);
+  if (!upload.ok()) return Fail("", upload.status());
+  const v1::JobSpec spec = SpecFrom(o);
+
+  std::unique_ptr<server::Server> embedded;
+  absl::StatusOr<std::shared_ptr<grpc::Channel>> channel = Connect(c, embedded);
+  if (!channel.ok()) return Fail("", channel.status());
+  auto stub = v1::MeshSmoother::NewStub(*channel);
+  grpc::ClientContext ctx;
+  if (absl::Status s = PrepareContext(c, ctx); !s.ok()) return Fail("", s);
+  ProgressPrinter progress(o.quiet || o.json);
+  absl::StatusOr<SmoothOutcome> outcome;
+  bool interrupted = false;
+  {
+    InterruptWatcher watcher(&ctx);
+    outcome = CallSmooth(*stub, ctx, spec, upload->draco, std::ref(progress));
+    interrupted = watcher.interrupted();
+  }
+  progress.Done();
+  if (interrupted) {
+    std::cerr << "meshsmooth: interrupted; the job was cancelled\n";
+    return kExitInterrupted;
+  }
+  if (!outcome.ok()) {
+    return Fail(std::string(absl::StatusCodeToString(outcome.status().code())) + ": ", outcome.status());
+  }
+  if (absl::Status s = WriteResult(o, *out_format, outcome->result, std::move(upload->colors)); !s.ok()) {
+    return Fail("", s);
+  }
+  if (o.json) {
+    std::printf("%s", ToJson(outcome->summary).c_str());
+  } else if (!o.quiet) {
+    PrintSummary(outcome->summary);
+    std::printf("wrote %s\n", o.output.c_str());
+  }
+  return 0;
+}
+
+int RunFlows(const ConnectionOptions& c, bool json) {
+  std::unique_ptr<server::Server> embedded;
+  absl::StatusOr<std::shared_ptr<grpc::Channel>> channel = Connect(c, embedded);
+  if (!channel.ok()) {
+    std::cerr << "meshsmooth: " << channel.status().message() << "\n";
+    return kExitFailure;
+  }
+  auto stub = v1::MeshSmoother::NewStub(*channel);
+  grpc::ClientContext ctx;
+  if (absl::Status s = PrepareContext(c, ctx); !s.ok()) {
+    std::cerr << "meshsmooth: " << s.message() << "\n";
+    return kExitFailure;
+  }
+  v1::ListFlowsResponse flows;
+  const grpc::Status s = stub->ListFlows(&ctx, v1::ListFlowsRequest(), &flows);
+  if (!s.ok()) {
+    std::cerr << "meshsmooth: " << s.error_message() << "\n";
+    return ExitCodeFor(FromGrpc(s));
+  }
+  if (json) {
+    std::printf("%s", ToJson(flows).c_str());
+  } else {
+    PrintFlows(flows);
+  }
+  return 0;
+}
+
+int RunInfo(const std::string& input) {
+  absl::StatusOr<Mesh> mesh = LoadInput(input);
+  if (!mesh.ok()) {
+    std::cerr << "meshsmooth: " << mesh.status().message() << "\n";
+    return kExitFailure;
+  }
+  ValidationReport report;
+  const Topology topo = BuildTopology(*mesh, &report);
+  std::cout << "# " << input << "\n\n## validation\n"
+            << FormatReport(report) << "\n## metrics\n"
+            << FormatMetrics(ComputeMetrics(*mesh, topo));
+  return 0;
+}
+
+int RunRidges(const std::string& input, const std::string& output, double threshold) {
+  absl::StatusOr<MeshFormat> format = FormatFromPath(output);
+  if (!format.ok() || *format != MeshFormat::kPly) {
+    std::cerr << "meshsmooth: ridges writes PLY (labels as vertex colours): give -o FILE.ply\n";
+    return kExitUsage;
+  }
+  if (!std::isfinite(threshold) || threshold < 0.0) {
+    std::cerr << "meshsmooth: --threshold must be finite and >= 0\n";
+    return kExitUsage;
+  }
+  absl::StatusOr<Mesh> mesh = LoadInput(input);
+  if (!mesh.ok()) {
+    std::cerr << "meshsmooth: " << mesh.status().message() << "\n";
+    return kExitFailure;
+  }
+  const Topology topo = BuildTopology(*mesh);
+  FeatureOptions options;
+  options.min_abs_curvature = threshold;
+  const Features features = DetectFeatures(*mesh, topo, options);
+  mesh->colors = FeatureColors(features.labels);
+  if (absl::Status s = WriteMesh(output, *mesh); !s.ok()) {
+    std::cerr << "meshsmooth: " << s.message() << "\n";
+    return kExitFailure;
+  }
+  std::printf("%lld ridge and %lld ravine vertices of %lld classified (%d vertices); wrote %s\n",
+              static_cast<long long>(features.ridges), static_cast<long long>(features.ravines),
+              static_cast<long long>(features.classified), mesh->num_vertices(), output.c_str());
+  return 0;
+}
+
+int RunRender(const RenderCommand& r) {
+  RenderOptions options;
+  absl::StatusOr<View> view = ParseView(r.view);
+  int w = 0, h = 0;
+  char tail = 0;
+  if (!view.ok()) {
+    std::cerr << "meshsmooth: --view: " << view.status().message() << "\n";
+    return kExitUsage;
+  }
+  if (std::sscanf(r.size.c_str(), "%dx%d%c", &w, &h, &tail) != 2 || w < kMinRenderSide || h < kMinRenderSide ||
+      w > kMaxRenderSide || h > kMaxRenderSide) {
+    std::cerr << "meshsmooth: --size must be WIDTHxHEIGHT with each side in " << kMinRenderSide << ".."
+              << kMaxRenderSide << ", e.g. 800x600, got '" << r.size << "'\n";
+    return kExitUsage;
+  }
+  options.view = *view;
+  options.width = w;
+  options.height = h;
+  options.shading = r.shading == "flat" ? Shading::kFlat : Shading::kGouraud;
+  absl::StatusOr<Mesh> mesh = LoadInput(r.input);
+  if (!mesh.ok()) {
+    std::cerr << "meshsmooth: " << mesh.status().message() << "\n";
+    return kExitFailure;
+  }
+  absl::StatusOr<Image> image = Render(*mesh, options);
+  if (!image.ok()) {
+    std::cerr << "meshsmooth: " << image.status().message() << "\n";
+    return kExitFailure;
+  }
+  if (absl::Status s = WritePng(r.output, *image); !s.ok()) {
+    std::cerr << "meshsmooth: " << s.message() << "\n";
+    return kExitFailure;
+  }
+  std::printf("wrote %s (%dx%d)\n", r.output.c_str(), image->width, image->height);
+  return 0;
+}
+
+}  // namespace meshsmooth::client

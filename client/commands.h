@@ -1,0 +1,57 @@
+// The CLI's subcommands. main.cc turns the command line into these option structs; each Run*
+// prints what the user asked for and returns the process's exit code.
+#pragma once
+
+#include <string>
+
+#include "client/connection.h"
+
+namespace meshsmooth::client {
+
+// Exit codes (README, "The CLI").
+inline constexpr int kExitFailure = 1;        // the job or the input failed
+inline constexpr int kExitUsage = 2;          // bad command line
+inline constexpr int kExitUnavailable = 3;    // the server could not be reached
+inline constexpr int kExitInterrupted = 130;  // Ctrl-C (the job was cancelled on the server)
+
+// `meshsmooth smooth`; the flow options map onto JobSpec fields (0 or negative = unset).
+struct SmoothOptions {
+  std::string input, output;
+  std::string flow;  // a name from FlowNames()
+  unsigned iterations = 20;
+  double step = 0.0;
+  std::string weights = "u0";
+  double mu = 0.0, pass_band = 0.0, tangential_weight = -1.0, epsilon = 0.0;
+  std::string adaptive = "none";
+  double threshold = 0.0;
+  unsigned recompute_every = 10;
+  std::string boundary = "fixed";
+  double tolerance = 0.0;
+  unsigned quantization_bits = 0;
+  bool edgebreaker = false;
+  bool quiet = false, json = false;
+  bool ridges = false;
+  double ridge_threshold = 0.0;
+};
+
+// `meshsmooth render`.
+struct RenderCommand {
+  std::string input = "builtin:noisy-sphere", output, view = "30,20", size = "800x800", shading = "gouraud";
+};
+
+// Smooths a mesh through the service and writes the result; prints the summary.
+int RunSmooth(const SmoothOptions& options, const ConnectionOptions& connection);
+
+// Lists the flows the service offers (ListFlows), as text or as JSON.
+int RunFlows(const ConnectionOptions& connection, bool json);
+
+// A mesh's validation report and metrics, computed locally.
+int RunInfo(const std::string& input);
+
+// Ridges and ravines of a mesh as it is (no smoothing), written as PLY vertex colours.
+int RunRidges(const std::string& input, const std::string& output, double threshold);
+
+// A picture of a mesh, rendered locally into a PNG.
+int RunRender(const RenderCommand& command);
+
+}  // namespace meshsmooth::client

@@ -1,0 +1,93 @@
+#include "client/report.h"
+
+#include <unistd.h>
+
+#include <cstdio>
+#include <sstream>
+#include <string>
+
+namespace meshsmooth::client {
+namespace {
+
+// "A | B" for an enumeration, "default D, range [MIN, MAX)" otherwise.
+std::string Range(const v1::ParameterInfo& p) {
+  if (p.choices_size() > 0) {
+    std::string list;
+    for (const auto& x : p.choices()) list += (list.empty() ? "" : " | ") + x;
+    return list;
+  }
+  std::ostringstream r;
+  r << "default " << p.default_value() << ", range " << (p.min_exclusive() ? "(" : "[") << p.min_value() << ", "
+    << p.max_value() << (p.max_exclusive() ? ")" : "]");
+  return r.str();
+}
+
+}  // namespace
+
+ProgressPrinter::ProgressPrinter(bool quiet) : quiet_(quiet), tty_(isatty(STDERR_FILENO) != 0) {}
+
+void ProgressPrinter::operator()(const v1::Progress& p) {
+  if (quiet_) return;
+  const double frac = p.total() > 0 ? static_cast<double>(p.iteration()) / p.total() : 1.0;
+  const double eta = frac > 0 ? p.elapsed_seconds() * (1.0 - frac) / frac : 0.0;
+  if (tty_) {
+    constexpr int kWidth = 30;
+    const int filled = static_cast<int>(frac * kWidth);
+    std::fprintf(stderr, "\r[%s%s] %u/%u  max move %.3g  mean %.3g  ETA %.1fs ", std::string(filled, '#').c_str(),
+                 std::string(kWidth - filled, '.').c_str(), p.iteration(), p.total(), p.max_displacement(),
+                 p.mean_displacement(), eta);
+    bar_shown_ = true;
+  } else {
+    std::fprintf(stderr, "iteration %u/%u max move %.6g mean %.6g moved %.1f%% elapsed %.2fs\n", p.iteration(),
+                 p.total(), p.max_displacement(), p.mean_displacement(), 100.0 * p.moved_share(),
+                 p.elapsed_seconds());
+  }
+}
+
+void ProgressPrinter::Done() {
+  if (bar_shown_) std::fprintf(stderr, "\n");
+}
+
+void PrintSummary(const v1::Summary& s) {
+  const v1::MeshMetrics &a = s.before(), &b = s.after();
+  const v1::EffectiveParameters& p = s.parameters();
+  std::printf("job %s: %s, %u of %u iterations (stopped by %s), step %g (effective %g)\n", s.job_id().c_str(),
+              p.flow().c_str(), p.iterations_run(), p.iterations_requested(), p.stop_reason().c_str(), p.step(),
+              p.effective_step());
+  std::printf("%-28s %14s %14s\n", "", "before", "after");
+  std::printf("%-28s %14.6g %14.6g\n", "area", a.area(), b.area());
+  std::printf("%-28s %14.6g %14.6g\n", "signed volume", a.signed_volume(), b.signed_volume());
+  std::printf("%-28s %14.6g %14.6g\n", "edge length mean", a.edge_length_mean(), b.edge_length_mean());
+  std::printf("%-28s %14.4f %14.4f\n", "edge length CV", a.edge_length_cv(), b.edge_length_cv());
+  std::printf("%-28s %14.2f %14.2f\n", "min angle (deg)", a.min_angle_deg(), b.min_angle_deg());
+  std::printf("%-28s %13.2f%% %13.2f%%\n", "angles below 10 deg", 100 * a.share_angles_below_10deg(),
+              100 * b.share_angles_below_10deg());
+  std::printf("displacement RMS %.6g, max %.6g; flipped normals %lld\n", s.rms_displacement(), s.max_displacement(),
+              static_cast<long long>(s.flipped_normals()));
+  if (s.has_features()) {
+    std::printf("features: %lld ridge and %lld ravine vertices of %lld classified (%.3fs)\n",
+                static_cast<long long>(s.features().ridge_vertices()),
+                static_cast<long long>(s.features().ravine_vertices()),
+                static_cast<long long>(s.features().classified_vertices()), s.features().detect_seconds());
+  }
+  const v1::Timings& t = s.timings();
+  std::printf("time: decode %.3fs, queue %.3fs, smooth %.3fs, encode %.3fs, total %.3fs; result %llu bytes\n",
+              t.decode_seconds(), t.queue_seconds(), t.smooth_seconds(), t.encode_seconds(), t.total_seconds(),
+              static_cast<unsigned long long>(s.result_bytes()));
+}
+
+void PrintFlows(const v1::ListFlowsResponse& flows) {
+  for (const v1::FlowInfo& f : flows.flows()) {
+    std::printf("%s  (paper: %s)\n  %s\n", f.name().c_str(), f.equations().c_str(), f.description().c_str());
+    for (const v1::ParameterInfo& p : f.parameters()) {
+      std::printf("    %-18s %s; %s\n", p.name().c_str(), p.description().c_str(), Range(p).c_str());
+    }
+  }
+  std::printf("every flow:\n");
+  for (const v1::ParameterInfo& p : flows.common_parameters()) {
+    std::printf("    %-24s %s; %s\n", p.name().c_str(), p.description().c_str(), Range(p).c_str());
+  }
+  std::printf("this server allows at most %u iterations\n", flows.max_iterations());
+}
+
+}  // namespace meshsmooth::client
