@@ -167,9 +167,9 @@ std::string JobLogLine(const JobReport& report, const JobParams& params) {
   char seconds[128];
   std::snprintf(seconds, sizeof seconds, "decode=%.3fs queue=%.3fs smooth=%.3fs encode=%.3fs", report.decode_seconds,
                 report.queue_seconds, report.smooth_seconds, report.encode_seconds);
-  return absl::StrCat("meshsmoothd job=", report.job_id, " flow=", std::string(FlowOf(params.flow.flow).name), " vertices=", report.vertices,
-                      " iterations=", report.flow.iterations_run, "/", params.flow.iterations,
-                      " status=", report.status, " ", seconds);
+  return absl::StrCat("meshsmoothd job=", report.job_id, " flow=", std::string(FlowOf(params.flow.flow).name),
+                      " vertices=", report.vertices, " iterations=", report.flow.iterations_run, "/",
+                      params.flow.iterations, " status=", report.status, " ", seconds);
 }
 
 }  // namespace meshsmooth::server
