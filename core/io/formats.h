@@ -88,4 +88,13 @@ inline void AppendDouble(std::string& out, double v) {
   out.append(buf, ec == std::errc() ? ptr : buf);
 }
 
+// "x y z" of a point, each coordinate as AppendDouble writes it (OBJ and OFF vertices).
+inline void AppendPoint(std::string& out, const Vec3& p) {
+  AppendDouble(out, p.x);
+  out += ' ';
+  AppendDouble(out, p.y);
+  out += ' ';
+  AppendDouble(out, p.z);
+}
+
 }  // namespace meshsmooth::io

@@ -53,11 +53,7 @@ std::string WriteObj(const Mesh& mesh) {
   out.reserve(out.size() + mesh.positions.size() * 40 + mesh.triangles.size() * 24);
   for (const Vec3& p : mesh.positions) {
     out += "v ";
-    AppendDouble(out, p.x);
-    out += ' ';
-    AppendDouble(out, p.y);
-    out += ' ';
-    AppendDouble(out, p.z);
+    AppendPoint(out, p);
     out += '\n';
   }
   for (const Triangle& t : mesh.triangles) {

@@ -79,11 +79,7 @@ absl::StatusOr<Mesh> ParseOff(std::string_view data, ReadInfo& info) {
 std::string WriteOff(const Mesh& mesh) {
   std::string out = absl::StrCat("OFF\n", mesh.positions.size(), " ", mesh.triangles.size(), " 0\n");
   for (const Vec3& p : mesh.positions) {
-    AppendDouble(out, p.x);
-    out += ' ';
-    AppendDouble(out, p.y);
-    out += ' ';
-    AppendDouble(out, p.z);
+    AppendPoint(out, p);
     out += '\n';
   }
   for (const Triangle& t : mesh.triangles) absl::StrAppend(&out, "3 ", t[0], " ", t[1], " ", t[2], "\n");
