@@ -408,11 +408,8 @@ def main():
             assert "UNAUTHENTICATED" in r.stderr, r.stderr
             assert not os.path.exists(os.path.join(tmp, "wrong_token.ply"))
         finally:
-            guarded.send_signal(signal.SIGTERM)
-            try:
-                guarded.wait(timeout=15)
-            except subprocess.TimeoutExpired:
-                guarded.kill()
+            guarded.terminate()
+            guarded.wait(timeout=15)
     check("a token file with spaces around the token works from the CLI; a wrong token exits 1 (UNAUTHENTICATED)",
           token_files_trimmed_alike)
 
