@@ -19,6 +19,7 @@
 #include "gtest/gtest.h"
 #include "server/server.h"
 #include "tests/flow_fixtures.h"
+#include "tests/service/service_fixtures.h"
 #include "tests/test_data.h"
 
 namespace meshsmooth {
@@ -29,35 +30,6 @@ using client::SmoothOutcome;
 using server::Server;
 using server::ServerOptions;
 using namespace meshsmooth::testing;
-
-Mesh FloatMesh(Mesh m) {
-  for (Vec3& p : m.positions) p = RoundToFloat(p);
-  return m;
-}
-
-std::unique_ptr<Server> StartServer(ServerOptions o = {}, bool listen = false) {
-  o.log_jobs = false;
-  if (listen) o.listen = "127.0.0.1:0";
-  absl::StatusOr<std::unique_ptr<Server>> s = Server::Start(o, listen);
-  EXPECT_TRUE(s.ok()) << s.status();
-  return s.ok() ? std::move(*s) : nullptr;
-}
-
-v1::JobSpec Spec(const std::string& flow, uint32_t iterations) {
-  v1::JobSpec spec;
-  spec.set_flow(flow);
-  spec.set_iterations(iterations);
-  return spec;
-}
-
-absl::StatusOr<SmoothOutcome> Call(std::shared_ptr<grpc::Channel> channel, const v1::JobSpec& spec,
-                                   const std::string& draco, const std::string& token = "") {
-  auto stub = v1::MeshSmoother::NewStub(channel);
-  grpc::ClientContext ctx;
-  ctx.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(120));
-  if (!token.empty()) ctx.AddMetadata("authorization", "Bearer " + token);
-  return CallSmooth(*stub, ctx, spec, draco, nullptr, 256 << 10);
-}
 
 // Every flow through the service equals the core's own result, bit for bit, on the lossless
 // path (in-process for every flow, and once over loopback TCP).
@@ -116,27 +88,6 @@ TEST(ServiceTest, MeshAbove20MiBGoesThrough) {
   ASSERT_TRUE(got.ok());
   EXPECT_EQ(got->positions.size(), big.positions.size());
 }
-
-// A job that runs "forever" until cancelled: icosphere(6), many iterations.
-struct LongJob {
-  std::string draco = *EncodeDraco(FloatMesh(NoisySphere(6)));
-  v1::JobSpec spec = Spec("median", 10000);  // the server's default limit; ~20 s on one core
-
-  // Starts the call on `ctx` and returns once its first progress event arrived (the job is
-  // running on a worker), or after 60 s.
-  std::future<absl::StatusOr<SmoothOutcome>> Start(v1::MeshSmoother::Stub& stub, grpc::ClientContext& ctx) {
-    auto started = std::make_shared<std::promise<void>>();
-    auto signalled = std::make_shared<std::atomic<bool>>(false);
-    std::future<void> running = started->get_future();
-    auto call = std::async(std::launch::async, [this, &stub, &ctx, started, signalled] {
-      return CallSmooth(stub, ctx, spec, draco, [started, signalled](const v1::Progress&) {
-        if (!signalled->exchange(true)) started->set_value();
-      });
-    });
-    EXPECT_EQ(running.wait_for(std::chrono::seconds(60)), std::future_status::ready) << "the long job never started";
-    return call;
-  }
-};
 
 TEST(ServiceTest, CancellingMidJobFreesTheWorker) {
   ServerOptions o;

@@ -1,0 +1,78 @@
+// Shared by the service tests: an in-process or loopback server, a job spec, one call through
+// the CLI's client code, and a job that runs until cancelled.
+#pragma once
+
+#include <atomic>
+#include <chrono>
+#include <future>
+#include <memory>
+#include <string>
+
+#include "client/smooth_client.h"
+#include "core/draco_codec.h"
+#include "core/vec3.h"
+#include "gtest/gtest.h"
+#include "server/server.h"
+#include "tests/flow_fixtures.h"
+
+namespace meshsmooth::testing {
+
+using client::CallSmooth;
+using client::SmoothOutcome;
+
+// Positions rounded to float32, as a Draco upload holds them.
+inline Mesh FloatMesh(Mesh m) {
+  for (Vec3& p : m.positions) p = RoundToFloat(p);
+  return m;
+}
+
+// A server with these options, quiet; listening on a free loopback port when `listen`, else
+// reachable in-process only.
+inline std::unique_ptr<server::Server> StartServer(server::ServerOptions o = {}, bool listen = false) {
+  o.log_jobs = false;
+  if (listen) o.listen = "127.0.0.1:0";
+  absl::StatusOr<std::unique_ptr<server::Server>> s = server::Server::Start(o, listen);
+  EXPECT_TRUE(s.ok()) << s.status();
+  return s.ok() ? std::move(*s) : nullptr;
+}
+
+// A spec for `flow` with `iterations`, everything else default.
+inline v1::JobSpec Spec(const std::string& flow, uint32_t iterations) {
+  v1::JobSpec spec;
+  spec.set_flow(flow);
+  spec.set_iterations(iterations);
+  return spec;
+}
+
+// One Smooth call with a 120 s deadline, in 256 KiB chunks.
+inline absl::StatusOr<SmoothOutcome> Call(std::shared_ptr<grpc::Channel> channel, const v1::JobSpec& spec,
+                                   const std::string& draco, const std::string& token = "") {
+  auto stub = v1::MeshSmoother::NewStub(channel);
+  grpc::ClientContext ctx;
+  ctx.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(120));
+  if (!token.empty()) ctx.AddMetadata("authorization", "Bearer " + token);
+  return CallSmooth(*stub, ctx, spec, draco, nullptr, 256 << 10);
+}
+
+// A job that runs "forever" until cancelled: icosphere(6), many iterations.
+struct LongJob {
+  std::string draco = *EncodeDraco(FloatMesh(NoisySphere(6)));
+  v1::JobSpec spec = Spec("median", 10000);  // the server's default limit; ~20 s on one core
+
+  // Starts the call on `ctx` and returns once its first progress event arrived (the job is
+  // running on a worker), or after 60 s.
+  std::future<absl::StatusOr<SmoothOutcome>> Start(v1::MeshSmoother::Stub& stub, grpc::ClientContext& ctx) {
+    auto started = std::make_shared<std::promise<void>>();
+    auto signalled = std::make_shared<std::atomic<bool>>(false);
+    std::future<void> running = started->get_future();
+    auto call = std::async(std::launch::async, [this, &stub, &ctx, started, signalled] {
+      return CallSmooth(stub, ctx, spec, draco, [started, signalled](const v1::Progress&) {
+        if (!signalled->exchange(true)) started->set_value();
+      });
+    });
+    EXPECT_EQ(running.wait_for(std::chrono::seconds(60)), std::future_status::ready) << "the long job never started";
+    return call;
+  }
+};
+
+}  // namespace meshsmooth::testing
