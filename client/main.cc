@@ -25,6 +25,7 @@
 #include "absl/strings/str_join.h"
 #include "client/commands.h"
 #include "client/inputs.h"
+#include "core/draco_codec.h"
 #include "core/flows/flow.h"
 #include "core/flows/flow_info.h"
 #include "core/huge_pages.h"
@@ -113,8 +114,8 @@ void AddSmoothOptions(CLI::App* smooth, SmoothOptions& so) {
   smooth->add_option("--tolerance", so.tolerance, "stop when the largest move < tolerance x mean edge; 0 = off")
       ->capture_default_str();
   smooth->add_option("--quantization-bits", so.quantization_bits,
-                     "result positions: 0 = lossless (exact float32), 1..30 = quantized")
-      ->capture_default_str()->check(CLI::Range(0, 30));
+                     "result positions: 0 = lossless (exact float32), 1..24 = quantized")
+      ->capture_default_str()->check(CLI::Range(0, meshsmooth::kMaxQuantizationBits));
   smooth->add_flag("--edgebreaker", so.edgebreaker, "encode the result with Edgebreaker (reorders vertices)");
   smooth->add_flag("-q,--quiet", so.quiet, "print nothing but errors");
   smooth->add_flag("--json", so.json, "print the job summary as JSON on stdout (no progress)");

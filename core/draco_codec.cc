@@ -4,6 +4,7 @@
 #include <cstring>
 #include <exception>
 #include <memory>
+#include <new>
 #include <utility>
 #include <variant>
 
@@ -12,17 +13,24 @@
 #include "draco/compression/encode.h"
 #include "draco/mesh/mesh.h"
 #include "draco/metadata/geometry_metadata.h"
+#include "core/draco_checks.h"
 #include "core/weld.h"
 
 namespace meshsmooth {
 namespace {
+
 absl::StatusOr<std::string> EncodeWithOptions(const draco::Mesh& dm, const DracoOptions& options);
+
 }  // namespace
 
 absl::StatusOr<std::string> EncodeDraco(const Mesh& mesh, const DracoOptions& options) {
   const int32_t n = mesh.num_vertices();
   if (n == 0 || mesh.triangles.empty()) {
     return absl::InvalidArgumentError("cannot encode an empty mesh (no vertices or no faces)");
+  }
+  if (absl::Status s = CheckDracoOptions(options); !s.ok()) return s;
+  for (int32_t i = 0; i < n; ++i) {
+    if (absl::Status s = CheckCoordinates(mesh.positions[i], "vertex", i); !s.ok()) return s;
   }
   draco::Mesh dm;
   dm.set_num_points(n);
@@ -40,12 +48,17 @@ absl::StatusOr<std::string> EncodeDraco(const Mesh& mesh, const DracoOptions& op
     if (t[0] < 0 || t[0] >= n || t[1] < 0 || t[1] >= n || t[2] < 0 || t[2] >= n) continue;
     dm.AddFace({draco::PointIndex(t[0]), draco::PointIndex(t[1]), draco::PointIndex(t[2])});
   }
+  if (options.method == DracoMethod::kEdgebreaker) {
+    const std::vector<uint8_t> used = PointsEdgebreakerKeeps(dm);
+    const int64_t dropped = std::count(used.begin(), used.end(), 0);
+    if (dropped > 0) return EdgebreakerDropsError(dropped);
+  }
   return EncodeWithOptions(dm, options);
 }
 
 namespace {
 
-// Decodes a Draco triangle mesh with clear errors; the positions attribute is checked.
+// Decodes a Draco triangle mesh with clear errors; its layout is checked (CheckDracoLayout).
 absl::StatusOr<std::unique_ptr<draco::Mesh>> DecodeToDraco(std::string_view bytes) {
   if (bytes.empty()) return absl::InvalidArgumentError("empty Draco data");
   draco::DecoderBuffer buffer;
@@ -78,10 +91,7 @@ absl::StatusOr<std::unique_ptr<draco::Mesh>> DecodeToDraco(std::string_view byte
   if (dm == nullptr || dm->num_points() == 0 || dm->num_faces() == 0) {
     return absl::InvalidArgumentError("the Draco mesh is empty (no points or no faces)");
   }
-  const draco::PointAttribute* pos = dm->GetNamedAttribute(draco::GeometryAttribute::POSITION);
-  if (pos == nullptr || pos->num_components() < 3 || pos->size() == 0) {
-    return absl::InvalidArgumentError("the Draco mesh has no 3-D position attribute");
-  }
+  if (absl::Status s = CheckDracoLayout(*dm); !s.ok()) return s;
   return dm;
 }
 
@@ -103,21 +113,19 @@ absl::StatusOr<Mesh> PointMesh(const draco::Mesh& dm) {
       float xyz[3];
       std::memcpy(xyz, pos->GetAddress(avi), sizeof xyz);
       mesh.positions[i] = {xyz[0], xyz[1], xyz[2]};
-      continue;
+    } else {
+      double xyz[3];
+      if (!pos->ConvertValue<double>(avi, 3, xyz)) {
+        return absl::InvalidArgumentError(absl::StrCat("corrupt Draco mesh: no position for point ", i));
+      }
+      mesh.positions[i] = {xyz[0], xyz[1], xyz[2]};
     }
-    double xyz[3];
-    if (!pos->ConvertValue<double>(avi, 3, xyz)) {
-      return absl::InvalidArgumentError(absl::StrCat("corrupt Draco mesh: no position for point ", i));
-    }
-    mesh.positions[i] = {xyz[0], xyz[1], xyz[2]};
+    if (absl::Status s = CheckCoordinates(mesh.positions[i], "point", i); !s.ok()) return s;
   }
   mesh.triangles.resize(dm.num_faces());
-  for (uint32_t f = 0; f < dm.num_faces(); ++f) {
+  for (uint32_t f = 0; f < dm.num_faces(); ++f) {  // every index < n (CheckDracoLayout)
     const draco::Mesh::Face& face = dm.face(draco::FaceIndex(f));
-    for (int c = 0; c < 3; ++c) {
-      const uint32_t v = face[c].value();
-      mesh.triangles[f][c] = v < n ? static_cast<int32_t>(v) : -1;
-    }
+    for (int c = 0; c < 3; ++c) mesh.triangles[f][c] = static_cast<int32_t>(face[c].value());
   }
   return mesh;
 }
@@ -133,13 +141,7 @@ int NamedAttributeId(const draco::Mesh& dm, std::string_view name) {
 }
 
 absl::StatusOr<std::string> EncodeWithOptions(const draco::Mesh& dm, const DracoOptions& options) {
-  if (options.quantization_bits < 0 || options.quantization_bits > 30) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("quantization bits must be 0 (lossless) or 1..30, got ", options.quantization_bits));
-  }
-  if (options.speed < 0 || options.speed > 10) {
-    return absl::InvalidArgumentError(absl::StrCat("Draco speed must be 0..10, got ", options.speed));
-  }
+  if (absl::Status s = CheckDracoOptions(options); !s.ok()) return s;
   draco::Encoder encoder;
   encoder.SetSpeedOptions(options.speed, options.speed);
   encoder.SetEncodingMethod(options.method == DracoMethod::kSequential ? draco::MESH_SEQUENTIAL_ENCODING
@@ -148,7 +150,12 @@ absl::StatusOr<std::string> EncodeWithOptions(const draco::Mesh& dm, const Draco
     encoder.SetAttributeQuantization(draco::GeometryAttribute::POSITION, options.quantization_bits);
   }
   draco::EncoderBuffer out;
-  const draco::Status status = encoder.EncodeMeshToBuffer(dm, &out);
+  draco::Status status;
+  try {
+    status = encoder.EncodeMeshToBuffer(dm, &out);
+  } catch (const std::bad_alloc&) {
+    return absl::ResourceExhaustedError("out of memory in Draco's encoder");
+  }
   if (!status.ok()) {
     return absl::InvalidArgumentError(absl::StrCat("Draco encoding failed: ", status.error_msg_string()));
   }
@@ -169,6 +176,7 @@ struct DracoMesh::Impl {
   int64_t num_vertices = 0;  // of welded, also once it has been taken
   std::vector<int32_t> point_to_vertex;
   int64_t seam_points = 0;
+  int64_t edgebreaker_drops = 0;  // vertices none of whose points Edgebreaker keeps
 };
 
 DracoMesh::DracoMesh(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
@@ -190,9 +198,21 @@ absl::StatusOr<DracoMesh> DracoMesh::Decode(std::string_view bytes) {
   impl->seam_points = welded.merged;
   impl->welded.triangles = std::move(points->triangles);
   for (Triangle& t : impl->welded.triangles) {
-    for (int32_t& v : t) v = v >= 0 ? impl->point_to_vertex[v] : -1;
+    for (int32_t& v : t) v = impl->point_to_vertex[v];
   }
+  std::vector<uint8_t> kept(impl->num_vertices, 0);
+  const std::vector<uint8_t> used = PointsEdgebreakerKeeps(*impl->draco);
+  for (size_t p = 0; p < used.size(); ++p) kept[impl->point_to_vertex[p]] |= used[p];
+  impl->edgebreaker_drops = std::count(kept.begin(), kept.end(), 0);
   return DracoMesh(std::move(impl));
+}
+
+absl::Status DracoMesh::CheckEncodable(const DracoOptions& options) const {
+  if (absl::Status s = CheckDracoOptions(options); !s.ok()) return s;
+  if (options.method == DracoMethod::kEdgebreaker && impl_->edgebreaker_drops > 0) {
+    return EdgebreakerDropsError(impl_->edgebreaker_drops);
+  }
+  return absl::OkStatus();
 }
 
 const Mesh& DracoMesh::welded() const { return impl_->welded; }
@@ -203,6 +223,7 @@ int64_t DracoMesh::seam_points() const { return impl_->seam_points; }
 absl::StatusOr<std::vector<float>> DecodeDracoAttribute(std::string_view bytes, std::string_view name) {
   absl::StatusOr<std::unique_ptr<draco::Mesh>> dm = DecodeToDraco(bytes);
   if (!dm.ok()) return dm.status();
+  if (absl::StatusOr<Mesh> points = PointMesh(**dm); !points.ok()) return points.status();  // the coordinates
   const int id = NamedAttributeId(**dm, name);
   if (id < 0) return absl::NotFoundError(absl::StrCat("the Draco mesh has no attribute named '", std::string(name), "'"));
   const draco::PointAttribute* a = (*dm)->attribute(id);
@@ -222,6 +243,12 @@ absl::StatusOr<std::string> DracoMesh::Encode(const Mesh& smoothed, const DracoO
   if (static_cast<int64_t>(smoothed.positions.size()) != impl_->num_vertices) {
     return absl::InvalidArgumentError(absl::StrCat("expected ", impl_->num_vertices,
                                                    " positions, got ", smoothed.positions.size()));
+  }
+  if (absl::Status s = CheckEncodable(options); !s.ok()) return s;
+  for (size_t v = 0; v < smoothed.positions.size(); ++v) {
+    if (absl::Status s = CheckCoordinates(smoothed.positions[v], "vertex", static_cast<int64_t>(v)); !s.ok()) {
+      return s;
+    }
   }
   draco::Mesh& dm = *impl_->draco;
   const uint32_t n = dm.num_points();

@@ -2,8 +2,15 @@
 //
 // The default (sequential, lossless) keeps vertex order and exact float32 positions, so vertex
 // i of a decoded result is vertex i of what was encoded. Edgebreaker compresses better but
-// reorders vertices and faces and drops isolated vertices. Quantization (1-30 bits) rounds
-// each coordinate to a grid over the bounding box: error <= extent / (2^q - 1) / 2.
+// reorders vertices and faces; it drops faces with a repeated index and the vertices no other
+// face uses, so it is refused for meshes that have such vertices. Quantization (1-24 bits)
+// rounds each coordinate to a grid over the bounding box: error <= extent / (2^q - 1) / 2.
+//
+// Draco's decoder accepts data that its encoders (and meshsmooth) may not index with: faces
+// naming points past the point count, several POSITION attributes, attributes without a value
+// for some point, coordinates that overflow float32 arithmetic. Every decoding function here
+// refuses them with InvalidArgument before anything else reads the mesh, and the encoders
+// refuse to write what Draco could not decode to the same vertices.
 #pragma once
 
 #include <cstdint>
@@ -21,18 +28,33 @@ namespace meshsmooth {
 
 enum class DracoMethod { kSequential, kEdgebreaker };
 
+// Finest position quantization the encoders accept. Draco's encoder holds a histogram of
+// ~2^(bits + 2) bytes whatever the mesh (64 MiB at 24 bits, 3.7 GB at 30), and 24 bits over the
+// bounding box are already as fine as float32 itself: lossless (0) is the choice beyond.
+inline constexpr int kMaxQuantizationBits = 24;
+
+// Largest coordinate magnitude decoded or encoded: 2^100 (about 1.27e30), exact in float32,
+// so that a double within it stays within it as a float. Far below float32's 3.4e38, so that
+// Draco's quantizer (float32 ranges) and the flows' products of coordinates (areas, volumes,
+// squared lengths in double) stay finite.
+inline constexpr double kMaxCoordinate = 0x1p100;
+
 struct DracoOptions {
-  int quantization_bits = 0;  // 0 = lossless (raw float32); otherwise 1..30
+  int quantization_bits = 0;  // 0 = lossless (raw float32); otherwise 1..kMaxQuantizationBits
   DracoMethod method = DracoMethod::kSequential;
   int speed = 5;  // Draco's encoding/decoding speed, 0 (best compression) .. 10 (fastest)
 };
 
-// InvalidArgument for bad options or faces Draco cannot hold (indices out of range); positions
-// are stored as float32.
+// Positions are stored as float32; faces with an index out of range are left out.
+// InvalidArgument for bad options, an empty mesh, a coordinate that is not finite or above
+// kMaxCoordinate in magnitude, and Edgebreaker when it would drop a vertex (one that no face
+// with three distinct indices uses).
 absl::StatusOr<std::string> EncodeDraco(const Mesh& mesh, const DracoOptions& options = {});
 
-// InvalidArgument with a clear message for corrupt bytes, a point cloud, an empty mesh or a
-// mesh without positions. Vertices are Draco's points (attribute seams stay split).
+// InvalidArgument with a clear message for corrupt bytes, a point cloud, an empty mesh, a mesh
+// with no or several POSITION attributes, an attribute without a value for some point, a face
+// naming a point past the point count, and a coordinate that is not finite or above
+// kMaxCoordinate in magnitude. Vertices are Draco's points (attribute seams stay split).
 absl::StatusOr<Mesh> DecodeDraco(std::string_view bytes);
 
 // Per-vertex values stored as a one-component Draco GENERIC attribute, named by the attribute
@@ -72,12 +94,18 @@ class DracoMesh {
   // Points that share their position with an earlier point (welded into it).
   int64_t seam_points() const;
 
+  // OK when Encode() can write this mesh with `options`: InvalidArgument for options out of
+  // range, and for Edgebreaker when it would drop a vertex of welded() (one none of whose
+  // points is in a face of three distinct points). A job checks this before smoothing.
+  absl::Status CheckEncodable(const DracoOptions& options) const;
+
   // Sets the positions from `smoothed` (same vertex count as welded() had), recomputes normals
   // from them (area-weighted over each point's faces, so hard edges split at seams stay hard),
   // keeps every other attribute unchanged, and encodes. Quantization applies to positions
   // only; other attributes are stored losslessly. `extra` attributes (one value per vertex of
   // welded(), written to each of its points) are added, replacing any attribute of the same
-  // name; InvalidArgument when one has the wrong count.
+  // name. InvalidArgument when one has the wrong count, when CheckEncodable() fails, or when a
+  // smoothed coordinate is not finite or above kMaxCoordinate in magnitude.
   absl::StatusOr<std::string> Encode(const Mesh& smoothed, const DracoOptions& options = {},
                                      const std::vector<GenericAttribute>& extra = {});
 

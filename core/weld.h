@@ -18,7 +18,8 @@ struct Welded {
 // +0.0 and -0.0 are the same position; a point with a NaN coordinate is never merged. Points
 // are grouped by a radix sort of a per-process seeded hash (no hash map, which is much slower
 // on large meshes), and exact equality is checked inside each group, so a hash collision merges
-// nothing and crafted collisions cost O(k log k), not O(k^2).
+// nothing and crafted collisions cost O(k log k), not O(k^2). At most 2^31 - 1 points (an
+// index must fit the 31 bits packed beside the hash, and int32): callers check their counts.
 Welded WeldPoints(const std::vector<Vec3>& points);
 
 }  // namespace meshsmooth

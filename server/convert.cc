@@ -41,9 +41,9 @@ absl::StatusOr<JobParams> FromProto(const v1::JobSpec& spec, int max_iterations)
   p.tolerance = spec.tolerance();
   if (absl::Status s = ValidateFlowParams(p, 0); !s.ok()) return s;
 
-  if (spec.output().quantization_bits() > 30) {
-    return absl::InvalidArgumentError(absl::StrCat("output.quantization_bits must be 0 (lossless) or 1..30, got ",
-                                                   spec.output().quantization_bits()));
+  if (spec.output().quantization_bits() > static_cast<uint32_t>(kMaxQuantizationBits)) {
+    return absl::InvalidArgumentError(absl::StrCat("output.quantization_bits must be 0 (lossless) or 1..",
+                                                   kMaxQuantizationBits, ", got ", spec.output().quantization_bits()));
   }
   j.output.quantization_bits = static_cast<int>(spec.output().quantization_bits());
   j.output.method = spec.output().edgebreaker() ? DracoMethod::kEdgebreaker : DracoMethod::kSequential;

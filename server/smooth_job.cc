@@ -146,6 +146,11 @@ void SmoothJob::Run() {
                                                                   " vertices, above this server's limit of ",
                                                                   options_.max_vertices)));
   }
+  // An output the encoder would refuse is refused before the smoothing it would waste.
+  if (absl::Status s = draco->CheckEncodable(params_.output); !s.ok()) {
+    report.decode_seconds = Seconds(start, Clock::now());
+    return Fail(report, s);
+  }
   ValidationReport validation;
   const Topology topo = BuildTopology(mesh, &validation);
   report.before = ComputeMetrics(mesh, topo);

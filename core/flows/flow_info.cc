@@ -47,7 +47,7 @@ std::vector<ParameterInfo> CommonParameters(int max_iterations) {
        {"BOUNDARY_MODE_FIXED", "BOUNDARY_MODE_CURVE"}},
       {"tolerance", "stop when an iteration's largest move is below tolerance x mean edge length (0 = off)", 0.0, 0.0,
        kInf, false, true, {}},
-      {"output.quantization_bits", "0 = lossless float32 positions; 1..30 = quantized", 0, 0, 30, false, false, {}},
+      {"output.quantization_bits", "0 = lossless float32 positions; 1..24 = quantized", 0, 0, 24, false, false, {}},
   };
 }
 

@@ -1,0 +1,108 @@
+#include "core/draco_checks.h"
+
+#include <cmath>
+#include <limits>
+
+#include "absl/strings/str_cat.h"
+
+namespace meshsmooth {
+namespace {
+
+// Points a decoded mesh may have: vertex and point indices are int32 here (and the weld packs
+// a point index into 31 bits).
+constexpr uint32_t kMaxPoints = std::numeric_limits<int32_t>::max();
+
+}  // namespace
+
+absl::Status CheckCoordinates(const Vec3& p, const char* what, int64_t index) {
+  for (double c : {p.x, p.y, p.z}) {
+    if (!(std::abs(c) <= kMaxCoordinate)) {
+      return absl::InvalidArgumentError(absl::StrCat(what, " ", index, " has a coordinate of ", c,
+                                                     ": coordinates must be finite and at most 2^100 (",
+                                                     kMaxCoordinate, ") in magnitude"));
+    }
+  }
+  return absl::OkStatus();
+}
+
+absl::Status CheckDracoOptions(const DracoOptions& options) {
+  if (options.quantization_bits < 0 || options.quantization_bits > kMaxQuantizationBits) {
+    return absl::InvalidArgumentError(absl::StrCat("quantization bits must be 0 (lossless) or 1..",
+                                                   kMaxQuantizationBits, ", got ", options.quantization_bits));
+  }
+  if (options.speed < 0 || options.speed > 10) {
+    return absl::InvalidArgumentError(absl::StrCat("Draco speed must be 0..10, got ", options.speed));
+  }
+  return absl::OkStatus();
+}
+
+std::vector<uint8_t> PointsEdgebreakerKeeps(const draco::Mesh& dm) {
+  std::vector<uint8_t> used(dm.num_points(), 0);
+  for (uint32_t f = 0; f < dm.num_faces(); ++f) {
+    const draco::Mesh::Face& face = dm.face(draco::FaceIndex(f));
+    if (face[0] == face[1] || face[1] == face[2] || face[0] == face[2]) continue;
+    for (int c = 0; c < 3; ++c) used[face[c].value()] = 1;
+  }
+  return used;
+}
+
+absl::Status EdgebreakerDropsError(int64_t dropped) {
+  return absl::InvalidArgumentError(absl::StrCat(
+      "Edgebreaker would drop ", dropped, dropped == 1 ? " vertex" : " vertices",
+      " that no face with three distinct vertices uses (isolated, or only in faces with a repeated index); ask "
+      "for sequential output"));
+}
+
+absl::Status CheckDracoLayout(const draco::Mesh& dm) {
+  const uint32_t n = dm.num_points();
+  if (n > kMaxPoints) {
+    return absl::InvalidArgumentError(absl::StrCat("the Draco mesh has ", n, " points; at most ", kMaxPoints,
+                                                   " can be read"));
+  }
+  int positions = 0;
+  for (int32_t i = 0; i < dm.num_attributes(); ++i) {
+    const draco::PointAttribute* a = dm.attribute(i);
+    if (a == nullptr) return absl::InvalidArgumentError(absl::StrCat("corrupt Draco mesh: attribute ", i, " is missing"));
+    const std::string name = absl::StrCat("attribute ", i, " (", a->TypeToString(a->attribute_type()), ")");
+    positions += a->attribute_type() == draco::GeometryAttribute::POSITION;
+    const int64_t value_bytes = int64_t{draco::DataTypeLength(a->data_type())} * a->num_components();
+    const int64_t size = static_cast<int64_t>(a->size());
+    const int64_t needed = size == 0 ? 0 : a->byte_offset() + a->byte_stride() * (size - 1) + value_bytes;
+    if (value_bytes <= 0 || a->byte_stride() < value_bytes || a->byte_offset() < 0 || a->buffer() == nullptr ||
+        needed > static_cast<int64_t>(a->buffer()->data_size())) {
+      return absl::InvalidArgumentError(absl::StrCat("corrupt Draco mesh: the values of ", name, " do not fit its buffer"));
+    }
+    if (a->is_mapping_identity()) {
+      if (a->size() < n) {
+        return absl::InvalidArgumentError(
+            absl::StrCat("corrupt Draco mesh: ", name, " has no value for point ", a->size()));
+      }
+      continue;
+    }
+    for (uint32_t p = 0; p < n; ++p) {
+      if (a->mapped_index(draco::PointIndex(p)).value() >= a->size()) {
+        return absl::InvalidArgumentError(absl::StrCat("corrupt Draco mesh: ", name, " has no value for point ", p));
+      }
+    }
+  }
+  if (positions > 1) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("the Draco mesh has ", positions, " POSITION attributes; meshsmooth needs exactly one"));
+  }
+  const draco::PointAttribute* pos = dm.GetNamedAttribute(draco::GeometryAttribute::POSITION);
+  if (pos == nullptr || pos->num_components() < 3 || pos->size() == 0) {
+    return absl::InvalidArgumentError("the Draco mesh has no 3-D position attribute");
+  }
+  for (uint32_t f = 0; f < dm.num_faces(); ++f) {
+    const draco::Mesh::Face& face = dm.face(draco::FaceIndex(f));
+    for (int c = 0; c < 3; ++c) {
+      if (face[c].value() >= n) {
+        return absl::InvalidArgumentError(absl::StrCat("corrupt Draco mesh: face ", f, " refers to point ",
+                                                       face[c].value(), ", but the mesh has ", n, " points"));
+      }
+    }
+  }
+  return absl::OkStatus();
+}
+
+}  // namespace meshsmooth

@@ -1,0 +1,37 @@
+// Internal to core: what the Draco functions check on what Draco's decoder lets through and on
+// what its encoders are given (draco_codec.h says what is refused and why).
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "absl/status/status.h"
+#include "core/draco_codec.h"
+#include "core/vec3.h"
+#include "draco/mesh/mesh.h"
+
+namespace meshsmooth {
+
+// InvalidArgument naming the point or vertex (`what` `index`, e.g. "point 7") when a coordinate
+// is not finite or above kMaxCoordinate in magnitude.
+absl::Status CheckCoordinates(const Vec3& p, const char* what, int64_t index);
+
+// InvalidArgument for quantization bits or a speed out of range.
+absl::Status CheckDracoOptions(const DracoOptions& options);
+
+// What Draco's decoder lets through but no reader of the mesh may meet (coordinates are checked
+// where they are read, CheckCoordinates): more points than an int32 holds, no or several
+// POSITION attributes (Draco's Edgebreaker encoder crashes on a second one), an attribute whose
+// values do not fit its buffer or that has no value for some point, a face naming a point past
+// the point count (Draco's encoders then read past the attributes' buffers). InvalidArgument
+// naming the attribute, point or face.
+absl::Status CheckDracoLayout(const draco::Mesh& dm);
+
+// Edgebreaker leaves out faces with a repeated point and the points no other face uses: marks
+// the points some face of three distinct points uses (every face index < num_points).
+std::vector<uint8_t> PointsEdgebreakerKeeps(const draco::Mesh& dm);
+
+// The InvalidArgument for an Edgebreaker output that would drop `dropped` vertices.
+absl::Status EdgebreakerDropsError(int64_t dropped);
+
+}  // namespace meshsmooth

@@ -1,0 +1,170 @@
+// Hostile Draco uploads (issue 19): face indices past the point count, a second POSITION
+// attribute, extreme or non-finite coordinates, and output encodings whose cost or result
+// would be unbounded. Each is refused with INVALID_ARGUMENT before anything indexes or encodes
+// with it, and every encoding that is accepted decodes to the welded input's vertices.
+#include <cmath>
+#include <limits>
+#include <set>
+#include <string>
+#include <tuple>
+
+#include "core/draco_codec.h"
+#include "core/shapes.h"
+#include "core/topology.h"
+#include "draco/compression/decode.h"
+#include "gtest/gtest.h"
+#include "tests/hostile_inputs.h"
+
+namespace meshsmooth {
+namespace {
+
+using testing::RawDraco;
+using testing::TorusWithIndexPastThePoints;
+
+void ExpectInvalid(const absl::Status& s, const std::string& words) {
+  EXPECT_EQ(s.code(), absl::StatusCode::kInvalidArgument) << s;
+  EXPECT_NE(s.message().find(words), std::string::npos) << s;
+}
+
+// Draco's own decoder accepts such a face; ours refuses it on every decoding path, before the
+// weld, the topology or an encoder could index with it.
+TEST(HostileDracoTest, FaceIndexPastThePointsIsRefused) {
+  const std::string bytes = RawDraco(TorusWithIndexPastThePoints());
+  draco::DecoderBuffer buffer;
+  buffer.Init(bytes.data(), bytes.size());
+  draco::Decoder decoder;
+  ASSERT_TRUE(decoder.DecodeMeshFromBuffer(&buffer).ok()) << "Draco itself no longer accepts the case";
+
+  const std::string words = "face 5 refers to point 65535, but the mesh has 1160 points";
+  ExpectInvalid(DecodeDraco(bytes).status(), words);
+  ExpectInvalid(DracoMesh::Decode(bytes).status(), words);
+  ExpectInvalid(DecodeDracoAttribute(bytes, "kmax").status(), words);
+}
+
+// A second POSITION attribute crashed Draco's Edgebreaker encoder: refused at decode.
+TEST(HostileDracoTest, SecondPositionAttributeIsRefused) {
+  const std::string bytes = RawDraco(TwoRateTorus(20), /*positions=*/2);
+  ExpectInvalid(DracoMesh::Decode(bytes).status(), "2 POSITION attributes");
+  ExpectInvalid(DecodeDraco(bytes).status(), "2 POSITION attributes");
+}
+
+// Coordinates must be finite and at most kMaxCoordinate in magnitude: 3.4e38 made Draco's
+// quantizer overflow (a SIGSEGV in its entropy estimate), and NaN has no grid cell.
+TEST(HostileDracoTest, ExtremeAndNonFiniteCoordinatesAreRefused) {
+  Mesh m = TwoRateTorus(20);
+  m.positions[7].x = 3.4e38;
+  ExpectInvalid(DracoMesh::Decode(RawDraco(m)).status(), "point 7 has a coordinate of 3.4e+38");
+  m.positions[7].x = -kMaxCoordinate;  // the limit itself is fine
+  EXPECT_TRUE(DracoMesh::Decode(RawDraco(m)).ok());
+  m.positions[9].z = std::numeric_limits<double>::quiet_NaN();
+  ExpectInvalid(DecodeDraco(RawDraco(m)).status(), "point 9 has a coordinate of nan");
+  m.positions[9].z = -std::numeric_limits<double>::infinity();
+  ExpectInvalid(DecodeDraco(RawDraco(m)).status(), "point 9 has a coordinate of -inf");
+
+  // Our own encoders write no such coordinate either.
+  ExpectInvalid(EncodeDraco(m).status(), "vertex 9 has a coordinate of -inf");
+  m.positions[9].z = 0.0;
+  absl::StatusOr<DracoMesh> dm = DracoMesh::Decode(RawDraco(m));
+  ASSERT_TRUE(dm.ok()) << dm.status();
+  Mesh welded = dm->TakeWelded();
+  welded.positions[3].y = 1e31;
+  DracoOptions quantized;
+  quantized.quantization_bits = 22;
+  ExpectInvalid(dm->Encode(welded, quantized).status(), "vertex 3 has a coordinate of 1e+31");
+}
+
+// Quantization costs ~2^(bits + 2) bytes in Draco's encoder whatever the mesh (3.7 GB at 30
+// bits): above kMaxQuantizationBits, which is already finer than float32 over the box, the
+// options are refused.
+TEST(HostileDracoTest, QuantizationAboveTheCapIsRefused) {
+  const Mesh m = Icosphere(1);
+  DracoOptions o;
+  o.quantization_bits = kMaxQuantizationBits;
+  EXPECT_TRUE(EncodeDraco(m, o).ok());
+  for (int bits : {kMaxQuantizationBits + 1, 27, 30}) {
+    o.quantization_bits = bits;
+    ExpectInvalid(EncodeDraco(m, o).status(), "quantization bits must be 0 (lossless) or 1..24");
+  }
+}
+
+// Edgebreaker drops vertices that no face with three distinct points uses: refused, so that
+// no result has fewer vertices than the upload.
+TEST(HostileDracoTest, EdgebreakerThatWouldDropAVertexIsRefused) {
+  Mesh m = Icosphere(1);
+  m.positions.push_back({3, 3, 3});  // isolated
+  DracoOptions eb;
+  eb.method = DracoMethod::kEdgebreaker;
+  ExpectInvalid(EncodeDraco(m, eb).status(), "Edgebreaker would drop 1 vertex");
+  absl::StatusOr<DracoMesh> dm = DracoMesh::Decode(*EncodeDraco(m));
+  ASSERT_TRUE(dm.ok()) << dm.status();
+  ExpectInvalid(dm->CheckEncodable(eb), "Edgebreaker would drop 1 vertex");
+  ExpectInvalid(dm->Encode(dm->welded(), eb).status(), "Edgebreaker would drop 1 vertex");
+  EXPECT_TRUE(dm->CheckEncodable({}).ok());
+
+  // A vertex used only by a face with a repeated index is dropped too; a seam copy of a vertex
+  // (same position, another point) is not: the vertex survives through its other point.
+  Mesh d = Icosphere(1);
+  const int32_t n = d.num_vertices();
+  d.positions.push_back({3, 3, 3});
+  d.triangles.push_back({0, n, n});
+  ExpectInvalid(EncodeDraco(d, eb).status(), "Edgebreaker would drop 1 vertex");
+  Mesh seam = Icosphere(1);
+  seam.positions.push_back(seam.positions[4]);
+  seam.triangles.push_back({4, n, 2});
+  absl::StatusOr<DracoMesh> sm = DracoMesh::Decode(*EncodeDraco(seam));
+  ASSERT_TRUE(sm.ok()) << sm.status();
+  EXPECT_TRUE(sm->CheckEncodable(eb).ok());
+}
+
+// Welded vertices of a decoded result, as a set of exact positions.
+std::set<std::tuple<double, double, double>> VertexSet(const std::string& bytes) {
+  std::set<std::tuple<double, double, double>> out;
+  absl::StatusOr<Mesh> m = DecodeDraco(bytes);
+  EXPECT_TRUE(m.ok()) << m.status();
+  if (m.ok()) {
+    for (const Vec3& p : m->positions) out.insert({p.x, p.y, p.z});
+  }
+  return out;
+}
+
+// Every encoding of an awkward but valid mesh (seams, duplicate faces, a non-manifold edge, a
+// face with a repeated index beside the vertex's other faces) decodes with Draco; lossless,
+// its points are exactly the welded input's vertices, and sequential keeps every point.
+TEST(HostileDracoTest, EveryAcceptedEncodingKeepsTheWeldedVertices) {
+  Mesh m = Icosphere(2);
+  for (Vec3& p : m.positions) p = RoundToFloat(p);
+  const int32_t n = m.num_vertices();
+  m.positions.push_back(m.positions[0]);             // a seam copy
+  m.triangles.push_back(m.triangles[3]);             // a duplicate face
+  m.positions.push_back({2, 2, 2});
+  m.triangles.push_back({m.triangles[5][0], m.triangles[5][1], n + 1});  // a non-manifold edge
+  m.triangles.push_back({1, 1, 2});                  // a repeated index
+  m.triangles.push_back({0, n, 7});
+  absl::StatusOr<DracoMesh> dm = DracoMesh::Decode(*EncodeDraco(m));
+  ASSERT_TRUE(dm.ok()) << dm.status();
+  const Mesh welded = dm->welded();
+  std::set<std::tuple<double, double, double>> expected;
+  for (const Vec3& p : welded.positions) expected.insert({p.x, p.y, p.z});
+  ASSERT_EQ(expected.size(), welded.positions.size());
+  for (DracoMethod method : {DracoMethod::kSequential, DracoMethod::kEdgebreaker}) {
+    for (int bits : {0, 1, 11, kMaxQuantizationBits}) {
+      SCOPED_TRACE(::testing::Message() << "edgebreaker " << (method == DracoMethod::kEdgebreaker) << " bits " << bits);
+      DracoOptions o;
+      o.method = method;
+      o.quantization_bits = bits;
+      absl::StatusOr<std::string> out = dm->Encode(welded, o);
+      ASSERT_TRUE(out.ok()) << out.status();
+      absl::StatusOr<Mesh> back = DecodeDraco(*out);
+      ASSERT_TRUE(back.ok()) << back.status();
+      if (method == DracoMethod::kSequential) {
+        EXPECT_EQ(back->num_vertices(), m.num_vertices());
+      }
+      if (bits == 0) {
+        EXPECT_EQ(VertexSet(*out), expected);
+      }
+    }
+  }
+}
+
+}  // namespace
+}  // namespace meshsmooth

@@ -1,0 +1,67 @@
+// Hostile inputs shared by the core and service tests (issue 19): Draco bytes that Draco's
+// decoder accepts but meshsmooth must refuse, and a fan whose centre has a huge valence.
+#pragma once
+
+#include <cmath>
+#include <numbers>
+#include <string>
+
+#include "core/mesh.h"
+#include "core/shapes.h"
+#include "draco/compression/encode.h"
+#include "draco/mesh/mesh.h"
+#include "gtest/gtest.h"
+
+namespace meshsmooth::testing {
+
+// Draco bytes of `m` written by Draco itself (sequential, raw indices), so that what
+// meshsmooth's own encoder refuses to write can be uploaded: `positions` POSITION attributes
+// (the second one shifted by 1 in z) and faces exactly as given, in range or not.
+inline std::string RawDraco(const Mesh& m, int positions = 1) {
+  draco::Mesh dm;
+  const int32_t n = m.num_vertices();
+  dm.set_num_points(n);
+  for (int k = 0; k < positions; ++k) {
+    draco::GeometryAttribute ga;
+    ga.Init(draco::GeometryAttribute::POSITION, nullptr, 3, draco::DT_FLOAT32, false, 3 * sizeof(float), 0);
+    const int id = dm.AddAttribute(ga, /*identity_mapping=*/true, n);
+    for (int32_t i = 0; i < n; ++i) {
+      const Vec3& p = m.positions[i];
+      const float v[3] = {static_cast<float>(p.x), static_cast<float>(p.y), static_cast<float>(p.z + k)};
+      dm.attribute(id)->SetAttributeValue(draco::AttributeValueIndex(i), v);
+    }
+  }
+  for (const Triangle& t : m.triangles) {
+    dm.AddFace({draco::PointIndex(static_cast<uint32_t>(t[0])), draco::PointIndex(static_cast<uint32_t>(t[1])),
+                draco::PointIndex(static_cast<uint32_t>(t[2]))});
+  }
+  draco::Encoder encoder;
+  encoder.SetSpeedOptions(10, 10);  // speed 10: indices stored as they are
+  encoder.SetEncodingMethod(draco::MESH_SEQUENTIAL_ENCODING);
+  draco::EncoderBuffer buf;
+  EXPECT_TRUE(encoder.EncodeMeshToBuffer(dm, &buf).ok());
+  return std::string(buf.data(), buf.size());
+}
+
+// The issue's example: a 20 x 15 torus (1160 vertices here) with one face index set to 65535.
+inline Mesh TorusWithIndexPastThePoints() {
+  Mesh m = TwoRateTorus(20);
+  m.triangles[5][1] = 65535;
+  return m;
+}
+
+// A closed fan: a centre slightly above the unit circle's plane and `valence` vertices around
+// it, one face per pair of neighbours. The centre is interior with that valence, every other
+// vertex a boundary vertex of valence 3.
+inline Mesh Fan(int32_t valence) {
+  Mesh m;
+  m.positions.push_back({0.0, 0.0, 0.1});
+  for (int32_t i = 0; i < valence; ++i) {
+    const double a = 2.0 * std::numbers::pi * i / valence;
+    m.positions.push_back({std::cos(a), std::sin(a), 0.0});
+  }
+  for (int32_t i = 0; i < valence; ++i) m.triangles.push_back({0, 1 + i, 1 + (i + 1) % valence});
+  return m;
+}
+
+}  // namespace meshsmooth::testing

@@ -1,0 +1,64 @@
+// The hostile requests of issue 19 through the service: each gets a clear status and leaves the
+// server serving (docs/reliability.md lists the classes and these tests).
+#include <string>
+
+#include "core/draco_codec.h"
+#include "core/shapes.h"
+#include "gtest/gtest.h"
+#include "tests/hostile_inputs.h"
+#include "tests/service/service_fixtures.h"
+
+namespace meshsmooth {
+namespace {
+
+using namespace meshsmooth::testing;
+
+void ExpectStatus(const absl::Status& s, absl::StatusCode code, const std::string& words) {
+  EXPECT_EQ(s.code(), code) << s;
+  EXPECT_NE(s.message().find(words), std::string::npos) << "expected '" << words << "' in: " << s;
+}
+
+v1::JobSpec Output(v1::JobSpec spec, uint32_t bits, bool edgebreaker) {
+  spec.mutable_output()->set_quantization_bits(bits);
+  spec.mutable_output()->set_edgebreaker(edgebreaker);
+  return spec;
+}
+
+// The issue's crashing uploads: refused with INVALID_ARGUMENT, and the server still serves.
+TEST(HardeningTest, HostileDracoUploadsAreRefusedAndTheServerServesOn) {
+  auto server = StartServer();
+  auto channel = server->InProcessChannel();
+
+  ExpectStatus(Call(channel, Output(Spec("mcf", 3), 12, true), RawDraco(TorusWithIndexPastThePoints())).status(),
+               absl::StatusCode::kInvalidArgument, "face 5 refers to point 65535, but the mesh has 1160 points");
+  ExpectStatus(Call(channel, Output(Spec("median", 3), 0, true), RawDraco(TwoRateTorus(20), 2)).status(),
+               absl::StatusCode::kInvalidArgument, "2 POSITION attributes");
+  Mesh extreme = TwoRateTorus(20);
+  extreme.positions[7].x = 3.4e38;
+  ExpectStatus(Call(channel, Output(Spec("median", 3), 22, false), RawDraco(extreme)).status(),
+               absl::StatusCode::kInvalidArgument, "point 7 has a coordinate of 3.4e+38");
+  Mesh isolated = Icosphere(2);
+  isolated.positions.push_back({3, 3, 3});
+  ExpectStatus(Call(channel, Output(Spec("median", 3), 11, true), *EncodeDraco(isolated)).status(),
+               absl::StatusCode::kInvalidArgument, "Edgebreaker would drop 1 vertex");
+
+  absl::StatusOr<SmoothOutcome> ok = Call(channel, Output(Spec("median", 3), 11, true), *EncodeDraco(Icosphere(2)));
+  ASSERT_TRUE(ok.ok()) << ok.status();
+  absl::StatusOr<Mesh> back = DecodeDraco(ok->result);
+  ASSERT_TRUE(back.ok()) << back.status();
+  EXPECT_EQ(back->num_vertices(), Icosphere(2).num_vertices());
+}
+
+// Quantization costs ~2^(bits + 2) bytes in Draco's encoder: above 24 bits the spec is refused
+// before any upload byte is read.
+TEST(HardeningTest, QuantizationAboveTheCapIsRefusedWithTheSpec) {
+  auto server = StartServer();
+  for (uint32_t bits : {25u, 27u, 30u}) {
+    ExpectStatus(Call(server->InProcessChannel(), Output(Spec("median", 3), bits, false), "not even Draco").status(),
+                 absl::StatusCode::kInvalidArgument, "output.quantization_bits must be 0 (lossless) or 1..24");
+  }
+  EXPECT_TRUE(Call(server->InProcessChannel(), Output(Spec("median", 3), 24, false), *EncodeDraco(Icosphere(2))).ok());
+}
+
+}  // namespace
+}  // namespace meshsmooth
