@@ -8,10 +8,29 @@
 #include <vector>
 
 #include "core/metrics.h"
+#include "core/normals.h"
 #include "core/topology.h"
 
 namespace meshsmooth {
 namespace {
+
+// ln(x) for finite x > 0 from +, -, *, / and frexp alone (core is built without FMA
+// contraction, and sqrt is correctly rounded), so noise is the same bytes on every CPU:
+// glibc picks among log implementations by CPU features. x = m 2^e with m in
+// [sqrt(1/2), sqrt(2)), ln m = 2 atanh(t), t = (m - 1) / (m + 1), |t| < 0.172; the series
+// to t^25 is exact to double precision.
+double PortableLog(double x) {
+  int e = 0;
+  double m = std::frexp(x, &e);  // m in [0.5, 1)
+  if (m < std::numbers::sqrt2 / 2.0) {
+    m *= 2.0;
+    --e;
+  }
+  const double t = (m - 1.0) / (m + 1.0), t2 = t * t;
+  double sum = 0.0;
+  for (int k = 25; k >= 1; k -= 2) sum = sum * t2 + 1.0 / k;
+  return 2.0 * t * sum + e * std::numbers::ln2;
+}
 
 // splitmix64: a tiny, well-mixed generator whose output is defined by this code alone (the
 // standard distributions are not bit-identical across library implementations).
@@ -26,10 +45,39 @@ class SplitMix64 {
   }
   // Uniform in [-1, 1).
   double NextSigned() { return static_cast<double>(Next() >> 11) * 0x1.0p-52 - 1.0; }
+  // Standard normal: Marsaglia's polar method, with PortableLog for the logarithm.
+  double NextGaussian() {
+    for (;;) {
+      const double u = NextSigned(), v = NextSigned(), s = u * u + v * v;
+      if (s > 0.0 && s < 1.0) return u * std::sqrt(-2.0 * PortableLog(s) / s);
+    }
+  }
+  // Uniform on the unit sphere: a point of the unit ball by rejection, normalised.
+  Vec3 NextDirection() {
+    for (;;) {
+      const Vec3 p{NextSigned(), NextSigned(), NextSigned()};
+      const double s = SquaredNorm(p);
+      if (s > 1e-6 && s <= 1.0) return p * (1.0 / std::sqrt(s));
+    }
+  }
 
  private:
   uint64_t state_;
 };
+
+// Moves each vertex a usable face touches by sigma h N(0, 1) along direction(v), in vertex
+// order (one Gaussian, then whatever `direction` draws, per vertex).
+template <typename Direction>
+void AddGaussianNoise(Mesh& mesh, double sigma_fraction_of_mean_edge, uint64_t seed, Direction&& direction) {
+  const Topology topo = BuildTopology(mesh);
+  const double sigma = sigma_fraction_of_mean_edge * MeanEdgeLength(mesh, topo);
+  SplitMix64 rng(seed);
+  for (int32_t v = 0; v < topo.num_vertices(); ++v) {
+    if (topo.kind[v] == VertexKind::kIsolated) continue;
+    const double distance = sigma * rng.NextGaussian();
+    mesh.positions[v] += distance * direction(v, rng);
+  }
+}
 
 // Cumulative positions of n cells: the first n/2 have width 1, the rest width `ratio`,
 // scaled so that the n cells span `total`.
@@ -225,6 +273,16 @@ void AddUniformNoise(Mesh& mesh, double fraction_of_mean_edge, uint64_t seed) {
     p.y += amplitude * rng.NextSigned();
     p.z += amplitude * rng.NextSigned();
   }
+}
+
+void AddNormalNoise(Mesh& mesh, double sigma_fraction_of_mean_edge, uint64_t seed) {
+  const std::vector<Vec3> normals = VertexNormals(mesh);
+  AddGaussianNoise(mesh, sigma_fraction_of_mean_edge, seed, [&](int32_t v, SplitMix64&) { return normals[v]; });
+}
+
+void AddRandomDirectionNoise(Mesh& mesh, double sigma_fraction_of_mean_edge, uint64_t seed) {
+  AddGaussianNoise(mesh, sigma_fraction_of_mean_edge, seed,
+                   [](int32_t, SplitMix64& rng) { return rng.NextDirection(); });
 }
 
 }  // namespace meshsmooth

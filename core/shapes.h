@@ -50,4 +50,15 @@ Mesh CosineHeightField(double amplitude, int periods, int rows_per_period, int c
 // noise"). Seeded: the same seed gives the same noise.
 void AddUniformNoise(Mesh& mesh, double fraction_of_mean_edge, uint64_t seed);
 
+// The mesh-denoising literature's noise: each vertex that a usable face touches moves by an
+// independent Gaussian distance N(0, (sigma h)^2), h the mesh's mean edge length, along its
+// area-weighted vertex normal (VertexNormals; a vertex whose normal is zero stays put).
+// Vertices no usable face touches stay put. Seeded, and the same bytes on every machine (the
+// Gaussian uses no libm function whose last bit may vary between CPUs).
+void AddNormalNoise(Mesh& mesh, double sigma_fraction_of_mean_edge, uint64_t seed);
+
+// Same, each vertex along its own direction drawn uniformly from the unit sphere rather than
+// along its normal: the displacement's RMS is again sigma h, its normal part sigma h / sqrt(3).
+void AddRandomDirectionNoise(Mesh& mesh, double sigma_fraction_of_mean_edge, uint64_t seed);
+
 }  // namespace meshsmooth
