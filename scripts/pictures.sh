@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# The README's pictures, made with `meshsmooth render` (runs locally; needs ../shared/data/meshes):
+# The README's pictures, made with `meshsmooth render` (runs locally; needs the shared test meshes,
+# docs/development.md "Data", or MESHES=DIR):
 #   docs/images/bunny-before.png   the Stanford bunny as scanned (zipper output, scanner noise)
 #   docs/images/bunny-after.png    the same after 20 iterations of the paper's flow (median)
 #   docs/images/fandisk-ridges.png ridges (black) and ravines (white) of the fandisk after 5
