@@ -47,6 +47,11 @@ v1::JobSpec SpecFrom(const SmoothOptions& o) {
   if (o.pass_band > 0) spec.set_taubin_pass_band(o.pass_band);
   if (o.tangential_weight >= 0) spec.set_tangential_weight(o.tangential_weight);
   if (o.epsilon > 0) spec.set_epsilon(o.epsilon);
+  v1::NormalFilter* nf = spec.mutable_normal_filter();
+  if (o.normal_iterations > 0) nf->set_normal_iterations(o.normal_iterations);
+  if (o.vertex_iterations > 0) nf->set_vertex_iterations(o.vertex_iterations);
+  if (o.sigma_spatial > 0) nf->set_sigma_spatial(o.sigma_spatial);
+  if (o.sigma_range > 0) nf->set_sigma_range(o.sigma_range);
   static const std::map<std::string, v1::AdaptiveMode> kModes = {{"none", v1::ADAPTIVE_MODE_NONE},
                                                                  {"constant", v1::ADAPTIVE_MODE_CONSTANT},
                                                                  {"ring1", v1::ADAPTIVE_MODE_RING1},

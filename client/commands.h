@@ -22,6 +22,9 @@ struct SmoothOptions {
   double step = 0.0;
   std::string weights = "u0";
   double mu = 0.0, pass_band = 0.0, tangential_weight = -1.0, epsilon = 0.0;
+  // Normal filter; 0 = the default (ListFlows).
+  unsigned normal_iterations = 0, vertex_iterations = 0;
+  double sigma_spatial = 0.0, sigma_range = 0.0;
   std::string adaptive = "none";
   double threshold = 0.0;
   unsigned recompute_every = 10;

@@ -104,6 +104,26 @@ void AddSmoothOptions(CLI::App* smooth, SmoothOptions& so) {
                      absl::StrCat(FlowsTaking(flows, "epsilon"), ": epsilon in (0, 1); 0 = default ",
                                   DefaultOf(flows, "epsilon")))
       ->capture_default_str();
+  smooth->add_option("--normal-iterations", so.normal_iterations,
+                     absl::StrCat(FlowsTaking(flows, "normal_filter.normal_iterations"),
+                                  ": filter passes over the face normals per iteration, 1..100; 0 = ",
+                                  DefaultOf(flows, "normal_filter.normal_iterations")))
+      ->capture_default_str();
+  smooth->add_option("--vertex-iterations", so.vertex_iterations,
+                     absl::StrCat(FlowsTaking(flows, "normal_filter.vertex_iterations"),
+                                  ": vertex updates per iteration, 1..100; 0 = ",
+                                  DefaultOf(flows, "normal_filter.vertex_iterations")))
+      ->capture_default_str();
+  smooth->add_option("--sigma-spatial", so.sigma_spatial,
+                     absl::StrCat(FlowsTaking(flows, "normal_filter.sigma_spatial"),
+                                  ": spatial sigma relative to the mean distance between adjacent face centroids; 0 = ",
+                                  DefaultOf(flows, "normal_filter.sigma_spatial")))
+      ->capture_default_str();
+  smooth->add_option("--sigma-range", so.sigma_range,
+                     absl::StrCat(FlowsTaking(flows, "normal_filter.sigma_range"),
+                                  ": range sigma on |n_i - n_j| of unit normals, (0, 2]; 0 = ",
+                                  DefaultOf(flows, "normal_filter.sigma_range")))
+      ->capture_default_str();
   smooth->add_option("--adaptive", so.adaptive, "eq. (14): none | constant | ring1 | ring2")
       ->capture_default_str()->check(CLI::IsMember({"none", "constant", "ring1", "ring2"}));
   smooth->add_option("--threshold", so.threshold, "T for --adaptive constant")->capture_default_str();

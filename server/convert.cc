@@ -27,6 +27,16 @@ absl::StatusOr<JobParams> FromProto(const v1::JobSpec& spec, int max_iterations)
   if (spec.has_taubin_pass_band()) p.taubin_pass_band = spec.taubin_pass_band();
   if (spec.has_tangential_weight()) p.tangential_weight = spec.tangential_weight();
   if (spec.has_epsilon()) p.epsilon = spec.epsilon();
+  const v1::NormalFilter& nf = spec.normal_filter();
+  // Counts above 100 are refused by validation; the clamp only keeps them from wrapping.
+  if (nf.has_normal_iterations()) {
+    p.normal_filter.normal_iterations = static_cast<int>(std::min(nf.normal_iterations(), 1000u));
+  }
+  if (nf.has_vertex_iterations()) {
+    p.normal_filter.vertex_iterations = static_cast<int>(std::min(nf.vertex_iterations(), 1000u));
+  }
+  if (nf.has_sigma_spatial()) p.normal_filter.sigma_spatial = nf.sigma_spatial();
+  if (nf.has_sigma_range()) p.normal_filter.sigma_range = nf.sigma_range();
   switch (spec.adaptive().mode()) {
     case v1::ADAPTIVE_MODE_CONSTANT: p.adaptive = AdaptiveMode::kConstant; break;
     case v1::ADAPTIVE_MODE_RING1: p.adaptive = AdaptiveMode::kRing1; break;
@@ -130,6 +140,11 @@ void ToProto(const JobParams& params, const FlowResult& result, v1::EffectivePar
   a->set_recompute_every(static_cast<uint32_t>(p.adaptive_recompute_every));
   out->set_epsilon(p.epsilon);
   out->set_tangential_weight(p.tangential_weight);
+  v1::NormalFilter* nf = out->mutable_normal_filter();
+  nf->set_normal_iterations(static_cast<uint32_t>(p.normal_filter.normal_iterations));
+  nf->set_vertex_iterations(static_cast<uint32_t>(p.normal_filter.vertex_iterations));
+  nf->set_sigma_spatial(p.normal_filter.sigma_spatial);
+  nf->set_sigma_range(p.normal_filter.sigma_range);
   out->mutable_output()->set_quantization_bits(static_cast<uint32_t>(params.output.quantization_bits));
   out->mutable_output()->set_edgebreaker(params.output.method == DracoMethod::kEdgebreaker);
 }

@@ -76,7 +76,7 @@ class FlowRun {
       : topo_(topo), p_(p), row_(FlowOf(p.flow)), n_(topo.num_vertices()), h_(h), diagonal_(diagonal) {}
 
   // Kernel, roles, step context, lane batches and the constant threshold.
-  void SetUp(FlowResult& result) {
+  void SetUp(const Mesh& mesh, FlowResult& result) {
     curvature_ = row_.kind == FlowKind::kCurvature;
     step_ = p_.step.value_or(row_.default_step);
     lambda_ = curvature_ ? step_ * h_ * h_ : step_;
@@ -87,6 +87,7 @@ class FlowRun {
     AssignRoles();
     threads_ = ThreadsFor(n_, p_);
     MakeContext();
+    kernel_->Bind(mesh, topo_, threads_);
     // Curvature flows move a boundary curve like the curve-shortening flow with the same time
     // step (kappa ~ 2 U / h^2), capped at the stable umbrella step 0.5.
     curve_step_ = curvature_ ? std::min(2.0 * step_, 0.5) : step_;
@@ -178,7 +179,7 @@ class FlowRun {
     ctx_.h = h_;
     ctx_.inv_h2 = 1.0 / (h_ * h_);
     ctx_.isa = BestVectorIsa();
-    if (curvature_) ctx_.max_step_sq = h_ * h_;
+    if (row_.kind != FlowKind::kUmbrella) ctx_.max_step_sq = h_ * h_;
     // The cotangent flows run their free vertices in batches (lane_batches.h);
     // MESHSMOOTH_LANE_BATCHES=0 makes them go vertex by vertex (for tests and measurements).
     const char* want_batches = std::getenv("MESHSMOOTH_LANE_BATCHES");
@@ -259,7 +260,7 @@ absl::StatusOr<FlowResult> RunIterations(Mesh& mesh, const Topology& topo, const
   if (!diagonal.ok()) return diagonal.status();
   FlowResult result;
   FlowRun run(topo, p, h, *diagonal);
-  run.SetUp(result);
+  run.SetUp(mesh, result);
 
   // The positions move into `cur` for the run (no copy; the mesh gets them back on every return
   // below). `cur` keeps the iteration's start until the iteration is accepted; passes write

@@ -61,6 +61,20 @@ enum class ReorderMode {
   kNever,
 };
 
+// The normal-filtering flows (bilateral_normal; docs/normal-filtering.md).
+// One iteration of the job is one round: `normal_iterations` passes of the filter over the
+// face normals, then `vertex_iterations` updates that move the vertices so that the faces fit
+// the filtered normals.
+struct NormalFilterParams {
+  int normal_iterations = 1;   // 1 .. 100
+  int vertex_iterations = 5;   // 1 .. 100
+  // The spatial Gaussian's sigma, relative to the mean distance between the centroids of
+  // faces that share an edge (measured once, on the input): scale-free.
+  double sigma_spatial = 1.0;  // (0, 10]
+  // The range Gaussian's sigma on |n_i - n_j| between unit normals (0 .. 2).
+  double sigma_range = 0.35;  // (0, 2]
+};
+
 struct FlowParams {
   FlowId flow = FlowId::kMedian;
   int iterations = 20;  // 1 .. kMaxIterations
@@ -73,6 +87,7 @@ struct FlowParams {
   double taubin_pass_band = 0.1;   // taubin: k_PB = 1/lambda - 1/mu (> 0), used when mu is 0
   double tangential_weight = 5.0;  // mcf_tangential: C; the tangential term moves by step*C*U0t
   double epsilon = 0.1;            // median: eq. (13)'s epsilon, in (0, 1)
+  NormalFilterParams normal_filter;  // bilateral_normal
 
   // Eq. (14). The threshold compares with |F|. For kConstant, T is in the flow's speed units:
   // curvature (1/length) for the curvature flows, and for the umbrella flows length relative

@@ -92,6 +92,9 @@ class FlowKernel {
   virtual double pass_factor(int /*pass*/) const { return 1.0; }
   // Taubin's mu (the second pass's step), reported in FlowResult; 0 for one-pass flows.
   virtual double mu() const { return 0.0; }
+  // Called once per run, before the first pass, with the mesh as it enters the run (flows
+  // that work on faces take them here; the positions then move with each pass).
+  virtual void Bind(const Mesh& /*mesh*/, const Topology& /*topo*/, int /*threads*/) {}
   // Work over all vertices before a pass's blocks (bilaplacian: U at every vertex).
   virtual void Prepare(const StepContext& /*c*/, const Vec3* /*cur*/, int32_t /*n*/, int /*threads*/) {}
   virtual BlockStats Step(const StepContext& c, const Vec3* cur, Vec3* next, int32_t begin, int32_t end) const = 0;
@@ -105,11 +108,13 @@ std::unique_ptr<FlowKernel> MakeBilaplacian(const FlowParams& p, double step);
 std::unique_ptr<FlowKernel> MakeMcf(const FlowParams& p, double step);
 std::unique_ptr<FlowKernel> MakeMcfTangential(const FlowParams& p, double step);
 std::unique_ptr<FlowKernel> MakeMedian(const FlowParams& p, double step);
+std::unique_ptr<FlowKernel> MakeBilateralNormal(const FlowParams& p, double step);
 
 // Checks of a flow's own parameters that involve the step (the flow table's `validate`):
 // InvalidArgument naming the parameters.
 absl::Status ValidateTaubin(const FlowParams& p, double step);
 absl::Status ValidateMcfTangential(const FlowParams& p, double step);
+absl::Status ValidateNormalFilter(const FlowParams& p, double step);
 
 // Eq. (14)'s T(P): mean |H| over the first ring (rings = 1) or the first and second rings
 // (rings = 2) of every vertex, over interior neighbours only; written to `t`.

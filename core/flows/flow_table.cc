@@ -17,6 +17,19 @@ ParameterInfo Weights() {
           {"UMBRELLA_WEIGHTS_UNIFORM", "UMBRELLA_WEIGHTS_INVERSE_DISTANCE"}};
 }
 
+// The parameters of the normal-filtering flows (FlowParams::normal_filter; JobSpec.normal_filter).
+std::vector<ParameterInfo> NormalFilterParameters(const NormalFilterParams& d) {
+  return {{"normal_filter.normal_iterations", "filter passes over the face normals per iteration",
+           static_cast<double>(d.normal_iterations), 1, 100, false, false, {}},
+          {"normal_filter.vertex_iterations", "vertex updates fitting the faces to the filtered normals per iteration",
+           static_cast<double>(d.vertex_iterations), 1, 100, false, false, {}},
+          {"normal_filter.sigma_spatial",
+           "spatial Gaussian sigma, relative to the mean distance between centroids of faces sharing an edge",
+           d.sigma_spatial, 0.0, 10.0, true, false, {}},
+          {"normal_filter.sigma_range", "range Gaussian sigma on the difference of unit normals |n_i - n_j|",
+           d.sigma_range, 0.0, 2.0, true, false, {}}};
+}
+
 std::vector<FlowRow> MakeTable() {
   const FlowParams d;
   std::vector<FlowRow> rows;
@@ -51,6 +64,11 @@ std::vector<FlowRow> MakeTable() {
                   "eqs. (12)-(13)",
                   {{"epsilon", "vertices with |cos(theta)| <= epsilon do not move", d.epsilon, 0.0, 1.0, true, true, {}}},
                   {}, nullptr, flows::MakeMedian});
+  rows.push_back({FlowId::kBilateralNormal, "bilateral_normal", FlowKind::kNormalFilter, 1.0, 1.0,
+                  "Bilateral filtering of the face normals, then vertices fitted to them: removes noise and keeps "
+                  "sharp creases; one iteration = normal_iterations filter passes + vertex_iterations vertex updates",
+                  "Zheng et al. 2011 (docs/normal-filtering.md)", NormalFilterParameters(d.normal_filter), {},
+                  flows::ValidateNormalFilter, flows::MakeBilateralNormal});
   return rows;
 }
 

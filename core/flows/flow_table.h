@@ -23,7 +23,15 @@ class FlowKernel;
 }
 
 // The flows, in the order ListFlows and the CLI list them.
-enum class FlowId : uint8_t { kLaplacian, kTaubin, kBilaplacian, kMcf, kMcfTangential, kMedian };
+enum class FlowId : uint8_t {
+  kLaplacian,
+  kTaubin,
+  kBilaplacian,
+  kMcf,
+  kMcfTangential,
+  kMedian,
+  kBilateralNormal,
+};
 
 // What a flow's step and speed are measured in, and which machinery the driver gives it.
 enum class FlowKind : uint8_t {
@@ -33,6 +41,11 @@ enum class FlowKind : uint8_t {
   // free vertex's step is capped at h, boundary curves move with min(2 step, 0.5), and the
   // cotangent kernel runs in lane batches (core/flows/lane_batches.h).
   kCurvature,
+  // Normal-filtering flows: the face normals are filtered, then the vertices follow them. The
+  // step (dimensionless, <= 1) scales each vertex update; a step is capped at h as for the
+  // curvature flows; boundary vertices in BoundaryMode::kCurve take the same vertex update as
+  // interior ones. They run on the mesh in its own order (they need its faces).
+  kNormalFilter,
 };
 
 struct FlowRow {

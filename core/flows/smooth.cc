@@ -75,7 +75,9 @@ absl::StatusOr<FlowResult> Smooth(Mesh& mesh, const Topology& topo, const FlowPa
     return absl::InvalidArgumentError("the topology was built for another mesh");
   }
   const double h = MeanEdgeLength(mesh, topo);
-  const bool reorder = p.reorder == ReorderMode::kAlways
+  // The normal-filtering flows work on the faces, which the reordered copy does not carry.
+  const bool reorder = FlowOf(p.flow).kind == FlowKind::kNormalFilter ? false
+                       : p.reorder == ReorderMode::kAlways
                            ? ReorderableSize(n)
                            : p.reorder == ReorderMode::kAuto && MortonOrderPaysOff(topo, p.iterations);
   if (!reorder) return flows::RunIterations(mesh, topo, p, control, h);

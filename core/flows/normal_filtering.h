@@ -1,0 +1,78 @@
+// Internal to core/flows: what the normal-filtering flows (bilateral_normal.cc) share. One round (one iteration of the job) filters the face normals
+// `normal_iterations` times (the flow's FilterOnce), then moves the vertices so that the faces
+// fit the filtered normals, `vertex_iterations` times (one pass each):
+//   x_v += step / |F(v)| * sum_{f in F(v)} n_f (n_f . (c_f - x_v))
+// the orthogonal-projection update of Sun et al. (2007) used by Zheng et al. (2011) and Zhang
+// et al. (2015), with c_f the centroid of face f in the pass's positions. docs/normal-filtering.md
+// gives the equations and the choices made here.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "core/flows/flow_kernel.h"
+
+namespace meshsmooth::flows {
+
+// The faces of a run and their neighbourhoods, built once per run.
+struct FaceGraph {
+  std::vector<Triangle> faces;  // the usable faces (Topology::faces)
+  // The faces around each vertex (indices into `faces`), CSR.
+  std::vector<int32_t> vertex_offsets, vertex_faces;
+  // The faces sharing a vertex with each face, the face itself included, ascending, CSR.
+  std::vector<int32_t> offsets, neighbours;
+  // The face across each edge (v0 v1, v1 v2, v2 v0), or -1 on a boundary or non-manifold edge.
+  std::vector<std::array<int32_t, 3>> across;
+  // Mean distance between the centroids of faces that share an edge, on the input (sigma_s
+  // is relative to it); 0 when no two faces share an edge.
+  double mean_centroid_distance = 0.0;
+};
+
+FaceGraph BuildFaceGraph(const Mesh& mesh, const Topology& topo, int threads);
+
+// A normal-filtering flow: the rounds, the face geometry and the vertex update. A flow derives
+// from it and implements FilterOnce.
+class NormalFilterKernel : public FlowKernel {
+ public:
+  explicit NormalFilterKernel(const NormalFilterParams& p) : p_(p) {}
+  int passes() const override { return p_.vertex_iterations; }
+  void Bind(const Mesh& mesh, const Topology& topo, int threads) override;
+  // The first pass of a round filters the normals of the round's input.
+  void Prepare(const StepContext& c, const Vec3* cur, int32_t n, int threads) override;
+  // The vertex update of one pass.
+  BlockStats Step(const StepContext& c, const Vec3* cur, Vec3* next, int32_t begin, int32_t end) const override;
+
+ protected:
+  // One pass of the filter: reads normal_ (unit, or zero for a face without area) and writes
+  // the filtered normals to `out`, face by face, on `threads_` threads.
+  virtual void FilterOnce(std::vector<Vec3>& out) = 0;
+
+  // Runs fn(face) over every face on threads_ threads, in fixed blocks.
+  template <typename Fn>
+  void ForFaces(Fn&& fn) const {
+    ForBlocks(static_cast<int32_t>(graph_.faces.size()), threads_, [&](int32_t, int32_t begin, int32_t end) {
+      for (int32_t f = begin; f < end; ++f) fn(f);
+    });
+  }
+
+  // The bilateral sum of face i's neighbours' normals with range weights on |g_i - g_j| (g =
+  // normal_ for the bilateral filter, or guidance normals), normalised; face i's
+  // own normal when the sum vanishes.
+  Vec3 FilteredNormal(int32_t i, const std::vector<Vec3>& g) const;
+
+  NormalFilterParams p_;
+  int threads_ = 1;
+  FaceGraph graph_;
+  std::vector<Vec3> normal_;     // per face: unit normal, or zero without area
+  std::vector<double> area_;     // per face
+  std::vector<double> spatial_;  // per neighbour entry j of face i: area_j * exp(-|c_i - c_j|^2 / (2 sigma_s^2))
+  double inv_two_sigma_r2_ = 0.0;
+
+ private:
+  // Normals, areas and the spatial weights of the positions `pos`.
+  void ComputeGeometry(const Vec3* pos);
+  int pass_ = 0;  // passes prepared so far
+};
+
+}  // namespace meshsmooth::flows
