@@ -82,6 +82,7 @@ void PrintFlows(const v1::ListFlowsResponse& flows) {
     for (const v1::ParameterInfo& p : f.parameters()) {
       std::printf("    %-18s %s; %s\n", p.name().c_str(), p.description().c_str(), Range(p).c_str());
     }
+    for (const std::string& c : f.constraints()) std::printf("    and %s\n", c.c_str());
   }
   std::printf("every flow:\n");
   for (const v1::ParameterInfo& p : flows.common_parameters()) {
