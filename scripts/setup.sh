@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages meshsmooth needs (only when one is missing), then configures
-# and builds one CMake preset. Usage: scripts/setup.sh [dev|asan]   (default: dev)
+# and builds one CMake preset. Usage: scripts/setup.sh [dev|asan|fuzz]   (default: dev)
+# fuzz also installs clang, libFuzzer and LLVM's OpenMP runtime (clang's -fopenmp needs it).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 preset="${1:-dev}"
@@ -12,6 +13,7 @@ packages=(
   libcli11-dev libeigen3-dev libbenchmark-dev libpng-dev
   python3-grpcio python3-protobuf python3-numpy python3-scipy openssl
 )
+if [ "$preset" = fuzz ]; then packages+=(clang libfuzzer-14-dev libomp-dev); fi
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -251,7 +251,7 @@ VectorIsa BestVectorIsa() {
     if (w == "sse2") best = VectorIsa::kSse2;
     if (w == "avx2" && best == VectorIsa::kAvx512) best = VectorIsa::kAvx2;
   }
-  return best;
+  return MESHSMOOTH_WIDE_LANES ? best : VectorIsa::kSse2;
 }
 
 absl::StatusOr<FlowResult> RunIterations(Mesh& mesh, const Topology& topo, const FlowParams& p,

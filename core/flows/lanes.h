@@ -9,6 +9,8 @@
 #include <cmath>
 #include <cstdint>
 
+#include "core/flows/vector_isa.h"  // MESHSMOOTH_WIDE_LANES
+
 namespace meshsmooth::flows {
 
 // Two doubles in one SSE2 register (GCC vector extension): U1 takes two ring neighbours at a
@@ -31,12 +33,14 @@ inline double LaneSqrt(double x) { return std::sqrt(x); }
 __attribute__((always_inline)) inline VertexLanesOf<2>::type LaneSqrt(VertexLanesOf<2>::type x) {
   return __builtin_ia32_sqrtpd(x);
 }
+#if MESHSMOOTH_WIDE_LANES
 __attribute__((always_inline)) inline VertexLanesOf<4>::type LaneSqrt(VertexLanesOf<4>::type x) {
   return __builtin_ia32_sqrtpd256(x);
 }
 __attribute__((always_inline)) inline VertexLanesOf<8>::type LaneSqrt(VertexLanesOf<8>::type x) {
   return __builtin_ia32_sqrtpd512_mask(x, x, static_cast<unsigned char>(0xff), 4 /* current rounding */);
 }
+#endif
 
 // True when a[l] < b[l] in some lane: one compare and one branch, whatever W (a select on
 // the comparison would be lowered to a branch per lane, see MeanCurvatureLanes).
@@ -44,6 +48,7 @@ inline bool AnyLaneLess(double a, double b) { return a < b; }
 __attribute__((always_inline)) inline bool AnyLaneLess(VertexLanesOf<2>::type a, VertexLanesOf<2>::type b) {
   return __builtin_ia32_movmskpd(__builtin_ia32_cmpltpd(a, b)) != 0;
 }
+#if MESHSMOOTH_WIDE_LANES
 __attribute__((always_inline)) inline bool AnyLaneLess(VertexLanesOf<4>::type a, VertexLanesOf<4>::type b) {
   return __builtin_ia32_movmskpd256(__builtin_ia32_cmppd256(a, b, 1 /* _CMP_LT_OS */)) != 0;
 }
@@ -51,6 +56,7 @@ __attribute__((always_inline)) inline bool AnyLaneLess(VertexLanesOf<8>::type a,
   return __builtin_ia32_cmppd512_mask(a, b, 1 /* _CMP_LT_OS */, static_cast<unsigned char>(0xff),
                                       4 /* current rounding */) != 0;
 }
+#endif
 
 // a < b ? a : b and b < a ? a : b lane by lane (NaN in a gives b), as one instruction: GCC
 // turns only some of these selects into minpd/maxpd.
@@ -62,6 +68,7 @@ __attribute__((always_inline)) inline VertexLanesOf<2>::type LaneMin(VertexLanes
 __attribute__((always_inline)) inline VertexLanesOf<2>::type LaneMax(VertexLanesOf<2>::type a, VertexLanesOf<2>::type b) {
   return __builtin_ia32_maxpd(a, b);
 }
+#if MESHSMOOTH_WIDE_LANES
 __attribute__((always_inline)) inline VertexLanesOf<4>::type LaneMin(VertexLanesOf<4>::type a, VertexLanesOf<4>::type b) {
   return __builtin_ia32_minpd256(a, b);
 }
@@ -74,6 +81,7 @@ __attribute__((always_inline)) inline VertexLanesOf<8>::type LaneMin(VertexLanes
 __attribute__((always_inline)) inline VertexLanesOf<8>::type LaneMax(VertexLanesOf<8>::type a, VertexLanesOf<8>::type b) {
   return __builtin_ia32_maxpd512_mask(a, b, a, static_cast<unsigned char>(0xff), 4 /* current rounding */);
 }
+#endif
 
 // W int32 lanes beside them: vertex and ring indices.
 template <int W> struct IndexLanesOf;
@@ -93,10 +101,12 @@ __attribute__((always_inline)) inline typename IndexLanesOf<W>::type GatherIndex
     return live ? base[index] : fallback;
   } else if constexpr (W == 2) {
     return I{live[0] ? base[index[0]] : fallback[0], live[1] ? base[index[1]] : fallback[1]};
+#if MESHSMOOTH_WIDE_LANES
   } else if constexpr (W == 4) {
     return __builtin_ia32_gathersiv4si(fallback, base, index, live, 4);
   } else {
     return __builtin_ia32_gathersiv8si(fallback, base, index, live, 4);
+#endif
   }
 }
 
@@ -109,10 +119,12 @@ __attribute__((always_inline)) inline typename VertexLanesOf<W>::type GatherLane
     return base[index];
   } else if constexpr (W == 2) {
     return V{base[index[0]], base[index[1]]};
+#if MESHSMOOTH_WIDE_LANES
   } else if constexpr (W == 4) {
     return __builtin_ia32_gathersiv4df(V{}, base, index, V{} == V{}, 8);
   } else {
     return __builtin_ia32_gathersiv8df(V{}, base, index, static_cast<unsigned char>(0xff), 8);
+#endif
   }
 }
 
@@ -124,6 +136,7 @@ __attribute__((always_inline)) inline void GatherXyzLanes(const double* base, co
                                                           typename VertexLanesOf<W>::type& x,
                                                           typename VertexLanesOf<W>::type& y,
                                                           typename VertexLanesOf<W>::type& z) {
+#if MESHSMOOTH_WIDE_LANES
   if constexpr (W == 8) {
     using V = typename VertexLanesOf<8>::type;
     typedef long long Select __attribute__((vector_size(64)));
@@ -146,7 +159,9 @@ __attribute__((always_inline)) inline void GatherXyzLanes(const double* base, co
     x = __builtin_shuffle(xy0, xy1, low);
     y = __builtin_shuffle(xy0, xy1, high);
     z = __builtin_shuffle(z0, z1, low);
-  } else {
+  } else
+#endif
+  {
     x = GatherLanes<W>(base, index3), y = GatherLanes<W>(base + 1, index3), z = GatherLanes<W>(base + 2, index3);
   }
 }

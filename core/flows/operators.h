@@ -140,13 +140,16 @@ __attribute__((always_inline)) inline CurvatureLanes<typename VertexLanesOf<W>::
   } else {
     const I n = end - begin;
     valence = __builtin_convertvector(n, V);
+#if MESHSMOOTH_WIDE_LANES
     if constexpr (W == 8) {  // by halves: three maxima instead of seven extracts
       typedef int32_t Half __attribute__((vector_size(16)));
       Half m = __builtin_ia32_pmaxsd128(Half{n[0], n[1], n[2], n[3]}, Half{n[4], n[5], n[6], n[7]});
       m = __builtin_ia32_pmaxsd128(m, __builtin_shuffle(m, Half{2, 3, 0, 1}));
       m = __builtin_ia32_pmaxsd128(m, __builtin_shuffle(m, Half{1, 0, 3, 2}));
       max_valence = m[0];
-    } else {
+    } else
+#endif
+    {
       max_valence = n[0];
       for (int l = 1; l < W; ++l) max_valence = std::max(max_valence, n[l]);
     }

@@ -156,8 +156,12 @@ __attribute__((target("avx2"), flatten)) BlockStats RunAvx2(const Fn& fn) {
 }
 template <class Fn>
 __attribute__((always_inline)) inline BlockStats RunWithIsa(VectorIsa isa, const Fn& fn) {
+#if MESHSMOOTH_WIDE_LANES
   if (isa == VectorIsa::kAvx512) return RunAvx512(fn);
   if (isa == VectorIsa::kAvx2) return RunAvx2(fn);
+#else
+  (void)isa;
+#endif
   return fn(LaneWidth<2>{});
 }
 

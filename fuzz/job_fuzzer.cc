@@ -1,0 +1,155 @@
+// libFuzzer target: the service's whole job path, without the network.
+//
+// The input's head picks a JobSpec (job_input.h), which goes through the server's own
+// conversion and checks (server::FromProto); the rest is the Draco upload, which a
+// server::SmoothJob runs as a worker does: decode, weld, validate, a few iterations of the
+// flow, ridges and ravines, encode in the chosen output encoding. The result is then decoded
+// with Draco and checked; any violation aborts, so libFuzzer keeps the input:
+//   - the job ends with exactly one of a result (after `accepted`) or an error status;
+//   - the result decodes, and carries the feature attributes when they were asked for;
+//   - sequential output keeps every point (the upload's count) and points welded together in
+//     the upload still share one position; Edgebreaker output has at most the upload's
+//     welded vertex count (it drops isolated vertices and splits non-manifold ones);
+//   - every coordinate is finite and inside the upload's bounding box grown by its diagonal.
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <limits>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "core/draco_codec.h"
+#include "core/weld.h"
+#include "fuzz/job_input.h"
+#include "server/convert.h"
+#include "server/options.h"
+#include "server/smooth_job.h"
+
+namespace meshsmooth::fuzz {
+namespace {
+
+[[noreturn]] void Fail(const char* what) {
+  std::fprintf(stderr, "fuzz_job: invariant violated: %s\n", what);
+  std::abort();
+}
+
+void Check(bool ok, const char* what) {
+  if (!ok) Fail(what);
+}
+
+class RecordingSink : public server::JobSink {
+ public:
+  void OnAccepted(const v1::Accepted&) override { ++accepted; }
+  void OnProgress(const v1::Progress&) override {}
+  void OnResult(std::string draco_bytes, const v1::Summary& s) override {
+    ++results;
+    result = std::move(draco_bytes);
+    summary = s;
+  }
+  void OnError(const absl::Status& s) override {
+    ++errors;
+    error = s;
+  }
+
+  int accepted = 0, results = 0, errors = 0;
+  std::string result;
+  v1::Summary summary;
+  absl::Status error;
+};
+
+struct Box {
+  Vec3 lo{std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
+          std::numeric_limits<double>::infinity()};
+  Vec3 hi = -lo;
+  void Add(const Vec3& p) {
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) return;
+    lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
+    hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
+  }
+  bool Contains(const Vec3& p, double margin) const {
+    return p.x >= lo.x - margin && p.x <= hi.x + margin && p.y >= lo.y - margin && p.y <= hi.y + margin &&
+           p.z >= lo.z - margin && p.z <= hi.z + margin;
+  }
+};
+
+// Exact equality with +0.0 == -0.0, as WeldPoints compares.
+bool SamePosition(const Vec3& a, const Vec3& b) { return a.x == b.x && a.y == b.y && a.z == b.z; }
+
+void CheckResult(std::string_view upload, const server::JobParams& params, const RecordingSink& sink) {
+  absl::StatusOr<Mesh> in = DecodeDraco(upload);
+  Check(in.ok(), "the job succeeded on an upload that DecodeDraco refuses");
+  absl::StatusOr<Mesh> out = DecodeDraco(sink.result);
+  Check(out.ok(), "the result does not decode");
+  const Welded in_welded = WeldPoints(in->positions);
+  const Welded out_welded = WeldPoints(out->positions);
+
+  if (params.output.method == DracoMethod::kSequential) {
+    Check(out->positions.size() == in->positions.size(), "sequential output changed the point count");
+    // Points welded into one vertex of the upload must still share one position.
+    std::vector<size_t> first_point(in_welded.positions.size(), SIZE_MAX);
+    for (size_t p = 0; p < in->positions.size(); ++p) {
+      size_t& first = first_point[in_welded.point_to_vertex[p]];
+      if (first == SIZE_MAX) first = p;
+      Check(SamePosition(out->positions[p], out->positions[first]), "points welded in the upload came back apart");
+    }
+  }
+  Check(out_welded.positions.size() <= in_welded.positions.size(), "the result has more vertices than the upload");
+
+  Box box;
+  for (const Vec3& p : in->positions) box.Add(p);
+  const double diagonal = Norm(box.hi - box.lo);
+  for (const Vec3& p : out->positions) {
+    Check(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z), "a result coordinate is not finite");
+    Check(box.Contains(p, diagonal), "a result vertex lies outside the upload's box grown by its diagonal");
+  }
+
+  if (params.detect_features) {
+    for (const char* name : {"feature_label", "kmax", "kmin"}) {
+      absl::StatusOr<std::vector<float>> values = DecodeDracoAttribute(sink.result, name);
+      Check(values.ok() && values->size() == out->positions.size(), "a feature attribute is missing");
+    }
+  }
+  const v1::EffectiveParameters& e = sink.summary.parameters();
+  Check(e.iterations_run() <= e.iterations_requested(), "more iterations ran than were asked for");
+}
+
+}  // namespace
+}  // namespace meshsmooth::fuzz
+
+extern "C" int LLVMFuzzerInitialize(int*, char***) {
+  // One core: the job's own threads stay at one (threads_per_job) and so does OpenMP.
+  setenv("OMP_NUM_THREADS", "1", 0);
+  return 0;
+}
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  using namespace meshsmooth;
+  const std::string_view bytes(reinterpret_cast<const char*>(data), size);
+  const std::string_view head = bytes.substr(0, std::min(size, fuzz::kSpecBytes));
+  const std::string_view upload = bytes.substr(head.size());
+
+  server::ServerOptions options;  // the service's defaults, but quiet and on one thread
+  options.threads_per_job = 1;
+  options.log_jobs = false;
+  absl::StatusOr<server::JobParams> params = server::FromProto(fuzz::SpecFromBytes(head), options.max_iterations);
+  if (!params.ok()) {
+    fuzz::Check(params.status().code() == absl::StatusCode::kInvalidArgument, "a bad spec is not INVALID_ARGUMENT");
+    return 0;
+  }
+  fuzz::RecordingSink sink;
+  server::SmoothJob job("fuzz", *params, std::string(upload), server::Clock::now(), options, &sink);
+  job.Run();
+  fuzz::Check(sink.results + sink.errors == 1, "the job did not end with exactly one result or error");
+  if (sink.errors == 1) {
+    fuzz::Check(!sink.error.ok() && sink.error.code() != absl::StatusCode::kInternal &&
+                    sink.error.code() != absl::StatusCode::kUnknown,
+                "the job failed without a clear status");
+    return 0;
+  }
+  fuzz::Check(sink.accepted == 1, "a result came without 'accepted'");
+  fuzz::CheckResult(upload, *params, sink);
+  return 0;
+}

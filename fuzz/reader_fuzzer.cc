@@ -1,0 +1,119 @@
+// libFuzzer target: one file reader (MESHSMOOTH_FUZZ_FORMAT, a MeshFormat enumerator; one
+// binary per format, see CMakeLists.txt), then what the service and the CLI do with its mesh.
+//
+// Bytes -> ParseMesh. A refusal must be INVALID_ARGUMENT. A mesh must hold:
+//   - every index is -1 or in [0, INT32_MAX] (the readers map anything else to -1); STL's
+//     welded soup, whose indices the reader makes, has every index in range;
+//   - colours are absent or one per vertex;
+//   - topology building and validation survive it: the report counts what the arrays hold,
+//     the one-ring names only existing vertices and only usable faces are kept;
+//   - written back in the same format and read again, it has the same vertices and faces
+//     (positions rounded to float32 where the format stores float32).
+// Any violation aborts, so libFuzzer keeps the input.
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <string_view>
+#include <vector>
+
+#include "core/io/mesh_io.h"
+#include "core/topology.h"
+
+namespace meshsmooth::fuzz {
+namespace {
+
+constexpr MeshFormat kFormat = MeshFormat::MESHSMOOTH_FUZZ_FORMAT;
+
+void Check(bool ok, const char* what) {
+  if (ok) return;
+  std::fprintf(stderr, "reader fuzz target: invariant violated: %s\n", what);
+  std::abort();
+}
+
+void CheckTopology(const Mesh& mesh) {
+  const int32_t n = mesh.num_vertices();
+  int64_t out_of_range = 0, usable = 0;
+  for (const Triangle& t : mesh.triangles) {
+    bool in_range = true;
+    for (int32_t i : t) {
+      Check(i >= -1, "an index below -1");
+      in_range = in_range && i >= 0 && i < n;
+    }
+    out_of_range += !in_range;
+    usable += IsUsableTriangle(t, n);
+    if (kFormat == MeshFormat::kStl) Check(in_range, "STL: an index out of range");
+  }
+  Check(mesh.colors.empty() || mesh.colors.size() == mesh.positions.size(), "colours but not one per vertex");
+
+  ValidationReport report;
+  const Topology topo = BuildTopology(mesh, &report);
+  Check(report.vertices == n && report.faces == mesh.num_triangles(), "the report miscounts vertices or faces");
+  Check(report.faces_out_of_range == out_of_range, "the report miscounts out-of-range faces");
+  Check(report.faces - report.dropped_faces() == usable, "the report miscounts usable faces");
+  Check(topo.num_vertices() == n && topo.ring_offsets.size() == static_cast<size_t>(n) + 1,
+        "the topology has the wrong size");
+  Check(topo.ring_offsets[0] == 0 && topo.ring_offsets[n] == static_cast<int32_t>(topo.ring.size()),
+        "the one-ring offsets do not span the ring");
+  for (int32_t v = 0; v < n; ++v) Check(topo.ring_offsets[v] <= topo.ring_offsets[v + 1], "offsets decrease");
+  for (int32_t w : topo.ring) Check(w >= 0 && w < n, "the one-ring names a vertex that does not exist");
+  Check(topo.faces.size() == static_cast<size_t>(usable), "the topology keeps the wrong faces");
+  for (int32_t f : topo.faces) {
+    Check(f >= 0 && f < mesh.num_triangles() && IsUsableTriangle(mesh.triangles[f], n),
+          "the topology keeps an unusable face");
+  }
+}
+
+// Same value once stored as the format stores it (float32 for PLY, STL and Draco).
+bool SameValue(double written, double read) {
+  const bool as_float = kFormat != MeshFormat::kObj && kFormat != MeshFormat::kOff;
+  const double want = as_float ? static_cast<double>(static_cast<float>(written)) : written;
+  return want == read || (std::isnan(want) && std::isnan(read));
+}
+
+void CheckRoundTrip(const Mesh& mesh) {
+  absl::StatusOr<std::string> bytes = SerializeMesh(mesh, kFormat);
+  if (!bytes.ok()) {
+    // Draco cannot hold a mesh without one in-range face.
+    Check(kFormat == MeshFormat::kDraco && bytes.status().code() == absl::StatusCode::kInvalidArgument,
+          "writing a mesh that was read failed");
+    return;
+  }
+  absl::StatusOr<Mesh> back = ParseMesh(*bytes, kFormat);
+  Check(back.ok(), "a mesh written back does not read again");
+  if (kFormat == MeshFormat::kStl) {
+    // A soup of the usable faces, welded again: nothing to compare index for index.
+    int64_t usable = 0;
+    for (const Triangle& t : mesh.triangles) usable += IsUsableTriangle(t, mesh.num_vertices());
+    Check(back->num_triangles() == usable, "STL written back lost or gained faces");
+    return;
+  }
+  Check(back->positions.size() == mesh.positions.size(), "written back, the vertex count changed");
+  for (size_t i = 0; i < mesh.positions.size(); ++i) {
+    const Vec3 &a = mesh.positions[i], &b = back->positions[i];
+    Check(SameValue(a.x, b.x) && SameValue(a.y, b.y) && SameValue(a.z, b.z), "written back, a position changed");
+  }
+  std::vector<Triangle> stored = mesh.triangles;
+  if (kFormat == MeshFormat::kDraco) {  // Draco cannot store a face with an index out of range
+    std::erase_if(stored, [n = mesh.num_vertices()](const Triangle& t) {
+      return t[0] < 0 || t[0] >= n || t[1] < 0 || t[1] >= n || t[2] < 0 || t[2] >= n;
+    });
+  }
+  Check(back->triangles == stored, "written back, the faces changed");
+  Check(back->colors == mesh.colors, "written back, the colours changed");
+}
+
+}  // namespace
+}  // namespace meshsmooth::fuzz
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  using namespace meshsmooth;
+  absl::StatusOr<Mesh> mesh = ParseMesh(std::string_view(reinterpret_cast<const char*>(data), size), fuzz::kFormat);
+  if (!mesh.ok()) {
+    fuzz::Check(mesh.status().code() == absl::StatusCode::kInvalidArgument, "a refusal that is not INVALID_ARGUMENT");
+    return 0;
+  }
+  fuzz::CheckTopology(*mesh);
+  fuzz::CheckRoundTrip(*mesh);
+  return 0;
+}

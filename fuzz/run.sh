@@ -1,0 +1,67 @@
+#!/usr/bin/env bash
+# Builds the fuzz preset (clang + libFuzzer, ASan + UBSan; installs its packages if needed) and
+# runs each fuzz target for SECONDS seconds, one after the other, in one process each.
+#
+# Usage: fuzz/run.sh [--no-build] SECONDS [TARGET...]
+#   TARGET: fuzz_job fuzz_ply fuzz_obj fuzz_off fuzz_stl fuzz_drc (default: all of them)
+#   --no-build: run the binaries already in build-fuzz/ (e.g. a long run beside other builds)
+#
+# Seeds are written afresh to build-fuzz/fuzz-seeds/ (generated meshes and the small files of
+# ${MESHSMOOTH_SHARED_DIR:-../shared}/data); what a run discovers accumulates in
+# build-fuzz/fuzz-corpus/TARGET/. A crash, leak, timeout (> 25 s for one input) or
+# out-of-memory (> 2 GB) leaves its input in build-fuzz/fuzz-findings/ and makes the script
+# exit 1 once every target has run. One line per target sums the run up.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+build=1
+if [ "${1:-}" = --no-build ]; then
+  build=0
+  shift
+fi
+seconds="${1:?usage: fuzz/run.sh [--no-build] SECONDS [TARGET...]}"
+shift
+targets=("$@")
+[ ${#targets[@]} -gt 0 ] || targets=(fuzz_job fuzz_ply fuzz_obj fuzz_off fuzz_stl fuzz_drc)
+
+[ "$build" = 0 ] || scripts/setup.sh fuzz
+out=build-fuzz
+shared="${MESHSMOOTH_SHARED_DIR:-../shared}"
+rm -rf "$out/fuzz-seeds"
+"$out/fuzz/fuzz_seeds" "$out/fuzz-seeds" "$shared"
+mkdir -p "$out/fuzz-findings" "$out/fuzz-logs"
+
+# One thread per job (LLVMFuzzerInitialize sets it too); UBSan reports stop the run.
+export OMP_NUM_THREADS=1
+export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
+
+failed=()
+for target in "${targets[@]}"; do
+  format="${target#fuzz_}"
+  seeds="$out/fuzz-seeds/$format"
+  corpus="$out/fuzz-corpus/$target"
+  log="$out/fuzz-logs/$target.log"
+  mkdir -p "$corpus"
+  args=(-max_total_time="$seconds" -timeout=25 -rss_limit_mb=2048 -print_final_stats=1
+        -artifact_prefix="$out/fuzz-findings/$target-")
+  [ -f "fuzz/$format.dict" ] && args+=(-dict="fuzz/$format.dict")
+  status=ok
+  "$out/fuzz/$target" "${args[@]}" "$corpus" "$seeds" >"$log" 2>&1 || status=FAILED
+  # libFuzzer's last status line (cov, ft, corp) and its final statistics.
+  last=$(grep -E '^#[0-9]+' "$log" | tail -n 1 || true)
+  execs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log")
+  rate=$(sed -n 's/^stat::average_exec_per_sec: *//p' "$log")
+  cov=$(sed -n 's/.* cov: \([0-9]*\).*/\1/p' <<<"$last")
+  ft=$(sed -n 's/.* ft: \([0-9]*\).*/\1/p' <<<"$last")
+  corp=$(sed -n 's/.* corp: \([0-9]*\/[0-9]*[a-zA-Z]*\).*/\1/p' <<<"$last")
+  echo "$target: $status, ${seconds} s, executions ${execs:-?}, ${rate:-?} exec/s, cov ${cov:-?}, ft ${ft:-?}, corpus ${corp:-?}"
+  if [ "$status" != ok ]; then
+    failed+=("$target")
+    grep -E 'ERROR|SUMMARY|invariant violated|Test unit written' "$log" | head -n 5 | sed 's/^/  /'
+    echo "  full log: $log"
+  fi
+done
+if [ ${#failed[@]} -gt 0 ]; then
+  echo "fuzz: findings in ${failed[*]} (inputs in $out/fuzz-findings/)"
+  exit 1
+fi

@@ -1,0 +1,158 @@
+// Writes the seed corpora of the fuzz targets (fuzz/run.sh runs it before each run; nothing
+// of it is committed): small generated meshes in every format and Draco encoding, the small
+// files (< 200 KB) of SHARED/data/draco and SHARED/data/meshes when present, and for the job
+// target each Draco seed behind a few spec heads (job_input.h).
+//
+// Usage: fuzz_seeds OUT_DIR [SHARED_DIR]   writes OUT_DIR/{job,drc,ply,obj,off,stl}/
+#include <array>
+#include <cstdint>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <tuple>
+#include <vector>
+
+#include "absl/strings/str_cat.h"
+#include "core/io/mesh_io.h"
+#include "core/shapes.h"
+#include "fuzz/job_input.h"
+
+namespace meshsmooth::fuzz {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr uintmax_t kMaxSharedBytes = 200 * 1024;
+
+// Heads that reach every flow, both boundary modes, the adaptive modes, features and each
+// output encoding (byte meanings in job_input.h).
+constexpr std::array<std::array<uint8_t, kSpecBytes>, 8> kHeads = {{
+    {6, 2, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0},              // the default flow, 3 iterations, lossless
+    {0, 1, 0, 0, 2, 2, 0, 0, 0, 0, 0, 0},              // laplacian U1, boundary as curves
+    {1, 2, 0, 0, 0, 0, 0, 0, 1, 200, 0, 0},            // taubin with mu
+    {2, 0, 0, 0, 0, 0, 0, 0, 0, 0, 1, 0},              // bilaplacian, features
+    {3, 2, 0, 0, 0, 0, 0, 0, 0, 0, 0, 128 + 12},       // mcf, Edgebreaker, 12 bits
+    {4, 1, 0, 0, 0, 0, 2, 0x15, 0, 0, 0, 20},          // mcf_tangential, ring1, 20 bits
+    {5, 2, 0, 0, 0, 2, 3, 0x15, 0, 0, 3, 128},         // median, ring2, features, Edgebreaker
+    {5, 0, 0, 0, 0, 0, 1, 0x20, 0x18, 60, 0, 0},       // median, constant T, epsilon, tolerance
+}};
+
+void WriteFile(const fs::path& path, const std::string& bytes) {
+  std::ofstream out(path, std::ios::binary);
+  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+}
+
+std::string ReadFile(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream buf;
+  buf << in.rdbuf();
+  return buf.str();
+}
+
+class SeedWriter {
+ public:
+  explicit SeedWriter(fs::path out) : out_(std::move(out)) {
+    for (const char* d : {"job", "drc", "ply", "obj", "off", "stl"}) fs::create_directories(out_ / d);
+  }
+
+  void Add(const std::string& dir, const std::string& name, const std::string& bytes) {
+    WriteFile(out_ / dir / name, bytes);
+    if (dir == "drc") AddJob(name, bytes);
+  }
+
+  // Every format and Draco encoding of a generated mesh.
+  void AddMesh(const std::string& name, const Mesh& mesh) {
+    WriteOptions ascii;
+    ascii.ply_binary = false;
+    for (const auto& [file, format, options] : {std::tuple{name + ".ply", MeshFormat::kPly, WriteOptions{}},
+                                                std::tuple{name + "_ascii.ply", MeshFormat::kPly, ascii},
+                                                std::tuple{name + ".obj", MeshFormat::kObj, WriteOptions{}},
+                                                std::tuple{name + ".off", MeshFormat::kOff, WriteOptions{}},
+                                                std::tuple{name + ".stl", MeshFormat::kStl, WriteOptions{}}}) {
+      absl::StatusOr<std::string> bytes = SerializeMesh(mesh, format, options);
+      if (bytes.ok()) Add(file.substr(file.rfind('.') + 1), file, *bytes);
+    }
+    const DracoOptions encodings[] = {{0, DracoMethod::kSequential}, {0, DracoMethod::kEdgebreaker},
+                                      {11, DracoMethod::kSequential}, {8, DracoMethod::kEdgebreaker}};
+    for (const DracoOptions& o : encodings) {
+      absl::StatusOr<std::string> bytes = EncodeDraco(mesh, o);
+      if (!bytes.ok()) continue;
+      Add("drc", absl::StrCat(name, o.method == DracoMethod::kSequential ? "_seq" : "_eb", o.quantization_bits, ".drc"),
+          *bytes);
+    }
+  }
+
+  // The small files of a shared data folder, by extension; meshes of other formats also go to
+  // the job corpus as the CLI would upload them (Draco, lossless, sequential).
+  void AddShared(const fs::path& dir) {
+    if (!fs::is_directory(dir)) return;
+    for (const fs::directory_entry& e : fs::directory_iterator(dir)) {
+      if (!e.is_regular_file() || e.file_size() >= kMaxSharedBytes) continue;
+      const std::string ext = e.path().extension().string();
+      if (ext != ".drc" && ext != ".ply" && ext != ".obj" && ext != ".off" && ext != ".stl") continue;
+      const std::string bytes = ReadFile(e.path());
+      const std::string name = e.path().filename().string();
+      Add(ext.substr(1), name, bytes);
+      if (ext == ".drc") continue;
+      absl::StatusOr<MeshFormat> format = FormatFromPath(name);
+      absl::StatusOr<Mesh> mesh = format.ok() ? ParseMesh(bytes, *format) : format.status();
+      if (!mesh.ok()) continue;
+      absl::StatusOr<std::string> drc = EncodeDraco(*mesh);
+      if (drc.ok()) AddJob(name + ".drc", *drc);
+    }
+  }
+
+ private:
+  // Two heads per upload, a different pair for each.
+  void AddJob(const std::string& name, const std::string& upload) {
+    for (size_t k : {jobs_ % kHeads.size(), (jobs_ + 3) % kHeads.size()}) {
+      std::string bytes(kHeads[k].begin(), kHeads[k].end());
+      WriteFile(out_ / "job" / absl::StrCat(name, ".h", k), bytes + upload);
+    }
+    ++jobs_;
+  }
+
+  fs::path out_;
+  size_t jobs_ = 0;
+};
+
+// A tetrahedron with what a hostile or careless writer leaves in: a face with an index out of
+// range, one with a repeated index, an isolated vertex and a third face on one edge.
+Mesh Odd() {
+  Mesh m;
+  m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 1, 1}, {5, 5, 5}};
+  m.triangles = {{0, 2, 1}, {0, 1, 3}, {1, 2, 3}, {0, 3, 2}, {0, 1, 4}, {0, 1, 7}, {2, 2, 3}};
+  return m;
+}
+
+}  // namespace
+}  // namespace meshsmooth::fuzz
+
+int main(int argc, char** argv) {
+  using namespace meshsmooth;
+  if (argc < 2 || argc > 3) {
+    std::fprintf(stderr, "usage: %s OUT_DIR [SHARED_DIR]\n", argv[0]);
+    return 2;
+  }
+  fuzz::SeedWriter seeds(argv[1]);
+  Mesh noisy = Icosphere(2);
+  AddUniformNoise(noisy, 0.2, 1);
+  Mesh colored = Icosphere(1);
+  for (int32_t i = 0; i < colored.num_vertices(); ++i) {
+    colored.colors.push_back({static_cast<uint8_t>(i * 7), static_cast<uint8_t>(i * 13), static_cast<uint8_t>(i)});
+  }
+  seeds.AddMesh("icosphere1", Icosphere(1));
+  seeds.AddMesh("noisy_icosphere2", noisy);
+  seeds.AddMesh("colored_icosphere1", colored);
+  seeds.AddMesh("torus", TwoRateTorus(8));
+  seeds.AddMesh("plane", TwoRatePlane(4, 4));
+  seeds.AddMesh("cylinder", Cylinder(0.5, 1.0, 8, 3));
+  seeds.AddMesh("odd", fuzz::Odd());
+  if (argc == 3) {
+    seeds.AddShared(fuzz::fs::path(argv[2]) / "data" / "draco");
+    seeds.AddShared(fuzz::fs::path(argv[2]) / "data" / "meshes");
+  }
+  return 0;
+}
