@@ -1,3 +1,4 @@
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <cstring>
@@ -144,6 +145,11 @@ absl::StatusOr<Mesh> ParsePly(std::string_view data, ReadInfo& info) {
       e.name = NextToken(rest);
       if (!ParseInt(NextToken(rest), e.count) || e.count < 0 || e.count > INT32_MAX) {
         return error(absl::StrCat("bad count for element '", Sv(e.name), "'"));
+      }
+      // A second one would replace the positions and leave the first one's colours behind.
+      if (e.name == "vertex" && std::any_of(elements.begin(), elements.end(),
+                                            [](const Element& other) { return other.name == "vertex"; })) {
+        return error("more than one vertex element");
       }
       elements.push_back(e);
     } else if (key == "property") {

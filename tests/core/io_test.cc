@@ -149,6 +149,20 @@ TEST(IoTest, TruncatedFilesNeverCrash) {
   }
 }
 
+// Found by fuzz_ply: a second vertex element replaced the positions but left the first one's
+// colours, one per vertex of another count.
+TEST(IoTest, PlyWithTwoVertexElementsIsRefused) {
+  const std::string ply =
+      "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\n"
+      "property uchar red\nproperty uchar green\nproperty uchar blue\n"
+      "element vertex 1\nproperty float x\nproperty float y\nproperty float z\nend_header\n"
+      "0 0 0 1 2 3\n1 0 0 4 5 6\n7 8 9\n";
+  absl::StatusOr<Mesh> m = ParseMesh(ply, MeshFormat::kPly);
+  ASSERT_FALSE(m.ok()) << m->positions.size() << " positions, " << m->colors.size() << " colours";
+  EXPECT_EQ(m.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_NE(m.status().message().find("more than one vertex element"), std::string::npos) << m.status();
+}
+
 TEST(IoTest, PlyColoursRoundTripInAsciiAndBinary) {
   Mesh m = Icosphere(2);
   for (Vec3& p : m.positions) p = RoundToFloat(p);
