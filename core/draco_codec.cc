@@ -142,6 +142,13 @@ int NamedAttributeId(const draco::Mesh& dm, std::string_view name) {
 
 absl::StatusOr<std::string> EncodeWithOptions(const draco::Mesh& dm, const DracoOptions& options) {
   if (absl::Status s = CheckDracoOptions(options); !s.ok()) return s;
+  // Draco's sequential decoder takes more than three points per face for corrupt data and
+  // refuses the bytes: write none rather than a file that nothing can read.
+  if (options.method == DracoMethod::kSequential && dm.num_points() > 3ull * dm.num_faces()) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        "Draco's sequential encoding cannot hold more than 3 points per face: ", dm.num_points(), " points, ",
+        dm.num_faces(), " faces with every index in range (remove the unreferenced vertices)"));
+  }
   draco::Encoder encoder;
   encoder.SetSpeedOptions(options.speed, options.speed);
   encoder.SetEncodingMethod(options.method == DracoMethod::kSequential ? draco::MESH_SEQUENTIAL_ENCODING

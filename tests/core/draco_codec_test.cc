@@ -123,6 +123,25 @@ TEST(DracoCodecTest, MeshWithoutFacesIsRefusedAsEmpty) {
   EXPECT_NE(s.message().find("empty"), std::string::npos) << s;
 }
 
+// Found by fuzz_drc: Draco's sequential decoder refuses more than 3 points per face, so
+// such a mesh (unreferenced vertices, or faces out of range left out) was written as bytes
+// that no Draco decoder reads. Now the encoder says so.
+TEST(DracoCodecTest, MorePointsThanThreePerFaceAreRefusedForSequential) {
+  Mesh m;
+  for (int i = 0; i < 7; ++i) m.positions.push_back({static_cast<double>(i), 0.5 * i * i, 0.0});
+  m.triangles = {{0, 1, 2}, {0, 1, 9}};  // one face in range for 7 points
+  const absl::StatusOr<std::string> seq = EncodeDraco(m);
+  ASSERT_FALSE(seq.ok()) << "encoded; decoding it gives " << DecodeDraco(*seq).status();
+  EXPECT_EQ(seq.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_NE(seq.status().message().find("more than 3 points per face"), std::string::npos) << seq.status();
+
+  m.positions.resize(6);  // 6 points, 2 faces once the second is in range: within the limit
+  m.triangles[1] = {0, 1, 5};
+  const absl::StatusOr<std::string> ok = EncodeDraco(m);
+  ASSERT_TRUE(ok.ok()) << ok.status();
+  EXPECT_TRUE(DecodeDraco(*ok).ok());
+}
+
 // A job takes the welded mesh instead of copying it; Encode() then still knows the vertex
 // count and writes each vertex back to every point welded into it.
 TEST(DracoCodecTest, TakenWeldedMeshEncodesBackToEveryPoint) {
