@@ -7,14 +7,15 @@
 #include <array>
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
-#include <fstream>
-#include <sstream>
 #include <string>
+#include <string_view>
 #include <tuple>
 #include <vector>
 
 #include "absl/strings/str_cat.h"
+#include "core/io/file_bytes.h"
 #include "core/io/mesh_io.h"
 #include "core/shapes.h"
 #include "fuzz/job_input.h"
@@ -39,16 +40,11 @@ constexpr std::array<std::array<uint8_t, kSpecBytes>, 8> kHeads = {{
     {5, 0, 0, 0, 0, 0, 1, 0x20, 0x18, 60, 0, 0},       // median, constant T, epsilon, tolerance
 }};
 
-void WriteFile(const fs::path& path, const std::string& bytes) {
-  std::ofstream out(path, std::ios::binary);
-  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-}
-
-std::string ReadFile(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream buf;
-  buf << in.rdbuf();
-  return buf.str();
+void WriteFile(const fs::path& path, std::string_view bytes) {
+  if (const absl::Status s = WriteFileBytes(path.string(), bytes); !s.ok()) {
+    std::fprintf(stderr, "fuzz_seeds: %s\n", s.ToString().c_str());
+    std::exit(1);
+  }
 }
 
 class SeedWriter {
@@ -92,7 +88,9 @@ class SeedWriter {
       if (!e.is_regular_file() || e.file_size() >= kMaxSharedBytes) continue;
       const std::string ext = e.path().extension().string();
       if (ext != ".drc" && ext != ".ply" && ext != ".obj" && ext != ".off" && ext != ".stl") continue;
-      const std::string bytes = ReadFile(e.path());
+      const absl::StatusOr<std::string> read = ReadFileBytes(e.path().string());
+      if (!read.ok()) continue;
+      const std::string& bytes = *read;
       const std::string name = e.path().filename().string();
       Add(ext.substr(1), name, bytes);
       if (ext == ".drc") continue;
