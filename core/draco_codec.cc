@@ -191,14 +191,18 @@ DracoMesh::DracoMesh(DracoMesh&&) noexcept = default;
 DracoMesh& DracoMesh::operator=(DracoMesh&&) noexcept = default;
 DracoMesh::~DracoMesh() = default;
 
-absl::StatusOr<DracoMesh> DracoMesh::Decode(std::string_view bytes) {
+absl::StatusOr<DracoMesh> DracoMesh::Decode(std::string_view bytes, const StopToken& stop) {
+  // Draco's decoder runs as one call; the token is checked between the steps around it.
   absl::StatusOr<std::unique_ptr<draco::Mesh>> dm = DecodeToDraco(bytes);
   if (!dm.ok()) return dm.status();
+  if (absl::Status s = stop.Check(); !s.ok()) return s;
   absl::StatusOr<Mesh> points = PointMesh(**dm);
   if (!points.ok()) return points.status();
+  if (absl::Status s = stop.Check(); !s.ok()) return s;
   auto impl = std::make_unique<Impl>();
   impl->draco = std::move(dm).value();
   Welded welded = WeldPoints(points->positions);
+  if (absl::Status s = stop.Check(); !s.ok()) return s;
   impl->welded.positions = std::move(welded.positions);
   impl->num_vertices = impl->welded.num_vertices();
   impl->point_to_vertex = std::move(welded.point_to_vertex);
@@ -246,7 +250,7 @@ absl::StatusOr<std::vector<float>> DecodeDracoAttribute(std::string_view bytes, 
 }
 
 absl::StatusOr<std::string> DracoMesh::Encode(const Mesh& smoothed, const DracoOptions& options,
-                                              const std::vector<GenericAttribute>& extra) {
+                                              const std::vector<GenericAttribute>& extra, const StopToken& stop) {
   if (static_cast<int64_t>(smoothed.positions.size()) != impl_->num_vertices) {
     return absl::InvalidArgumentError(absl::StrCat("expected ", impl_->num_vertices,
                                                    " positions, got ", smoothed.positions.size()));
@@ -340,6 +344,7 @@ absl::StatusOr<std::string> DracoMesh::Encode(const Mesh& smoothed, const DracoO
       }
     }
   }
+  if (absl::Status s = stop.Check(); !s.ok()) return s;  // Draco's encoder runs as one call
   return EncodeWithOptions(dm, options);
 }
 

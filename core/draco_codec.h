@@ -23,6 +23,7 @@
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
 #include "core/mesh.h"
+#include "core/stop_token.h"
 
 namespace meshsmooth {
 
@@ -78,8 +79,9 @@ absl::StatusOr<std::vector<float>> DecodeDracoAttribute(std::string_view bytes, 
 // (and without coincident points) vertex i is point i.
 class DracoMesh {
  public:
-  // Same errors as DecodeDraco().
-  static absl::StatusOr<DracoMesh> Decode(std::string_view bytes);
+  // Same errors as DecodeDraco(); Cancelled or DeadlineExceeded once `stop` fires (checked
+  // between Draco's decoder and the steps after it).
+  static absl::StatusOr<DracoMesh> Decode(std::string_view bytes, const StopToken& stop = {});
 
   DracoMesh(DracoMesh&&) noexcept;
   DracoMesh& operator=(DracoMesh&&) noexcept;
@@ -105,9 +107,11 @@ class DracoMesh {
   // only; other attributes are stored losslessly. `extra` attributes (one value per vertex of
   // welded(), written to each of its points) are added, replacing any attribute of the same
   // name. InvalidArgument when one has the wrong count, when CheckEncodable() fails, or when a
-  // smoothed coordinate is not finite or above kMaxCoordinate in magnitude.
+  // smoothed coordinate is not finite or above kMaxCoordinate in magnitude; Cancelled or
+  // DeadlineExceeded when `stop` has fired before Draco's encoder starts.
   absl::StatusOr<std::string> Encode(const Mesh& smoothed, const DracoOptions& options = {},
-                                     const std::vector<GenericAttribute>& extra = {});
+                                     const std::vector<GenericAttribute>& extra = {},
+                                     const StopToken& stop = {});
 
  private:
   struct Impl;

@@ -22,12 +22,15 @@ constexpr int64_t kMetricTasks = 32;
 
 // fn(begin, end) -> Partial for each block of [0, n), on all cores when n is large; the
 // partials are merged in block order. Inside a team (ComputeMetricsBeside) the blocks are
-// tasks, taken by whichever of its threads is free.
+// tasks, taken by whichever of its threads is free. Once `stop` fires, the blocks left count
+// as empty.
 template <typename Partial, typename Fn, typename Merge>
-Partial BlockReduce(int64_t n, Fn&& fn, Merge&& merge) {
+Partial BlockReduce(int64_t n, const StopToken& stop, Fn&& fn, Merge&& merge) {
   const int64_t blocks = (n + kMetricBlock - 1) / kMetricBlock;
   std::vector<Partial> parts(static_cast<size_t>(blocks));
-  auto block = [&](int64_t b) { parts[b] = fn(b * kMetricBlock, std::min(n, (b + 1) * kMetricBlock)); };
+  auto block = [&](int64_t b) {
+    if (!stop.Fired()) parts[b] = fn(b * kMetricBlock, std::min(n, (b + 1) * kMetricBlock));
+  };
   if (omp_in_parallel()) {
     // At most kMetricTasks tasks: libgomp runs tasks beyond 64 per thread at once on the thread
     // that makes them, which then leaves nothing for a thread that comes free.
@@ -54,9 +57,9 @@ constexpr int32_t kEdgePrefetchEntries = 64;
 
 // The lengths of the edges (a < b) of the vertices' rings, summed in fixed blocks of vertices:
 // one pass serves the mean and the spread.
-EdgeLengthSums SumEdgeLengths(const Mesh& mesh, const Topology& topo) {
+EdgeLengthSums SumEdgeLengths(const Mesh& mesh, const Topology& topo, const StopToken& stop = {}) {
   return BlockReduce<EdgeLengthSums>(
-      topo.num_vertices(),
+      topo.num_vertices(), stop,
       [&](int64_t begin, int64_t end) {
         EdgeLengthSums p;
         const int32_t ring_end = topo.ring_offsets[end];
@@ -87,7 +90,7 @@ double MeanOf(const EdgeLengthSums& e) { return e.count > 0 ? e.sum / static_cas
 
 double MeanEdgeLength(const Mesh& mesh, const Topology& topo) { return MeanOf(SumEdgeLengths(mesh, topo)); }
 
-MeshMetrics ComputeMetrics(const Mesh& mesh, const Topology& topo) {
+MeshMetrics ComputeMetrics(const Mesh& mesh, const Topology& topo, const StopToken& stop) {
   MeshMetrics m;
   Vec3 centroid;
   int64_t referenced = 0;
@@ -104,7 +107,7 @@ MeshMetrics ComputeMetrics(const Mesh& mesh, const Topology& topo) {
   };
   const double tan10 = std::tan(10.0 * std::numbers::pi / 180.0);
   const FacePartial faces = BlockReduce<FacePartial>(
-      static_cast<int64_t>(topo.faces.size()),
+      static_cast<int64_t>(topo.faces.size()), stop,
       [&](int64_t begin, int64_t end) {
         FacePartial q;
         for (int64_t i = begin; i < end; ++i) {
@@ -152,7 +155,7 @@ MeshMetrics ComputeMetrics(const Mesh& mesh, const Topology& topo) {
   // One pass over the edges: the variance as E[l^2] - E[l]^2 (edge lengths of one mesh have a
   // CV well above the 1e-8 where that would lose digits), without a second pass over the edges
   // for the deviations from the mean.
-  const EdgeLengthSums edges = SumEdgeLengths(mesh, topo);
+  const EdgeLengthSums edges = SumEdgeLengths(mesh, topo, stop);
   m.edge_length_mean = MeanOf(edges);
   if (edges.count > 0 && m.edge_length_mean > 0.0) {
     const double mean_sq = edges.sum_sq / static_cast<double>(edges.count);
@@ -163,7 +166,7 @@ MeshMetrics ComputeMetrics(const Mesh& mesh, const Topology& topo) {
 }
 
 MeshMetrics ComputeMetricsBeside(const Mesh& mesh, const Topology& topo, const std::function<void()>& beside,
-                                 int threads) {
+                                 int threads, const StopToken& stop) {
   MeshMetrics m;
   const int team = std::max(2, threads > 0 ? threads : omp_get_max_threads());
 #pragma omp parallel num_threads(team)
@@ -171,7 +174,7 @@ MeshMetrics ComputeMetricsBeside(const Mesh& mesh, const Topology& topo, const s
   {
 #pragma omp task default(shared)
     beside();
-    m = ComputeMetrics(mesh, topo);
+    m = ComputeMetrics(mesh, topo, stop);
   }
   return m;
 }

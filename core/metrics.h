@@ -7,6 +7,7 @@
 
 #include "absl/status/statusor.h"
 #include "core/mesh.h"
+#include "core/stop_token.h"
 #include "core/topology.h"
 
 namespace meshsmooth {
@@ -21,15 +22,16 @@ struct MeshMetrics {
   double share_angles_below_10deg = 0.0;  // of all triangle angles
 };
 
-// Metrics of the usable faces and edges of `topo` (built from `mesh`).
-MeshMetrics ComputeMetrics(const Mesh& mesh, const Topology& topo);
+// Metrics of the usable faces and edges of `topo` (built from `mesh`). Once `stop` fires, the
+// blocks of faces and edges left are skipped: a caller that passes a token checks it after.
+MeshMetrics ComputeMetrics(const Mesh& mesh, const Topology& topo, const StopToken& stop = {});
 
 // ComputeMetrics() while `beside` runs on one thread of the same team of max(2, threads)
 // threads (0 = hardware threads): the others start on the metrics' blocks, and the thread that
 // ran `beside` takes blocks too once it returns (a job encodes beside them). The same bits as
 // ComputeMetrics(): the blocks are merged in the same order.
 MeshMetrics ComputeMetricsBeside(const Mesh& mesh, const Topology& topo, const std::function<void()>& beside,
-                                 int threads = 0);
+                                 int threads = 0, const StopToken& stop = {});
 
 struct Displacement {
   double rms = 0.0;             // RMS of |after_i - before_i| over all vertices

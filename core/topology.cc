@@ -92,28 +92,51 @@ bool WalkFan(Scratch& s, int32_t start, int32_t start_face, bool closed, int32_t
   return static_cast<int32_t>(s.ring.size()) == distinct;
 }
 
-// The common case, in O(k^2) compares without sorting: v is an interior vertex of a
-// consistently oriented manifold. Its k >= 3 faces (v, a, b) then chain into a single cycle,
-// face i followed by the one face whose a is i's b, through k distinct neighbours a. On success
-// s.ring holds the cycle from faces[0].a, the order WalkFan gives such a fan. Any other fan
-// (boundary, non-manifold, inconsistent orientation, repeated neighbour) returns false and
-// takes the general path.
+// Up to this many faces the closed-fan check compares every pair (fast for the usual valence
+// 4-8); above it looks the faces up in a sorted list, so that a vertex of valence k costs
+// O(k log k), not O(k^2) (a fan of valence 120,000 took 10 s).
+constexpr int32_t kPairwiseFanFaces = 32;
+
+// The face whose a is `b`, or -1 when none is; -2 when two are (a repeated neighbour).
+int32_t FaceFrom(const Scratch& s, int32_t b) {
+  const int32_t k = static_cast<int32_t>(s.faces.size());
+  int32_t next = -1;
+  if (k <= kPairwiseFanFaces) {
+    for (int32_t j = 0; j < k; ++j) {
+      if (s.faces[j].a != b) continue;
+      if (next >= 0) return -2;
+      next = j;
+    }
+    return next;
+  }
+  auto it = std::lower_bound(s.inc.begin(), s.inc.end(), Incidence{b, std::numeric_limits<int32_t>::min()});
+  if (it == s.inc.end() || it->w != b) return -1;
+  if (it + 1 != s.inc.end() && (it + 1)->w == b) return -2;
+  return it->face;
+}
+
+// The common case: v is an interior vertex of a consistently oriented manifold. Its k >= 3
+// faces (v, a, b) then chain into a single cycle, face i followed by the one face whose a is
+// i's b, through k distinct neighbours a. On success s.ring holds the cycle from faces[0].a,
+// the order WalkFan gives such a fan. Any other fan (boundary, non-manifold, inconsistent
+// orientation, repeated neighbour) returns false and takes the general path.
 bool ConsistentClosedFan(Scratch& s) {
   const int32_t k = static_cast<int32_t>(s.faces.size());
   if (k < 3) return false;
+  if (k > kPairwiseFanFaces) {  // the faces by their a, for FaceFrom
+    s.inc.clear();
+    for (int32_t i = 0; i < k; ++i) s.inc.push_back({s.faces[i].a, i});
+    std::sort(s.inc.begin(), s.inc.end());
+  }
   s.ring.clear();
   int32_t face = 0;
   for (int32_t step = 0; step < k; ++step) {
     if (step > 0 && face == 0) return false;  // a shorter cycle: more than one fan
     s.ring.push_back(s.faces[face].a);
-    const int32_t b = s.faces[face].b;
-    int32_t next = -1;
-    for (int32_t j = 0; j < k; ++j) {
-      if (s.faces[j].a != b) continue;
-      if (next >= 0) return false;  // two faces continue from b: a repeated neighbour
-      next = j;
-    }
-    if (next < 0) return false;  // b is a boundary neighbour, or an edge is oriented against
+    const int32_t next = FaceFrom(s, s.faces[face].b);
+    // -2: two faces continue from b, a repeated neighbour; -1: b is a boundary neighbour, or
+    // an edge is oriented against the others.
+    if (next < 0) return false;
     face = next;
   }
   // Back at face 0 after exactly k steps: the k faces were visited once each, and every a had
@@ -134,12 +157,14 @@ constexpr int32_t kParallelTopologyThreshold = 50000;
 // Fans, rings, kinds and edge counts of vertices [begin, end). Writes kind[v] and, relative to
 // the range's own ring, ring_offsets[v + 1]; each edge is counted at its smaller endpoint and
 // each set of duplicate faces at its smallest vertex, so ranges never count a thing twice.
+// Returns early, the range unfinished, once `stop` fires.
 void ProcessVertices(const std::vector<int32_t>& vf_offsets, const std::vector<LocalFace>& vf, int32_t begin,
-                     int32_t end, Topology& topo, RangeResult& out) {
+                     int32_t end, Topology& topo, RangeResult& out, const StopToken& stop) {
   ValidationReport& r = out.counts;
   Scratch s;
   std::vector<std::pair<int32_t, int32_t>> owned;  // (middle, largest) of faces whose smallest vertex is v
   for (int32_t v = begin; v < end; ++v) {
+    if ((v - begin) % kStopPollInterval == 0 && stop.Fired()) return;
     s.faces.clear();
     owned.clear();
     for (int32_t i = vf_offsets[v]; i < vf_offsets[v + 1]; ++i) {
@@ -226,7 +251,7 @@ void ProcessVertices(const std::vector<int32_t>& vf_offsets, const std::vector<L
 
 }  // namespace
 
-Topology BuildTopology(const Mesh& mesh, ValidationReport* report) {
+Topology BuildTopology(const Mesh& mesh, ValidationReport* report, const StopToken& stop) {
   const int32_t n = mesh.num_vertices();
   ValidationReport r;
   r.vertices = n;
@@ -294,7 +319,11 @@ Topology BuildTopology(const Mesh& mesh, ValidationReport* report) {
   for (int part = 0; part < threads; ++part) {
     const int32_t begin = static_cast<int32_t>(int64_t{n} * part / threads);
     const int32_t end = static_cast<int32_t>(int64_t{n} * (part + 1) / threads);
-    ProcessVertices(vf_offsets, vf, begin, end, topo, parts[part]);
+    ProcessVertices(vf_offsets, vf, begin, end, topo, parts[part], stop);
+  }
+  if (stop.Fired()) {  // the rings are unfinished: what is left would only waste time
+    if (report != nullptr) *report = r;
+    return topo;
   }
   topo.ring.reserve(vf.size() + 16);
   DisjointSets boundary_sets(n);
@@ -335,6 +364,12 @@ Topology BuildTopology(const Mesh& mesh, ValidationReport* report) {
 
   if (report != nullptr) *report = r;
   return topo;
+}
+
+int64_t SquaredValenceSum(const Topology& topo) {
+  int64_t sum = 0;
+  for (int32_t v = 0; v < topo.num_vertices(); ++v) sum += int64_t{topo.valence(v)} * topo.valence(v);
+  return sum;
 }
 
 ValidationReport Validate(const Mesh& mesh) {

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "core/mesh.h"
+#include "core/stop_token.h"
 
 namespace meshsmooth {
 
@@ -67,8 +68,15 @@ struct ValidationReport {
   }
 };
 
-// Builds the topology of `mesh`; fills `report` when it is not null.
-Topology BuildTopology(const Mesh& mesh, ValidationReport* report = nullptr);
+// Builds the topology of `mesh`; fills `report` when it is not null. Linear in the mesh's size
+// up to a log factor of the largest valence. Once `stop` fires it returns early with an
+// unfinished topology and report: a caller that passes a token checks it after the call.
+Topology BuildTopology(const Mesh& mesh, ValidationReport* report = nullptr, const StopToken& stop = {});
+
+// The sum over the vertices of their valence squared: the work of a pass that visits the ring
+// of every neighbour of every vertex (e.g. eq. (14)'s second rings), which a single vertex of
+// valence k makes k^2.
+int64_t SquaredValenceSum(const Topology& topo);
 
 // Convenience: the report alone.
 ValidationReport Validate(const Mesh& mesh);

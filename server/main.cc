@@ -29,7 +29,8 @@ int main(int argc, char** argv) {
   app.add_option("--max-upload-bytes", o.max_upload_bytes, "largest Draco upload of one job")->capture_default_str();
   app.add_option("--max-vertices", o.max_vertices, "largest mesh, in vertices")->capture_default_str();
   app.add_option("--max-iterations", o.max_iterations, "most iterations one job may ask for")->capture_default_str();
-  app.add_option("--max-job-seconds", o.max_job_seconds, "smoothing time limit of one job (DEADLINE_EXCEEDED)")
+  app.add_option("--max-job-seconds", o.max_job_seconds,
+                 "time limit of one job on its worker, decode to encode (DEADLINE_EXCEEDED)")
       ->capture_default_str();
   app.add_option("--max-concurrent-streams", o.max_concurrent_streams, "Smooth calls open at once")
       ->capture_default_str();

@@ -14,7 +14,7 @@ struct ServerOptions {
   int64_t max_upload_bytes = 512ll << 20;  // Draco bytes of one job
   int64_t max_vertices = 20'000'000;       // vertices of one mesh (after welding seams)
   int max_iterations = 10'000;
-  double max_job_seconds = 600.0;          // smoothing time of one job
+  double max_job_seconds = 600.0;          // a job's time on its worker (decode to encode)
   int max_concurrent_streams = 128;        // Smooth calls open at once
   double grace_seconds = 10.0;             // on shutdown, running jobs get this long to finish
   std::string tls_cert_file, tls_key_file;  // both or neither

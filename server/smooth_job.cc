@@ -1,5 +1,6 @@
 #include "server/smooth_job.h"
 
+#include <algorithm>
 #include <cstdio>
 
 #include "absl/strings/str_cat.h"
@@ -16,6 +17,20 @@ double Seconds(Clock::time_point a, Clock::time_point b) { return std::chrono::d
 
 // At most ~10 progress events per second reach the client, however fast the iterations run.
 constexpr auto kProgressInterval = std::chrono::milliseconds(100);
+
+// Work quadratic in a vertex's valence (SquaredValenceSum) is allowed up to this many times the
+// work linear in it (the ring entries), or up to kQuadraticWorkFloor in all: eq. (14)'s second
+// rings visit it per recompute, and Draco's Edgebreaker encoder, whose corner table searches
+// each vertex's edges, spends as much (0.55 s at valence 60,000, 2.2 s at 120,000), both
+// without a point to stop at. Ordinary meshes sum ~6-7 per ring entry.
+constexpr int64_t kQuadraticWorkPerRingEntry = 64;
+constexpr int64_t kQuadraticWorkFloor = int64_t{1} << 26;
+
+// The job's deadline: `seconds` after `start`; none for 0 (or anything a clock cannot hold).
+Clock::time_point Deadline(Clock::time_point start, double seconds) {
+  if (!(seconds > 0.0) || seconds > 1e9) return Clock::time_point::max();
+  return start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds));
+}
 
 }  // namespace
 
@@ -52,13 +67,35 @@ void SmoothJob::Fail(JobReport& report, const absl::Status& status) {
   Log(report);
 }
 
-absl::StatusOr<DracoMesh> SmoothJob::DecodeUpload() {
+absl::Status SmoothJob::StepStatus(const absl::Status& status, const char* step) const {
+  if (status.code() != absl::StatusCode::kDeadlineExceeded) return status;
+  return absl::DeadlineExceededError(
+      absl::StrFormat("the job ran out of this server's time limit of %g s while %s", options_.max_job_seconds, step));
+}
+
+absl::Status SmoothJob::CheckQuadraticWork(const Topology& topo) const {
+  const bool ring2 = params_.flow.adaptive == AdaptiveMode::kRing2;
+  const bool edgebreaker = params_.output.method == DracoMethod::kEdgebreaker;
+  if (!ring2 && !edgebreaker) return absl::OkStatus();
+  const int64_t work = SquaredValenceSum(topo);
+  const int64_t limit =
+      std::max(kQuadraticWorkFloor, kQuadraticWorkPerRingEntry * static_cast<int64_t>(topo.ring.size()));
+  if (work <= limit) return absl::OkStatus();
+  int32_t valence = 0;
+  for (int32_t v = 0; v < topo.num_vertices(); ++v) valence = std::max(valence, topo.valence(v));
+  return absl::ResourceExhaustedError(absl::StrCat(
+      ring2 ? "adaptive.mode ADAPTIVE_MODE_RING2" : "Edgebreaker output", " costs the sum of the squared valences, ",
+      work, " for this mesh (a vertex of valence ", valence, "), above this server's limit of ", limit,
+      " for it; ", ring2 ? "use ADAPTIVE_MODE_RING1" : "ask for sequential output"));
+}
+
+absl::StatusOr<DracoMesh> SmoothJob::DecodeUpload(const StopToken& stop) {
   std::string upload;
   {
     std::lock_guard<std::mutex> lock(mu_);
     upload.swap(upload_);
   }
-  absl::StatusOr<DracoMesh> draco = DracoMesh::Decode(upload);
+  absl::StatusOr<DracoMesh> draco = DracoMesh::Decode(upload, stop);
   std::string().swap(upload);  // the bytes are not needed past decoding
   return draco;
 }
@@ -72,12 +109,15 @@ void SmoothJob::SendAccepted(const ValidationReport& validation, int64_t seam_po
   Emit([&](JobSink& sink) { sink.OnAccepted(accepted); });
 }
 
-absl::StatusOr<FlowResult> SmoothJob::SmoothMesh(Mesh& mesh, const Topology& topo, Clock::time_point decoded) {
+absl::StatusOr<FlowResult> SmoothJob::SmoothMesh(Mesh& mesh, const Topology& topo, Clock::time_point decoded,
+                                                 const StopToken& stop, JobReport& report) {
   FlowParams flow = params_.flow;
   flow.threads = options_.threads_per_job;
   RunControl control;
   control.cancel = &cancel_;
-  control.time_budget_seconds = options_.max_job_seconds;
+  if (stop.deadline() != Clock::time_point::max()) {  // what is left of the job's time
+    control.time_budget_seconds = std::max(1e-9, Seconds(Clock::now(), stop.deadline()));
+  }
   Clock::time_point last_progress = decoded - kProgressInterval;  // the first iteration is reported
   control.on_progress = [&](const Progress& p) {
     const Clock::time_point now = Clock::now();
@@ -91,11 +131,14 @@ absl::StatusOr<FlowResult> SmoothJob::SmoothMesh(Mesh& mesh, const Topology& top
   return Smooth(mesh, topo, flow, control);
 }
 
-std::vector<GenericAttribute> SmoothJob::DetectFeaturesIfAsked(const Mesh& mesh, const Topology& topo,
-                                                              JobReport& report) const {
-  if (!params_.detect_features) return {};
+absl::StatusOr<std::vector<GenericAttribute>> SmoothJob::DetectFeaturesIfAsked(const Mesh& mesh,
+                                                                              const Topology& topo,
+                                                                              const StopToken& stop,
+                                                                              JobReport& report) const {
+  if (!params_.detect_features) return std::vector<GenericAttribute>{};
   const Clock::time_point t0 = Clock::now();
-  const Features features = DetectFeatures(mesh, topo, params_.features);
+  const Features features = DetectFeatures(mesh, topo, params_.features, stop);
+  if (absl::Status s = stop.Check(); !s.ok()) return StepStatus(s, "detecting ridges and ravines");
   report.features = FeatureSummary{features.ridges, features.ravines, features.classified, 0.0};
   std::vector<GenericAttribute> attributes = FeatureAttributes(features);
   report.features->detect_seconds = Seconds(t0, Clock::now());
@@ -105,7 +148,7 @@ std::vector<GenericAttribute> SmoothJob::DetectFeaturesIfAsked(const Mesh& mesh,
 absl::StatusOr<std::string> SmoothJob::EncodeAndMeasure(DracoMesh& draco, const Mesh& mesh, const Topology& topo,
                                                         const std::vector<Vec3>& input,
                                                         const std::vector<GenericAttribute>& attributes,
-                                                        JobReport& report) const {
+                                                        const StopToken& stop, JobReport& report) const {
   // Draco encodes on one thread, then the displacement follows there; the summary's "after"
   // metrics take the job's other threads meanwhile, and that one once it is free (all only read
   // the mesh). The metrics on every core beside the encoder's thread would put one thread more
@@ -115,16 +158,19 @@ absl::StatusOr<std::string> SmoothJob::EncodeAndMeasure(DracoMesh& draco, const 
   report.after = ComputeMetricsBeside(
       mesh, topo,
       [&] {
-        encoded = draco.Encode(mesh, params_.output, attributes);
+        encoded = draco.Encode(mesh, params_.output, attributes, stop);
         displacement = CompareMeshes(input, mesh);
       },
-      options_.threads_per_job);
+      options_.threads_per_job, stop);
   if (displacement.ok()) report.displacement = *displacement;
+  if (absl::Status s = stop.Check(); !s.ok()) return StepStatus(s, "encoding the result");
   return encoded;
 }
 
 void SmoothJob::Run() {
   const Clock::time_point start = Clock::now();
+  // --max-job-seconds bounds the job's whole time on this worker: every long step polls it.
+  const StopToken stop(&cancel_, Deadline(start, options_.max_job_seconds));
   JobReport report;
   report.job_id = id_;
   report.queue_seconds = Seconds(submitted_, start);
@@ -133,10 +179,10 @@ void SmoothJob::Run() {
     return Log(report);
   }
 
-  absl::StatusOr<DracoMesh> draco = DecodeUpload();
+  absl::StatusOr<DracoMesh> draco = DecodeUpload(stop);
   if (!draco.ok()) {
     report.decode_seconds = Seconds(start, Clock::now());
-    return Fail(report, draco.status());
+    return Fail(report, StepStatus(draco.status(), "decoding the upload"));
   }
   Mesh mesh = draco->TakeWelded();
   report.vertices = mesh.num_vertices();
@@ -152,14 +198,23 @@ void SmoothJob::Run() {
     return Fail(report, s);
   }
   ValidationReport validation;
-  const Topology topo = BuildTopology(mesh, &validation);
-  report.before = ComputeMetrics(mesh, topo);
+  const Topology topo = BuildTopology(mesh, &validation, stop);
+  if (stop.Fired()) {
+    report.decode_seconds = Seconds(start, Clock::now());
+    return Fail(report, StepStatus(stop.Check(), "validating the mesh"));
+  }
+  if (absl::Status s = CheckQuadraticWork(topo); !s.ok()) {
+    report.decode_seconds = Seconds(start, Clock::now());
+    return Fail(report, s);
+  }
+  report.before = ComputeMetrics(mesh, topo, stop);
   const Clock::time_point decoded = Clock::now();
   report.decode_seconds = Seconds(start, decoded);
+  if (absl::Status s = stop.Check(); !s.ok()) return Fail(report, StepStatus(s, "validating the mesh"));
   SendAccepted(validation, draco->seam_points());
 
   const std::vector<Vec3> input = mesh.positions;  // for the displacement; the triangles stay put
-  absl::StatusOr<FlowResult> result = SmoothMesh(mesh, topo, decoded);
+  absl::StatusOr<FlowResult> result = SmoothMesh(mesh, topo, decoded, stop, report);
   const Clock::time_point smoothed = Clock::now();
   report.smooth_seconds = Seconds(decoded, smoothed);
   if (!result.ok()) return Fail(report, result.status());
@@ -172,11 +227,12 @@ void SmoothJob::Run() {
 
   // Section 5 of the paper: ridges and ravines of the smoothed mesh (same connectivity, so
   // the input's topology serves), sent as generic attributes.
-  const std::vector<GenericAttribute> attributes = DetectFeaturesIfAsked(mesh, topo, report);
-  absl::StatusOr<std::string> encoded = EncodeAndMeasure(*draco, mesh, topo, input, attributes, report);
+  absl::StatusOr<std::vector<GenericAttribute>> attributes = DetectFeaturesIfAsked(mesh, topo, stop, report);
+  if (!attributes.ok()) return Fail(report, attributes.status());
+  absl::StatusOr<std::string> encoded = EncodeAndMeasure(*draco, mesh, topo, input, *attributes, stop, report);
   const Clock::time_point done = Clock::now();
-  if (!encoded.ok()) return Fail(report, encoded.status());
   report.encode_seconds = Seconds(smoothed, done);
+  if (!encoded.ok()) return Fail(report, encoded.status());
   report.total_seconds = Seconds(received_, done);
   report.result_bytes = encoded->size();
   const v1::Summary summary = MakeSummary(report, params_);

@@ -14,6 +14,7 @@
 #include "core/draco_codec.h"
 #include "core/flows/flow.h"
 #include "core/mesh.h"
+#include "core/stop_token.h"
 #include "core/topology.h"
 #include "meshsmooth/v1/smoothing.pb.h"
 #include "server/convert.h"
@@ -58,20 +59,30 @@ class SmoothJob {
   void Log(const JobReport& report) const;
   // Sends `status` to the sink and logs the job with its code.
   void Fail(JobReport& report, const absl::Status& status);
+  // `status` of a step the job's StopToken ended: past the time limit, a DeadlineExceeded
+  // naming the limit and the step (e.g. "decoding the upload"); anything else unchanged.
+  absl::Status StepStatus(const absl::Status& status, const char* step) const;
+  // ResourceExhausted when the spec asks for work quadratic in the valences (eq. (14)'s second
+  // rings, Edgebreaker output) and this mesh's squared valences sum above the server's limit.
+  absl::Status CheckQuadraticWork(const Topology& topo) const;
 
-  // The steps of Run(), in order.
-  absl::StatusOr<DracoMesh> DecodeUpload();  // takes the upload and frees it
+  // The steps of Run(), in order; each stops early once `stop` (the job's cancel flag and
+  // --max-job-seconds) fires.
+  absl::StatusOr<DracoMesh> DecodeUpload(const StopToken& stop);  // takes the upload and frees it
   void SendAccepted(const ValidationReport& validation, int64_t seam_points);
-  // The flow under the job's cancel flag and time limit, progress throttled to ~10/s.
-  absl::StatusOr<FlowResult> SmoothMesh(Mesh& mesh, const Topology& topo, Clock::time_point decoded);
+  // The flow with what is left of the job's time, progress throttled to ~10/s; the iterations
+  // done so far go to `report` as they complete.
+  absl::StatusOr<FlowResult> SmoothMesh(Mesh& mesh, const Topology& topo, Clock::time_point decoded,
+                                        const StopToken& stop, JobReport& report);
   // Ridges and ravines as the result's attributes when the spec asks; counts in `report`.
-  std::vector<GenericAttribute> DetectFeaturesIfAsked(const Mesh& mesh, const Topology& topo,
-                                                      JobReport& report) const;
+  absl::StatusOr<std::vector<GenericAttribute>> DetectFeaturesIfAsked(const Mesh& mesh, const Topology& topo,
+                                                                      const StopToken& stop,
+                                                                      JobReport& report) const;
   // The result's Draco bytes; the after metrics and the displacement go to `report`.
   absl::StatusOr<std::string> EncodeAndMeasure(DracoMesh& draco, const Mesh& mesh, const Topology& topo,
                                                const std::vector<Vec3>& input,
                                                const std::vector<GenericAttribute>& attributes,
-                                               JobReport& report) const;
+                                               const StopToken& stop, JobReport& report) const;
 
   const std::string id_;
   const JobParams params_;

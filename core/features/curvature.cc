@@ -1,5 +1,6 @@
 #include "core/features/curvature.h"
 
+#include <atomic>
 #include <cmath>
 #include <initializer_list>
 
@@ -123,7 +124,7 @@ VertexEstimate EstimateAt(const Mesh& mesh, const Topology& topo, int32_t v) {
 
 }  // namespace
 
-CurvatureField EstimateCurvature(const Mesh& mesh, const Topology& topology) {
+CurvatureField EstimateCurvature(const Mesh& mesh, const Topology& topology, const StopToken& stop) {
   const int32_t n = topology.num_vertices();
   CurvatureField f;
   f.normal.assign(n, Vec3{});
@@ -133,8 +134,11 @@ CurvatureField EstimateCurvature(const Mesh& mesh, const Topology& topology) {
   f.kmin.assign(n, 0.0);
   f.valid.assign(n, 0);
   // Each vertex writes only its own entries: the result does not depend on the thread count.
+  std::atomic<bool> stopped{false};
 #pragma omp parallel for schedule(static) if (n >= kParallelMin)
   for (int32_t v = 0; v < n; ++v) {
+    if (v % kStopPollInterval == 0 && stop.Fired()) stopped.store(true, std::memory_order_relaxed);
+    if (stopped.load(std::memory_order_relaxed)) continue;
     const VertexEstimate e = EstimateAt(mesh, topology, v);
     f.normal[v] = e.normal;
     if (!e.valid) continue;

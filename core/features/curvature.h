@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "core/mesh.h"
+#include "core/stop_token.h"
 #include "core/topology.h"
 
 namespace meshsmooth {
@@ -48,6 +49,7 @@ struct CurvatureField {
 // equations, solved in closed form; a near-singular system leaves the vertex invalid). kmax >=
 // kmin are B's eigenvalues and dir_max, dir_min its eigenvectors. Neighbours coincident with P
 // or on its normal line are skipped. Deterministic, whatever the number of OpenMP threads.
-CurvatureField EstimateCurvature(const Mesh& mesh, const Topology& topology);
+// Once `stop` fires the vertices left stay invalid: a caller that passes a token checks it.
+CurvatureField EstimateCurvature(const Mesh& mesh, const Topology& topology, const StopToken& stop = {});
 
 }  // namespace meshsmooth

@@ -1,5 +1,6 @@
 #include "core/features/ridges.h"
 
+#include <atomic>
 #include <cmath>
 
 namespace meshsmooth {
@@ -62,15 +63,19 @@ FeatureLabel Classify(const Mesh& mesh, const Topology& topo, const CurvatureFie
 
 }  // namespace
 
-Features DetectFeatures(const Mesh& mesh, const Topology& topology, const FeatureOptions& options) {
+Features DetectFeatures(const Mesh& mesh, const Topology& topology, const FeatureOptions& options,
+                        const StopToken& stop) {
   Features out;
-  out.curvature = EstimateCurvature(mesh, topology);
+  out.curvature = EstimateCurvature(mesh, topology, stop);
   const int32_t n = topology.num_vertices();
   out.labels.assign(n, static_cast<uint8_t>(FeatureLabel::kNone));
   const CurvatureField& f = out.curvature;
   // Each vertex writes only its own label: the result does not depend on the thread count.
+  std::atomic<bool> stopped{false};
 #pragma omp parallel for schedule(static) if (n >= kParallelMin)
   for (int32_t v = 0; v < n; ++v) {
+    if (v % kStopPollInterval == 0 && stop.Fired()) stopped.store(true, std::memory_order_relaxed);
+    if (stopped.load(std::memory_order_relaxed)) continue;
     out.labels[v] = static_cast<uint8_t>(Classify(mesh, topology, f, v, options.min_abs_curvature));
   }
   for (uint8_t valid : f.valid) out.classified += valid != 0;

@@ -11,6 +11,7 @@
 #include "core/draco_codec.h"
 #include "core/features/curvature.h"
 #include "core/mesh.h"
+#include "core/stop_token.h"
 #include "core/topology.h"
 
 namespace meshsmooth {
@@ -40,8 +41,10 @@ struct Features {
 // the plane of the normal and dir_min. A vertex that is both gets the label of the larger
 // |kappa|. Not classified (kNone): vertices that are not valid in the curvature field
 // (boundary, non-manifold, isolated, degenerate), vertices with an invalid neighbour (the
-// interpolation is undefined), and vertices whose plane misses one side of the ring.
-Features DetectFeatures(const Mesh& mesh, const Topology& topology, const FeatureOptions& options = {});
+// interpolation is undefined), and vertices whose plane misses one side of the ring. Once
+// `stop` fires the vertices left are not classified: a caller that passes a token checks it.
+Features DetectFeatures(const Mesh& mesh, const Topology& topology, const FeatureOptions& options = {},
+                        const StopToken& stop = {});
 
 // Names of the generic Draco attributes a smoothing job with feature detection returns (part
 // of the meshsmooth.v1 contract, see FeatureDetection in proto/meshsmooth/v1/smoothing.proto).

@@ -1,6 +1,11 @@
 // The hostile requests of issue 19 through the service: each gets a clear status and leaves the
 // server serving (docs/reliability.md lists the classes and these tests).
+#include <atomic>
+#include <chrono>
+#include <future>
+#include <regex>
 #include <string>
+#include <thread>
 
 #include "core/draco_codec.h"
 #include "core/shapes.h"
@@ -58,6 +63,41 @@ TEST(HardeningTest, QuantizationAboveTheCapIsRefusedWithTheSpec) {
                  absl::StatusCode::kInvalidArgument, "output.quantization_bits must be 0 (lossless) or 1..24");
   }
   EXPECT_TRUE(Call(server->InProcessChannel(), Output(Spec("median", 3), 24, false), *EncodeDraco(Icosphere(2))).ok());
+}
+
+// A 2.2 MB fan whose centre has valence 120,000 held a worker ~10 s in validation, quadratic
+// in the valence. It now validates in milliseconds; the steps that stay quadratic in a vertex's
+// valence (eq. (14)'s second rings, Draco's Edgebreaker encoder) are refused for it, at once.
+TEST(HardeningTest, HighValenceFanCompletesOrIsRefusedFast) {
+  auto server = StartServer();
+  const std::string fan = *EncodeDraco(Fan(120000));
+  ASSERT_GT(fan.size(), 2'000'000u);
+  absl::StatusOr<SmoothOutcome> out = Call(server->InProcessChannel(), Spec("median", 3), fan);
+  ASSERT_TRUE(out.ok()) << out.status();
+  EXPECT_LT(out->summary.timings().decode_seconds(), 2.0);  // 10 s before; generous
+  EXPECT_EQ(out->summary.parameters().iterations_run(), 3u);
+
+  v1::JobSpec ring2 = Spec("median", 3);
+  ring2.mutable_adaptive()->set_mode(v1::ADAPTIVE_MODE_RING2);
+  for (const v1::JobSpec& spec : {Output(Spec("median", 3), 0, true), ring2}) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const absl::Status s = Call(server->InProcessChannel(), spec, fan).status();
+    ExpectStatus(s, absl::StatusCode::kResourceExhausted, "a vertex of valence 120000");
+    EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 2.0) << s;
+  }
+  // Both are fine on an ordinary mesh.
+  EXPECT_TRUE(Call(server->InProcessChannel(), ring2, *EncodeDraco(Icosphere(3))).ok());
+}
+
+// --max-job-seconds covers the job's whole time on its worker, not only the smoothing: a job
+// past it stops in whichever step it is in (here the first, decoding), with DEADLINE_EXCEEDED
+// naming that step.
+TEST(HardeningTest, TimeLimitCoversEveryStepOfTheJob) {
+  server::ServerOptions o;
+  o.max_job_seconds = 1e-6;
+  auto server = StartServer(o);
+  const absl::Status s = Call(server->InProcessChannel(), Spec("median", 3), *EncodeDraco(Icosphere(6))).status();
+  ExpectStatus(s, absl::StatusCode::kDeadlineExceeded, "time limit of 1e-06 s while decoding the upload");
 }
 
 }  // namespace
