@@ -35,7 +35,7 @@ struct JobReport {
   std::string job_id;
   std::string status = "OK";  // the status code's name when the job failed
   int64_t vertices = 0;       // of the welded mesh; 0 when it did not decode
-  FlowResult flow;            // iterations_run 0 until the flow ran to its end
+  FlowResult flow;            // iterations_run: those completed, also when the run ends early
   double decode_seconds = 0.0, queue_seconds = 0.0, smooth_seconds = 0.0, encode_seconds = 0.0;
   double total_seconds = 0.0;  // from the call's arrival
   // Known once the job got that far.

@@ -120,6 +120,7 @@ absl::StatusOr<FlowResult> SmoothJob::SmoothMesh(Mesh& mesh, const Topology& top
   }
   Clock::time_point last_progress = decoded - kProgressInterval;  // the first iteration is reported
   control.on_progress = [&](const Progress& p) {
+    report.flow.iterations_run = p.iteration;  // what the log says if the run ends early
     const Clock::time_point now = Clock::now();
     if (now - last_progress < kProgressInterval && p.iteration != p.total) return;
     last_progress = now;

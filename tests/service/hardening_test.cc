@@ -100,5 +100,33 @@ TEST(HardeningTest, TimeLimitCoversEveryStepOfTheJob) {
   ExpectStatus(s, absl::StatusCode::kDeadlineExceeded, "time limit of 1e-06 s while decoding the upload");
 }
 
+// A job cancelled mid-smoothing logged iterations=0/N: the log line now says how many ran.
+TEST(HardeningTest, CancelledJobLogsTheIterationsItRan) {
+  server::ServerOptions o;
+  o.workers = 1;
+  o.log_jobs = true;
+  absl::StatusOr<std::unique_ptr<server::Server>> server = server::Server::Start(o, /*listen=*/false);
+  ASSERT_TRUE(server.ok()) << server.status();
+  auto stub = v1::MeshSmoother::NewStub((*server)->InProcessChannel());
+  LongJob long_job;
+  ::testing::internal::CaptureStderr();
+  grpc::ClientContext ctx;
+  std::atomic<uint32_t> seen{0};
+  auto call = std::async(std::launch::async, [&] {
+    return CallSmooth(*stub, ctx, long_job.spec, long_job.draco,
+                      [&](const v1::Progress& p) { seen.store(p.iteration()); });
+  });
+  for (int i = 0; i < 600 && seen.load() < 3; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  ctx.TryCancel();
+  EXPECT_EQ(call.get().status().code(), absl::StatusCode::kCancelled);
+  // The only worker takes the next job once the cancelled one has logged its line.
+  EXPECT_TRUE(Call((*server)->InProcessChannel(), Spec("laplacian", 1), *EncodeDraco(Icosphere(1))).ok());
+  const std::string log = ::testing::internal::GetCapturedStderr();
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(log, m, std::regex("iterations=(\\d+)/10000 status=CANCELLED"))) << log;
+  EXPECT_GE(std::stoul(m[1]), seen.load()) << log;
+  EXPECT_GE(seen.load(), 3u);
+}
+
 }  // namespace
 }  // namespace meshsmooth
