@@ -2,12 +2,33 @@
 
 #include <cmath>
 #include <cstdio>
+#include <string>
+#include <vector>
 
 #include "absl/strings/str_cat.h"
+#include "absl/strings/str_join.h"
 
 namespace meshsmooth::server {
+namespace {
+
+// Proto3 keeps enum numbers it does not know (a newer client's, or garbage): InvalidArgument
+// naming `field` and the values this server knows, rather than running them as the default.
+absl::Status CheckEnum(const char* field, int value, const google::protobuf::EnumDescriptor* values) {
+  if (values->FindValueByNumber(value) != nullptr) return absl::OkStatus();
+  std::vector<std::string> names;
+  for (int i = 0; i < values->value_count(); ++i) names.push_back(values->value(i)->name());
+  return absl::InvalidArgumentError(
+      absl::StrCat(field, ": unknown value ", value, " (this server knows ", absl::StrJoin(names, ", "), ")"));
+}
+
+}  // namespace
 
 absl::StatusOr<JobParams> FromProto(const v1::JobSpec& spec, int max_iterations) {
+  for (const absl::Status& s : {CheckEnum("weights", spec.weights(), v1::UmbrellaWeights_descriptor()),
+                                CheckEnum("boundary", spec.boundary(), v1::BoundaryMode_descriptor()),
+                                CheckEnum("adaptive.mode", spec.adaptive().mode(), v1::AdaptiveMode_descriptor())}) {
+    if (!s.ok()) return s;
+  }
   JobParams j;
   FlowParams& p = j.flow;
   if (!spec.flow().empty()) {

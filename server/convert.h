@@ -53,8 +53,8 @@ v1::Summary MakeSummary(const JobReport& report, const JobParams& params);
 std::string JobLogLine(const JobReport& report, const JobParams& params);
 
 // InvalidArgument naming the field for anything out of range (iterations above
-// `max_iterations` included); the flow's own checks run here too, so a bad spec is refused
-// before the upload.
+// `max_iterations` included) and for enum values this server does not know; the flow's own
+// checks run here too, so a bad spec is refused before the upload.
 absl::StatusOr<JobParams> FromProto(const v1::JobSpec& spec, int max_iterations);
 
 void ToProto(const ValidationReport& r, v1::ValidationReport* out);

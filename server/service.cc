@@ -70,13 +70,16 @@ class SmoothReactor final : public grpc::ServerBidiReactor<v1::SmoothRequest, v1
           return Abort(InvalidArgument("the first message must be a JobSpec (spec), not a mesh chunk"));
         }
         const std::string& chunk = request_.mesh_chunk();
+        // Sizes beyond this server's limits are RESOURCE_EXHAUSTED, as gRPC's own answer to a
+        // message above its receive limit (a chunk of more than kMaxReceiveMessageBytes).
         if (static_cast<int64_t>(chunk.size()) > kMaxChunkBytes) {
-          return Abort(InvalidArgument(absl::StrCat("a mesh chunk of ", chunk.size(), " bytes is above the ",
-                                                    kMaxChunkBytes, "-byte chunk limit")));
+          return Abort(ResourceExhausted(absl::StrCat("a mesh chunk of ", chunk.size(),
+                                                      " bytes is above this server's limit of ", kMaxChunkBytes,
+                                                      " bytes per chunk")));
         }
         if (static_cast<int64_t>(upload_.size() + chunk.size()) > options.max_upload_bytes) {
-          return Abort(InvalidArgument(absl::StrCat("the upload exceeds this server's limit of ",
-                                                    options.max_upload_bytes, " bytes")));
+          return Abort(ResourceExhausted(absl::StrCat("the upload exceeds this server's limit of ",
+                                                      options.max_upload_bytes, " bytes")));
         }
         upload_.append(chunk);
         break;
@@ -167,6 +170,9 @@ class SmoothReactor final : public grpc::ServerBidiReactor<v1::SmoothRequest, v1
   }
 
  private:
+  static grpc::Status ResourceExhausted(const std::string& message) {
+    return grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED, message);
+  }
   static grpc::Status InvalidArgument(const std::string& message) {
     return grpc::Status(grpc::StatusCode::INVALID_ARGUMENT, message);
   }

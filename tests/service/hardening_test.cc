@@ -2,6 +2,8 @@
 // server serving (docs/reliability.md lists the classes and these tests).
 #include <atomic>
 #include <chrono>
+#include <climits>
+#include <functional>
 #include <future>
 #include <regex>
 #include <string>
@@ -126,6 +128,61 @@ TEST(HardeningTest, CancelledJobLogsTheIterationsItRan) {
   ASSERT_TRUE(std::regex_search(log, m, std::regex("iterations=(\\d+)/10000 status=CANCELLED"))) << log;
   EXPECT_GE(std::stoul(m[1]), seen.load()) << log;
   EXPECT_GE(seen.load(), 3u);
+}
+
+// Proto3 keeps enum numbers it does not know: they ran as the defaults. Each enum of the
+// JobSpec now refuses them with INVALID_ARGUMENT naming the field.
+template <typename Enum>
+void ExpectUnknownValuesRefused(const std::string& field, const std::function<void(v1::JobSpec&, Enum)>& set) {
+  auto server = StartServer();
+  const std::string sphere = *EncodeDraco(Icosphere(2));
+  for (int32_t value : {3, 4, 99, -1, INT32_MIN, INT32_MAX}) {
+    v1::JobSpec spec = Spec("laplacian", 2);
+    set(spec, static_cast<Enum>(value));
+    if (field == "adaptive.mode" && value == 3) continue;  // ADAPTIVE_MODE_RING2
+    ExpectStatus(Call(server->InProcessChannel(), spec, sphere).status(), absl::StatusCode::kInvalidArgument,
+                 field + ": unknown value " + std::to_string(value));
+  }
+}
+
+TEST(HardeningTest, UnknownWeightsAreRefused) {
+  ExpectUnknownValuesRefused<v1::UmbrellaWeights>("weights",
+                                                  [](v1::JobSpec& s, v1::UmbrellaWeights v) { s.set_weights(v); });
+}
+
+TEST(HardeningTest, UnknownBoundaryModeIsRefused) {
+  ExpectUnknownValuesRefused<v1::BoundaryMode>("boundary",
+                                               [](v1::JobSpec& s, v1::BoundaryMode v) { s.set_boundary(v); });
+}
+
+TEST(HardeningTest, UnknownAdaptiveModeIsRefused) {
+  ExpectUnknownValuesRefused<v1::AdaptiveMode>(
+      "adaptive.mode", [](v1::JobSpec& s, v1::AdaptiveMode v) { s.mutable_adaptive()->set_mode(v); });
+}
+
+// One rule for sizes: beyond one of this server's limits (a chunk, the upload, the vertices) is
+// RESOURCE_EXHAUSTED, whoever checks it: a chunk between 1 MiB + 1 and gRPC's own receive limit
+// (1 MiB + 64 KiB) got INVALID_ARGUMENT from us, a larger one RESOURCE_EXHAUSTED from gRPC.
+TEST(HardeningTest, SizesBeyondTheLimitsAreResourceExhausted) {
+  server::ServerOptions o;
+  o.max_upload_bytes = 3 << 20;
+  auto server = StartServer(o, /*listen=*/true);
+  auto channel = grpc::CreateChannel("127.0.0.1:" + std::to_string(server->port()), grpc::InsecureChannelCredentials());
+  v1::SmoothRequest spec, chunk;
+  *spec.mutable_spec() = Spec("median", 3);
+  for (int64_t size : {(int64_t{1} << 20) + 1, (int64_t{1} << 20) + (32 << 10), (int64_t{1} << 20) + (128 << 10),
+                       int64_t{3} << 20}) {
+    chunk.set_mesh_chunk(std::string(static_cast<size_t>(size), 'x'));
+    const grpc::Status g = RawCall(channel, {spec, chunk});
+    EXPECT_EQ(g.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED) << size << ": " << g.error_message();
+  }
+  chunk.set_mesh_chunk(std::string(1 << 20, 'x'));  // at the limit: read, then refused as not Draco
+  grpc::Status g = RawCall(channel, {spec, chunk});
+  EXPECT_EQ(g.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << g.error_message();
+  g = RawCall(channel, {spec, chunk, chunk, chunk, chunk});  // 4 MiB in chunks of 1 MiB
+  EXPECT_EQ(g.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED) << g.error_message();
+  EXPECT_NE(g.error_message().find("upload exceeds this server's limit of 3145728 bytes"), std::string::npos)
+      << g.error_message();
 }
 
 }  // namespace

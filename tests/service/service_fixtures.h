@@ -7,6 +7,7 @@
 #include <future>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "client/smooth_client.h"
 #include "core/draco_codec.h"
@@ -52,6 +53,23 @@ inline absl::StatusOr<SmoothOutcome> Call(std::shared_ptr<grpc::Channel> channel
   ctx.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(120));
   if (!token.empty()) ctx.AddMetadata("authorization", "Bearer " + token);
   return CallSmooth(*stub, ctx, spec, draco, nullptr, 256 << 10);
+}
+
+// A raw Smooth stream of `messages` (what the client library would never send), then
+// half-close; the call's final status.
+inline grpc::Status RawCall(std::shared_ptr<grpc::Channel> channel, const std::vector<v1::SmoothRequest>& messages) {
+  auto stub = v1::MeshSmoother::NewStub(channel);
+  grpc::ClientContext ctx;
+  ctx.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(120));
+  auto stream = stub->Smooth(&ctx);
+  for (const auto& m : messages) {
+    if (!stream->Write(m)) break;
+  }
+  stream->WritesDone();
+  v1::SmoothResponse r;
+  while (stream->Read(&r)) {
+  }
+  return stream->Finish();
 }
 
 // A job that runs "forever" until cancelled: icosphere(6), many iterations.
