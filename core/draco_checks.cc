@@ -1,5 +1,6 @@
 #include "core/draco_checks.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -32,6 +33,24 @@ absl::Status CheckDracoOptions(const DracoOptions& options) {
   }
   if (options.speed < 0 || options.speed > 10) {
     return absl::InvalidArgumentError(absl::StrCat("Draco speed must be 0..10, got ", options.speed));
+  }
+  return absl::OkStatus();
+}
+
+absl::Status CheckQuantizedExtent(const draco::PointAttribute& positions) {
+  float lo[3], hi[3];
+  for (int c = 0; c < 3; ++c) lo[c] = std::numeric_limits<float>::infinity(), hi[c] = -lo[c];
+  for (uint32_t i = 0; i < positions.size(); ++i) {
+    float v[3];
+    positions.GetValue(draco::AttributeValueIndex(i), v);
+    for (int c = 0; c < 3; ++c) lo[c] = std::min(lo[c], v[c]), hi[c] = std::max(hi[c], v[c]);
+  }
+  double extent = 0.0;
+  for (int c = 0; c < 3; ++c) extent = std::max(extent, static_cast<double>(hi[c]) - lo[c]);
+  if (extent > 0.0 && extent < kMinQuantizedExtent) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        "the mesh is too small to quantize: it spans ", extent, ", less than 2^-100 (", kMinQuantizedExtent,
+        "); ask for lossless output (0 quantization bits)"));
   }
   return absl::OkStatus();
 }

@@ -19,6 +19,10 @@ absl::Status CheckCoordinates(const Vec3& p, const char* what, int64_t index);
 // InvalidArgument for quantization bits or a speed out of range.
 absl::Status CheckDracoOptions(const DracoOptions& options);
 
+// InvalidArgument when the values of `positions` (float32 xyz, all of them, as Draco's
+// quantizer measures them) span less than kMinQuantizedExtent but more than nothing.
+absl::Status CheckQuantizedExtent(const draco::PointAttribute& positions);
+
 // What Draco's decoder lets through but no reader of the mesh may meet (coordinates are checked
 // where they are read, CheckCoordinates): more points than an int32 holds, no or several
 // POSITION attributes (Draco's Edgebreaker encoder crashes on a second one), an attribute whose

@@ -154,6 +154,8 @@ absl::StatusOr<std::string> EncodeWithOptions(const draco::Mesh& dm, const Draco
   encoder.SetEncodingMethod(options.method == DracoMethod::kSequential ? draco::MESH_SEQUENTIAL_ENCODING
                                                                        : draco::MESH_EDGEBREAKER_ENCODING);
   if (options.quantization_bits > 0) {
+    const draco::PointAttribute* positions = dm.GetNamedAttribute(draco::GeometryAttribute::POSITION);
+    if (absl::Status s = CheckQuantizedExtent(*positions); !s.ok()) return s;
     encoder.SetAttributeQuantization(draco::GeometryAttribute::POSITION, options.quantization_bits);
   }
   draco::EncoderBuffer out;

@@ -40,6 +40,12 @@ inline constexpr int kMaxQuantizationBits = 24;
 // squared lengths in double) stay finite.
 inline constexpr double kMaxCoordinate = 0x1p100;
 
+// Smallest extent of the positions (largest over x, y, z, as Draco measures it) that quantized
+// output takes, unless it is 0: Draco's quantizer computes (2^bits - 1) / extent in float32,
+// which overflows below ~2^-104 and turns every decoded coordinate into garbage. 2^-100
+// mirrors kMaxCoordinate.
+inline constexpr double kMinQuantizedExtent = 0x1p-100;
+
 struct DracoOptions {
   int quantization_bits = 0;  // 0 = lossless (raw float32); otherwise 1..kMaxQuantizationBits
   DracoMethod method = DracoMethod::kSequential;
@@ -48,8 +54,9 @@ struct DracoOptions {
 
 // Positions are stored as float32; faces with an index out of range are left out.
 // InvalidArgument for bad options, an empty mesh, a coordinate that is not finite or above
-// kMaxCoordinate in magnitude, and Edgebreaker when it would drop a vertex (one that no face
-// with three distinct indices uses).
+// kMaxCoordinate in magnitude, quantized output of a mesh spanning less than
+// kMinQuantizedExtent, and Edgebreaker when it would drop a vertex (one that no face with three
+// distinct indices uses).
 absl::StatusOr<std::string> EncodeDraco(const Mesh& mesh, const DracoOptions& options = {});
 
 // InvalidArgument with a clear message for corrupt bytes, a point cloud, an empty mesh, a mesh
@@ -106,8 +113,9 @@ class DracoMesh {
   // keeps every other attribute unchanged, and encodes. Quantization applies to positions
   // only; other attributes are stored losslessly. `extra` attributes (one value per vertex of
   // welded(), written to each of its points) are added, replacing any attribute of the same
-  // name. InvalidArgument when one has the wrong count, when CheckEncodable() fails, or when a
-  // smoothed coordinate is not finite or above kMaxCoordinate in magnitude; Cancelled or
+  // name. InvalidArgument when one has the wrong count, when CheckEncodable() fails, when a
+  // smoothed coordinate is not finite or above kMaxCoordinate in magnitude, or for quantized
+  // output of a mesh spanning less than kMinQuantizedExtent; Cancelled or
   // DeadlineExceeded when `stop` has fired before Draco's encoder starts.
   absl::StatusOr<std::string> Encode(const Mesh& smoothed, const DracoOptions& options = {},
                                      const std::vector<GenericAttribute>& extra = {},

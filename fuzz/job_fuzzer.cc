@@ -31,8 +31,12 @@
 namespace meshsmooth::fuzz {
 namespace {
 
+// The spec of the input being run, printed with a violation.
+const v1::JobSpec* current_spec = nullptr;
+
 [[noreturn]] void Fail(const char* what) {
-  std::fprintf(stderr, "fuzz_job: invariant violated: %s\n", what);
+  std::fprintf(stderr, "fuzz_job: invariant violated: %s\nspec: %s\n", what,
+               current_spec != nullptr ? current_spec->ShortDebugString().c_str() : "?");
   std::abort();
 }
 
@@ -103,7 +107,11 @@ void CheckResult(std::string_view upload, const server::JobParams& params, const
   const double diagonal = Norm(box.hi - box.lo);
   for (const Vec3& p : out->positions) {
     Check(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z), "a result coordinate is not finite");
-    Check(box.Contains(p, diagonal), "a result vertex lies outside the upload's box grown by its diagonal");
+    if (!box.Contains(p, diagonal)) {
+      std::fprintf(stderr, "fuzz_job: vertex (%g, %g, %g), box (%g, %g, %g) .. (%g, %g, %g), diagonal %g\n", p.x, p.y,
+                   p.z, box.lo.x, box.lo.y, box.lo.z, box.hi.x, box.hi.y, box.hi.z, diagonal);
+      Fail("a result vertex lies outside the upload's box grown by its diagonal");
+    }
   }
 
   if (params.detect_features) {
@@ -134,7 +142,9 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   server::ServerOptions options;  // the service's defaults, but quiet and on one thread
   options.threads_per_job = 1;
   options.log_jobs = false;
-  absl::StatusOr<server::JobParams> params = server::FromProto(fuzz::SpecFromBytes(head), options.max_iterations);
+  const v1::JobSpec spec = fuzz::SpecFromBytes(head);
+  fuzz::current_spec = &spec;
+  absl::StatusOr<server::JobParams> params = server::FromProto(spec, options.max_iterations);
   if (!params.ok()) {
     fuzz::Check(params.status().code() == absl::StatusCode::kInvalidArgument, "a bad spec is not INVALID_ARGUMENT");
     return 0;

@@ -142,6 +142,36 @@ TEST(DracoCodecTest, MorePointsThanThreePerFaceAreRefusedForSequential) {
   EXPECT_TRUE(DecodeDraco(*ok).ok());
 }
 
+// Found by fuzz_job: Draco's quantizer divides by the positions' extent in float32, so for a
+// mesh a few 1e-38 wide the grid overflowed and the decoded vertices landed at -1.2e-32, a
+// million boxes away from the mesh. Quantization now needs an extent of at least
+// kMinQuantizedExtent (or none at all); within that the round trip stays on the grid.
+TEST(DracoCodecTest, ExtentTooSmallToQuantizeIsRefused) {
+  for (int bits : {1, 12, kMaxQuantizationBits}) {
+    for (DracoMethod method : {DracoMethod::kSequential, DracoMethod::kEdgebreaker}) {
+      Mesh tiny = Icosphere(1);
+      for (Vec3& p : tiny.positions) p = RoundToFloat(p * 1e-38);
+      const absl::StatusOr<std::string> refused = EncodeDraco(tiny, {bits, method});
+      ASSERT_FALSE(refused.ok()) << bits << " bits: decodes to " << DecodeDraco(*refused)->positions[0].x
+                                 << " for " << tiny.positions[0].x;
+      EXPECT_EQ(refused.status().code(), absl::StatusCode::kInvalidArgument);
+      EXPECT_NE(refused.status().message().find("too small to quantize"), std::string::npos) << refused.status();
+      EXPECT_TRUE(EncodeDraco(tiny, {0, method}).ok()) << "lossless output has no grid";
+
+      // Scaled to the smallest extent quantization takes: every coordinate within half a step.
+      Mesh small = Icosphere(1);
+      for (Vec3& p : small.positions) p = RoundToFloat(p * (kMinQuantizedExtent / 2));
+      const absl::StatusOr<std::string> bytes = EncodeDraco(small, {bits, method});
+      ASSERT_TRUE(bytes.ok()) << bytes.status();
+      const absl::StatusOr<Mesh> back = DecodeDraco(*bytes);
+      ASSERT_TRUE(back.ok()) << back.status();
+      for (const Vec3& p : back->positions) {
+        for (double c : {p.x, p.y, p.z}) EXPECT_LE(std::abs(c), 1.01 * kMinQuantizedExtent / 2) << bits << " bits";
+      }
+    }
+  }
+}
+
 // A job takes the welded mesh instead of copying it; Encode() then still knows the vertex
 // count and writes each vertex back to every point welded into it.
 TEST(DracoCodecTest, TakenWeldedMeshEncodesBackToEveryPoint) {
