@@ -10,7 +10,9 @@
 //   - sequential output keeps every point (the upload's count) and points welded together in
 //     the upload still share one position; Edgebreaker output has at most the upload's
 //     welded vertex count (it drops isolated vertices and splits non-manifold ones);
-//   - every coordinate is finite and inside the upload's bounding box grown by its diagonal.
+//   - every coordinate is finite and inside the upload's bounding box grown by what the flow may
+//     move a vertex in the iterations it ran (ResultBound).
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -22,6 +24,7 @@
 #include <vector>
 
 #include "core/draco_codec.h"
+#include "core/flows/flow_table.h"
 #include "core/weld.h"
 #include "fuzz/job_input.h"
 #include "server/convert.h"
@@ -69,15 +72,48 @@ struct Box {
           std::numeric_limits<double>::infinity()};
   Vec3 hi = -lo;
   void Add(const Vec3& p) {
-    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) return;
     lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
     hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
   }
-  bool Contains(const Vec3& p, double margin) const {
-    return p.x >= lo.x - margin && p.x <= hi.x + margin && p.y >= lo.y - margin && p.y <= hi.y + margin &&
-           p.z >= lo.z - margin && p.z <= hi.z + margin;
+  // Grown on each side by `margin` per axis.
+  Box Grown(const Vec3& margin) const { return {lo - margin, hi + margin}; }
+  bool Contains(const Vec3& p) const {
+    return p.x >= lo.x && p.x <= hi.x && p.y >= lo.y && p.y <= hi.y && p.z >= lo.z && p.z <= hi.z;
   }
 };
+
+// The box no vertex of the result may leave: the upload's, grown by what the flow may move a
+// vertex (per axis, from what each flow guarantees for a pass), then by the quantization.
+//   laplacian: every pass is a convex combination of neighbours (step <= 1): no growth.
+//   taubin (its mu pass, mu <= 1) and bilaplacian (|U0^2| <= 2 extents, step <= 0.5): a pass
+//     moves a vertex by at most the current extent on each axis, so k passes grow the box by
+//     (3^k - 1) / 2 extents on each side.
+//   curvature and normal-filter flows: every step of a vertex is capped at h, the input's mean
+//     edge length, and boundary curves move to a convex combination: k steps, k h.
+//   quantized output: half a grid step (the largest extent / (2^bits - 1)) on each axis.
+// Plus float32 rounding.
+Box ResultBound(const Box& in, const server::JobParams& params, const v1::Summary& summary) {
+  const Vec3 extent = in.hi - in.lo;
+  const int iterations = static_cast<int>(summary.parameters().iterations_run());
+  const double h = summary.parameters().mean_edge_length();
+  const FlowId id = params.flow.flow;
+  Vec3 margin;
+  if (id == FlowId::kTaubin || id == FlowId::kBilaplacian) {
+    margin = extent * ((std::pow(3.0, iterations) - 1.0) / 2.0);
+  } else if (FlowOf(id).kind != FlowKind::kUmbrella) {
+    const int passes = FlowOf(id).kind == FlowKind::kNormalFilter
+                           ? iterations * params.flow.normal_filter.vertex_iterations
+                           : iterations;
+    margin = Vec3{1, 1, 1} * (passes * h);
+  }
+  Box bound = in.Grown(margin);
+  const Vec3 grown = bound.hi - bound.lo;
+  const int bits = params.output.quantization_bits;
+  const double step = bits > 0 ? std::max({grown.x, grown.y, grown.z}) / (std::ldexp(1.0, bits) - 1.0) : 0.0;
+  const double magnitude = std::max({std::abs(bound.lo.x), std::abs(bound.lo.y), std::abs(bound.lo.z),
+                                     std::abs(bound.hi.x), std::abs(bound.hi.y), std::abs(bound.hi.z)});
+  return bound.Grown(Vec3{1, 1, 1} * (step / 2 + 1e-6 * magnitude));
+}
 
 // Exact equality with +0.0 == -0.0, as WeldPoints compares.
 bool SamePosition(const Vec3& a, const Vec3& b) { return a.x == b.x && a.y == b.y && a.z == b.z; }
@@ -104,13 +140,14 @@ void CheckResult(std::string_view upload, const server::JobParams& params, const
 
   Box box;
   for (const Vec3& p : in->positions) box.Add(p);
-  const double diagonal = Norm(box.hi - box.lo);
+  const Box bound = ResultBound(box, params, sink.summary);
   for (const Vec3& p : out->positions) {
     Check(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z), "a result coordinate is not finite");
-    if (!box.Contains(p, diagonal)) {
-      std::fprintf(stderr, "fuzz_job: vertex (%g, %g, %g), box (%g, %g, %g) .. (%g, %g, %g), diagonal %g\n", p.x, p.y,
-                   p.z, box.lo.x, box.lo.y, box.lo.z, box.hi.x, box.hi.y, box.hi.z, diagonal);
-      Fail("a result vertex lies outside the upload's box grown by its diagonal");
+    if (!bound.Contains(p)) {
+      std::fprintf(stderr, "fuzz_job: vertex (%g, %g, %g) outside (%g, %g, %g) .. (%g, %g, %g), upload's box (%g, %g, %g) .. (%g, %g, %g)\n",
+                   p.x, p.y, p.z, bound.lo.x, bound.lo.y, bound.lo.z, bound.hi.x, bound.hi.y, bound.hi.z, box.lo.x,
+                   box.lo.y, box.lo.z, box.hi.x, box.hi.y, box.hi.z);
+      Fail("a result vertex lies outside what the flow may reach from the upload's box");
     }
   }
 

@@ -30,14 +30,14 @@ constexpr uintmax_t kMaxSharedBytes = 200 * 1024;
 // Heads that reach every flow, both boundary modes, the adaptive modes, features and each
 // output encoding (byte meanings in job_input.h).
 constexpr std::array<std::array<uint8_t, kSpecBytes>, 8> kHeads = {{
-    {6, 2, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0},              // the default flow, 3 iterations, lossless
-    {0, 1, 0, 0, 2, 2, 0, 0, 0, 0, 0, 0},              // laplacian U1, boundary as curves
-    {1, 2, 0, 0, 0, 0, 0, 0, 1, 200, 0, 0},            // taubin with mu
-    {2, 0, 0, 0, 0, 0, 0, 0, 0, 0, 1, 0},              // bilaplacian, features
-    {3, 2, 0, 0, 0, 0, 0, 0, 0, 0, 0, 128 + 12},       // mcf, Edgebreaker, 12 bits
-    {4, 1, 0, 0, 0, 0, 2, 0x15, 0, 0, 0, 20},          // mcf_tangential, ring1, 20 bits
-    {5, 2, 0, 0, 0, 2, 3, 0x15, 0, 0, 3, 128},         // median, ring2, features, Edgebreaker
-    {5, 0, 0, 0, 0, 0, 1, 0x20, 0x18, 60, 0, 0},       // median, constant T, epsilon, tolerance
+    {0, 1, 0, 0, 2, 2, 0, 0, 0, 0, 0, 0, 0, 0},          // laplacian U1, boundary as curves
+    {1, 2, 0, 0, 0, 0, 0, 0, 1, 200, 0, 0, 0, 0},        // taubin with mu
+    {2, 0, 0, 0, 0, 0, 0, 0, 0, 0, 1, 0, 0, 0},          // bilaplacian, features
+    {3, 2, 0, 0, 0, 0, 0, 0, 0, 0, 0, 128 + 12, 0, 0},   // mcf, Edgebreaker, 12 bits
+    {4, 1, 0, 0, 0, 0, 2, 0x15, 0, 0, 0, 20, 0, 0},      // mcf_tangential, ring1, 20 bits
+    {5, 2, 0, 0, 0, 2, 3, 0x15, 0, 0, 3, 128, 0, 0},     // median, ring2, features, Edgebreaker
+    {5, 0, 0, 0, 0, 0, 1, 0x20, 0x18, 60, 0, 0, 0, 0},   // median, constant T, epsilon, tolerance
+    {6, 1, 0, 0, 0, 2, 0, 0, 0, 0, 0, 8, 15, 9},         // bilateral_normal, every filter parameter
 }};
 
 void WriteFile(const fs::path& path, std::string_view bytes) {
