@@ -9,9 +9,11 @@
 #include <iostream>
 
 #include "CLI/CLI.hpp"
+#include "absl/strings/str_cat.h"
 #include "core/huge_pages.h"
 #include "core/io/file_bytes.h"
 #include "core/shutdown_signals.h"
+#include "server/admission.h"
 #include "server/server.h"
 
 int main(int argc, char** argv) {
@@ -34,6 +36,14 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--max-concurrent-streams", o.max_concurrent_streams, "Smooth calls open at once")
       ->capture_default_str();
+  app.add_option("--upload-idle-seconds", o.upload_idle_seconds,
+                 "an upload that sends no message for this long ends with DEADLINE_EXCEEDED; 0 = never")
+      ->capture_default_str();
+  app.add_option("--max-buffered-bytes", o.max_buffered_bytes,
+                 absl::StrCat("bytes held by uploads in flight and queued jobs; beyond, uploads get "
+                              "RESOURCE_EXHAUSTED; 0 = a quarter of this machine's memory (",
+                              meshsmooth::server::DefaultBufferedBytes(), " here)"))
+      ->capture_default_str()->check(CLI::NonNegativeNumber);
   app.add_option("--grace-seconds", o.grace_seconds, "on SIGINT/SIGTERM, time running jobs get to finish")
       ->capture_default_str();
   app.add_option("--tls-cert", o.tls_cert_file, "PEM certificate chain; with --tls-key enables TLS");

@@ -16,6 +16,13 @@ struct ServerOptions {
   int max_iterations = 10'000;
   double max_job_seconds = 600.0;          // a job's time on its worker (decode to encode)
   int max_concurrent_streams = 128;        // Smooth calls open at once
+  // An upload that receives no message for this long ends with DEADLINE_EXCEEDED, freeing its
+  // call slot; <= 0: never. A 1 MiB chunk at 20 KiB/s still arrives within the default.
+  double upload_idle_seconds = 60.0;
+  // Bytes held at once by uploads in flight and jobs waiting for a worker (their buffers'
+  // capacity); an upload that would go beyond it gets RESOURCE_EXHAUSTED before keeping its
+  // chunk. 0 = a quarter of the machine's memory (DefaultBufferedBytes()).
+  int64_t max_buffered_bytes = 0;
   double grace_seconds = 10.0;             // on shutdown, running jobs get this long to finish
   std::string tls_cert_file, tls_key_file;  // both or neither
   std::string auth_token;                   // non-empty: calls need "authorization: Bearer <token>"

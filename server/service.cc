@@ -1,5 +1,6 @@
 #include "server/service.h"
 
+#include <algorithm>
 #include <chrono>
 #include <optional>
 #include <thread>
@@ -32,7 +33,10 @@ class SmoothReactor final : public grpc::ServerBidiReactor<v1::SmoothRequest, v1
                             public JobSink {
  public:
   SmoothReactor(MeshSmootherService* service, grpc::CallbackServerContext* context)
-      : service_(service), received_(Clock::now()) {
+      : service_(service),
+        received_(Clock::now()),
+        upload_(&service->budget_, service->options_.max_upload_bytes),
+        last_read_(received_) {
     service_->Register(this);
     if (!service_->Authorized(context)) {
       Abort(grpc::Status(grpc::StatusCode::UNAUTHENTICATED,
@@ -49,10 +53,17 @@ class SmoothReactor final : public grpc::ServerBidiReactor<v1::SmoothRequest, v1
                                       service_->options_.max_concurrent_streams, "); retry later")));
       return;
     }
+    uploading_.store(true);
     StartRead(&request_);
   }
 
+  // True while the call still reads its upload and its last message arrived before `cutoff`.
+  bool IdleSince(Clock::time_point cutoff) const {
+    return uploading_.load() && last_read_.load() < cutoff;
+  }
+
   void OnReadDone(bool ok) override {
+    last_read_.store(Clock::now());
     if (!ok) return OnHalfClose();
     const ServerOptions& options = service_->options_;
     switch (request_.kind_case()) {
@@ -77,11 +88,8 @@ class SmoothReactor final : public grpc::ServerBidiReactor<v1::SmoothRequest, v1
                                                       " bytes is above this server's limit of ", kMaxChunkBytes,
                                                       " bytes per chunk")));
         }
-        if (static_cast<int64_t>(upload_.size() + chunk.size()) > options.max_upload_bytes) {
-          return Abort(ResourceExhausted(absl::StrCat("the upload exceeds this server's limit of ",
-                                                      options.max_upload_bytes, " bytes")));
-        }
-        upload_.append(chunk);
+        // The upload's own limit and the server's memory budget.
+        if (absl::Status s = upload_.Append(chunk); !s.ok()) return Abort(ToGrpc(s));
         break;
       }
       default:
@@ -158,6 +166,7 @@ class SmoothReactor final : public grpc::ServerBidiReactor<v1::SmoothRequest, v1
 
   // Ends the call with `status` as soon as no write is in flight (pending events are dropped).
   void Abort(const grpc::Status& status) {
+    uploading_.store(false);
     std::shared_ptr<SmoothJob> job;
     {
       std::lock_guard<std::mutex> lock(mu_);
@@ -178,6 +187,7 @@ class SmoothReactor final : public grpc::ServerBidiReactor<v1::SmoothRequest, v1
   }
 
   void OnHalfClose() {
+    uploading_.store(false);
     {
       std::lock_guard<std::mutex> lock(mu_);
       if (finished_ || cancelled_) return;
@@ -189,8 +199,8 @@ class SmoothReactor final : public grpc::ServerBidiReactor<v1::SmoothRequest, v1
       return Abort(InvalidArgument("no mesh arrived: send the Draco bytes in mesh_chunk messages after the spec"));
     }
     const std::string id = absl::StrFormat("%x-%d", service_->start_tag_, service_->next_job_.fetch_add(1));
-    auto job = std::make_shared<SmoothJob>(id, std::move(*params_), std::move(upload_), received_,
-                                           service_->options_, this);
+    auto job = std::make_shared<SmoothJob>(id, std::move(*params_), upload_.TakeBytes(), upload_.TakeHold(),
+                                           received_, service_->options_, this);
     {
       std::lock_guard<std::mutex> lock(mu_);
       job_ = job;
@@ -251,7 +261,10 @@ class SmoothReactor final : public grpc::ServerBidiReactor<v1::SmoothRequest, v1
   // Reader state: only touched by reactions, which gRPC serialises for reads.
   v1::SmoothRequest request_;
   std::optional<JobParams> params_;
-  std::string upload_;
+  UploadBuffer upload_;  // held against the service's memory budget
+  // For the idle reaper (another thread): reading the upload, and when the last message came.
+  std::atomic<bool> uploading_{false};
+  std::atomic<Clock::time_point> last_read_;
 
   std::mutex mu_;  // guards everything below
   std::shared_ptr<SmoothJob> job_;
@@ -270,12 +283,47 @@ class SmoothReactor final : public grpc::ServerBidiReactor<v1::SmoothRequest, v1
 
 MeshSmootherService::MeshSmootherService(const ServerOptions& options)
     : options_(options),
+      budget_(options.max_buffered_bytes > 0 ? options.max_buffered_bytes : DefaultBufferedBytes()),
       pool_(options.workers > 0 ? options.workers : HardwareThreads(), options.queue_depth),
       start_tag_(static_cast<uint64_t>(
           std::chrono::duration_cast<std::chrono::seconds>(std::chrono::system_clock::now().time_since_epoch())
-              .count())) {}
+              .count())) {
+  if (options.upload_idle_seconds > 0.0) reaper_ = std::thread([this] { ReapIdleUploads(); });
+}
 
-MeshSmootherService::~MeshSmootherService() { pool_.Stop(); }
+MeshSmootherService::~MeshSmootherService() {
+  StopReaper();
+  pool_.Stop();
+}
+
+void MeshSmootherService::ReapIdleUploads() {
+  const auto idle = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(
+      std::min(options_.upload_idle_seconds, 1e9)));
+  // Idle uploads end between `idle` and 1.25 x `idle` after their last message.
+  const auto period = std::clamp<Clock::duration>(idle / 4, std::chrono::milliseconds(10), std::chrono::seconds(1));
+  const grpc::Status status(
+      grpc::StatusCode::DEADLINE_EXCEEDED,
+      absl::StrFormat("no message for %g s: this server ends uploads that stop sending (--upload-idle-seconds); "
+                      "send the spec, the whole mesh, then half-close",
+                      options_.upload_idle_seconds));
+  std::unique_lock<std::mutex> lock(mu_);
+  while (!reaper_stop_) {
+    reaper_cv_.wait_for(lock, period);
+    const Clock::time_point cutoff = Clock::now() - idle;
+    for (SmoothReactor* r : reactors_) {
+      if (r->IdleSince(cutoff)) r->Abort(status);  // a reactor is deleted only after Unregister
+    }
+  }
+}
+
+void MeshSmootherService::StopReaper() {
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    reaper_stop_ = true;
+  }
+  reaper_cv_.notify_all();
+  if (reaper_.joinable()) reaper_.join();
+}
 
 bool MeshSmootherService::Authorized(const grpc::CallbackServerContext* context) const {
   if (options_.auth_token.empty()) return true;

@@ -3,11 +3,15 @@
 #pragma once
 
 #include <atomic>
+#include <condition_variable>
+#include <cstdint>
 #include <memory>
 #include <mutex>
 #include <set>
+#include <thread>
 
 #include "meshsmooth/v1/smoothing.grpc.pb.h"
+#include "server/admission.h"
 #include "server/options.h"
 #include "server/worker_pool.h"
 
@@ -31,21 +35,30 @@ class MeshSmootherService final : public v1::MeshSmoother::CallbackService {
 
   // Jobs waiting for a worker now (for tests).
   int queued_jobs() { return pool_.queued(); }
+  // Bytes held against --max-buffered-bytes now: uploads in flight and queued jobs (for tests).
+  int64_t buffered_bytes() const { return budget_.held(); }
 
  private:
   friend class SmoothReactor;
   bool Authorized(const grpc::CallbackServerContext* context) const;
   void Register(SmoothReactor* r);
   void Unregister(SmoothReactor* r);
+  // The reaper thread: ends the uploads idle for --upload-idle-seconds, until StopReaper().
+  void ReapIdleUploads();
+  void StopReaper();
 
   const ServerOptions options_;
+  MemoryBudget budget_;
   WorkerPool pool_;
   std::atomic<int> active_{0};
   std::atomic<uint64_t> next_job_{1};
   std::atomic<bool> draining_{false};
   const uint64_t start_tag_;
-  std::mutex mu_;  // guards reactors_
+  std::mutex mu_;  // guards reactors_ and reaper_stop_
   std::set<SmoothReactor*> reactors_;
+  std::condition_variable reaper_cv_;
+  bool reaper_stop_ = false;
+  std::thread reaper_;
 };
 
 }  // namespace meshsmooth::server

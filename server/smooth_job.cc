@@ -34,11 +34,12 @@ Clock::time_point Deadline(Clock::time_point start, double seconds) {
 
 }  // namespace
 
-SmoothJob::SmoothJob(std::string id, JobParams params, std::string upload, Clock::time_point received,
-                     const ServerOptions& options, JobSink* sink)
+SmoothJob::SmoothJob(std::string id, JobParams params, std::string upload, BudgetHold hold,
+                     Clock::time_point received, const ServerOptions& options, JobSink* sink)
     : id_(std::move(id)),
       params_(std::move(params)),
       upload_(std::move(upload)),
+      upload_hold_(std::move(hold)),
       received_(received),
       submitted_(received),
       options_(options),
@@ -55,6 +56,7 @@ void SmoothJob::Detach() {
   std::lock_guard<std::mutex> lock(mu_);
   sink_ = nullptr;
   std::string().swap(upload_);
+  upload_hold_.Release();
 }
 
 void SmoothJob::Log(const JobReport& report) const {
@@ -91,12 +93,15 @@ absl::Status SmoothJob::CheckQuadraticWork(const Topology& topo) const {
 
 absl::StatusOr<DracoMesh> SmoothJob::DecodeUpload(const StopToken& stop) {
   std::string upload;
+  BudgetHold hold;
   {
     std::lock_guard<std::mutex> lock(mu_);
     upload.swap(upload_);
+    hold = std::move(upload_hold_);
   }
   absl::StatusOr<DracoMesh> draco = DracoMesh::Decode(upload, stop);
   std::string().swap(upload);  // the bytes are not needed past decoding
+  hold.Release();
   return draco;
 }
 

@@ -17,6 +17,7 @@
 #include "core/stop_token.h"
 #include "core/topology.h"
 #include "meshsmooth/v1/smoothing.pb.h"
+#include "server/admission.h"
 #include "server/convert.h"
 #include "server/options.h"
 
@@ -37,7 +38,9 @@ using Clock = std::chrono::steady_clock;
 
 class SmoothJob {
  public:
-  SmoothJob(std::string id, JobParams params, std::string upload, Clock::time_point received,
+  // `hold` is the upload's share of the server's memory budget: given back once the upload is
+  // decoded and freed (or dropped by Detach()).
+  SmoothJob(std::string id, JobParams params, std::string upload, BudgetHold hold, Clock::time_point received,
             const ServerOptions& options, JobSink* sink);
 
   const std::string& id() const { return id_; }
@@ -87,12 +90,13 @@ class SmoothJob {
   const std::string id_;
   const JobParams params_;
   std::string upload_;
+  BudgetHold upload_hold_;
   const Clock::time_point received_;
   Clock::time_point submitted_;
   std::atomic<int> queue_position_{0};
   const ServerOptions& options_;
   std::atomic<bool> cancel_{false};
-  std::mutex mu_;        // guards sink_ and upload_
+  std::mutex mu_;        // guards sink_, upload_ and upload_hold_
   JobSink* sink_;
 };
 

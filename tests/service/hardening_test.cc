@@ -3,15 +3,19 @@
 #include <atomic>
 #include <chrono>
 #include <climits>
+#include <fstream>
 #include <functional>
 #include <future>
+#include <memory>
 #include <regex>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "core/draco_codec.h"
 #include "core/shapes.h"
 #include "gtest/gtest.h"
+#include "server/admission.h"
 #include "tests/hostile_inputs.h"
 #include "tests/service/service_fixtures.h"
 
@@ -183,6 +187,155 @@ TEST(HardeningTest, SizesBeyondTheLimitsAreResourceExhausted) {
   EXPECT_EQ(g.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED) << g.error_message();
   EXPECT_NE(g.error_message().find("upload exceeds this server's limit of 3145728 bytes"), std::string::npos)
       << g.error_message();
+}
+
+// A Smooth stream written message by message and read to its end by the test.
+class OpenStream {
+ public:
+  OpenStream(std::shared_ptr<grpc::Channel> channel, std::chrono::seconds deadline)
+      : stub_(v1::MeshSmoother::NewStub(channel)) {
+    ctx_.set_deadline(std::chrono::system_clock::now() + deadline);
+    stream_ = stub_->Smooth(&ctx_);
+  }
+  bool Write(const v1::SmoothRequest& m) { return stream_->Write(m); }
+  // Half-closes, reads every response, and returns the final status.
+  grpc::Status Finish() {
+    stream_->WritesDone();
+    return Drain();
+  }
+  // Reads every response without half-closing (the server ends the call), and the status.
+  grpc::Status Drain() {
+    v1::SmoothResponse r;
+    while (stream_->Read(&r)) {
+    }
+    return stream_->Finish();
+  }
+
+ private:
+  std::unique_ptr<v1::MeshSmoother::Stub> stub_;
+  grpc::ClientContext ctx_;
+  std::unique_ptr<grpc::ClientReaderWriter<v1::SmoothRequest, v1::SmoothResponse>> stream_;
+};
+
+v1::SmoothRequest SpecMessage(const v1::JobSpec& spec) {
+  v1::SmoothRequest m;
+  *m.mutable_spec() = spec;
+  return m;
+}
+
+v1::SmoothRequest ChunkMessage(std::string bytes) {
+  v1::SmoothRequest m;
+  m.set_mesh_chunk(std::move(bytes));
+  return m;
+}
+
+// Streams that sent a spec and then nothing held their call slot for ever: with every slot
+// taken, everyone else got "too many concurrent Smooth calls". An upload that stops sending
+// for --upload-idle-seconds now ends with DEADLINE_EXCEEDED, and its slot is free again.
+TEST(HardeningTest, IdleUploadsAreEndedAndFreeTheirSlots) {
+  server::ServerOptions o;
+  o.max_concurrent_streams = 4;
+  o.upload_idle_seconds = 0.5;
+  auto server = StartServer(o);
+  auto channel = server->InProcessChannel();
+  std::vector<std::unique_ptr<OpenStream>> idle;
+  for (int i = 0; i < 4; ++i) {
+    idle.push_back(std::make_unique<OpenStream>(channel, std::chrono::seconds(20)));
+    ASSERT_TRUE(idle.back()->Write(SpecMessage(Spec("median", 3))));
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  ExpectStatus(Call(channel, Spec("median", 3), *EncodeDraco(Icosphere(2))).status(),
+               absl::StatusCode::kResourceExhausted, "too many concurrent Smooth calls");
+  for (auto& stream : idle) {
+    const grpc::Status g = stream->Drain();
+    EXPECT_EQ(g.error_code(), grpc::StatusCode::DEADLINE_EXCEEDED) << g.error_message();
+    EXPECT_NE(g.error_message().find("no message for 0.5 s"), std::string::npos) << g.error_message();
+  }
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 10.0);
+  // The slots are free (once gRPC has let go of the ended calls, just after their status): a
+  // real job goes through.
+  absl::Status next = absl::ResourceExhaustedError("not tried");
+  for (int i = 0; i < 100 && next.code() == absl::StatusCode::kResourceExhausted; ++i) {
+    if (i > 0) std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    next = Call(channel, Spec("median", 3), *EncodeDraco(Icosphere(2))).status();
+  }
+  EXPECT_TRUE(next.ok()) << next;
+  // A slow upload that keeps sending is not idle.
+  OpenStream slow(channel, std::chrono::seconds(20));
+  const std::string sphere = *EncodeDraco(Icosphere(2));
+  ASSERT_TRUE(slow.Write(SpecMessage(Spec("median", 3))));
+  for (size_t at = 0; at < sphere.size(); at += sphere.size() / 4 + 1) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));
+    ASSERT_TRUE(slow.Write(ChunkMessage(sphere.substr(at, sphere.size() / 4 + 1))));
+  }
+  EXPECT_TRUE(slow.Finish().ok());
+}
+
+// Uploads in flight and queued jobs hold their bytes against --max-buffered-bytes; an upload
+// whose next chunk would go beyond it is refused with RESOURCE_EXHAUSTED before the chunk is
+// kept, and the bytes come back when a job starts (its upload is decoded and freed).
+TEST(HardeningTest, UploadsBeyondTheMemoryBudgetAreRefused) {
+  server::ServerOptions o;
+  o.workers = 1;
+  o.max_buffered_bytes = 5 << 20;
+  auto server = StartServer(o);
+  auto channel = server->InProcessChannel();
+  const std::string mib(1 << 20, 'x');
+  // A holds 4 MiB (buffers of 1, 2 and 4 MiB as it grows), still uploading.
+  OpenStream a(channel, std::chrono::seconds(60));
+  ASSERT_TRUE(a.Write(SpecMessage(Spec("median", 3))));
+  for (int i = 0; i < 3; ++i) ASSERT_TRUE(a.Write(ChunkMessage(mib)));
+  for (int i = 0; i < 200 && server->service().buffered_bytes() < (4 << 20); ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  ASSERT_EQ(server->service().buffered_bytes(), 4 << 20);
+  // B's second MiB would go beyond 5 MiB.
+  OpenStream b(channel, std::chrono::seconds(60));
+  ASSERT_TRUE(b.Write(SpecMessage(Spec("median", 3))));
+  b.Write(ChunkMessage(mib));
+  b.Write(ChunkMessage(mib));
+  const grpc::Status refused = b.Finish();
+  EXPECT_EQ(refused.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED) << refused.error_message();
+  EXPECT_NE(refused.error_message().find("memory budget"), std::string::npos) << refused.error_message();
+  // A ends (its bytes are not Draco): everything is given back, and a job fits again.
+  EXPECT_EQ(a.Finish().error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  for (int i = 0; i < 200 && server->service().buffered_bytes() > 0; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  EXPECT_EQ(server->service().buffered_bytes(), 0);
+
+  // A queued job holds its upload until a worker takes it: the worker busy with a long job,
+  // a queued 4 MiB upload leaves no room for a third.
+  LongJob long_job;
+  auto stub = v1::MeshSmoother::NewStub(channel);
+  grpc::ClientContext long_ctx;
+  auto running = long_job.Start(*stub, long_ctx);
+  OpenStream queued(channel, std::chrono::seconds(60));
+  ASSERT_TRUE(queued.Write(SpecMessage(Spec("median", 3))));
+  for (int i = 0; i < 3; ++i) ASSERT_TRUE(queued.Write(ChunkMessage(mib)));
+  std::thread finisher([&] { EXPECT_EQ(queued.Finish().error_code(), grpc::StatusCode::INVALID_ARGUMENT); });
+  for (int i = 0; i < 500 && server->service().queued_jobs() < 1; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  ASSERT_EQ(server->service().queued_jobs(), 1);
+  EXPECT_EQ(server->service().buffered_bytes(), 4 << 20);
+  const absl::Status third = Call(channel, Spec("median", 3), mib + mib).status();
+  ExpectStatus(third, absl::StatusCode::kResourceExhausted, "memory budget");
+  long_ctx.TryCancel();
+  EXPECT_EQ(running.get().status().code(), absl::StatusCode::kCancelled);
+  finisher.join();
+  for (int i = 0; i < 200 && server->service().buffered_bytes() > 0; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  EXPECT_EQ(server->service().buffered_bytes(), 0);
+}
+
+// The budget's default: a quarter of MemTotal, 4 GiB when /proc/meminfo cannot be read.
+TEST(HardeningTest, DefaultBudgetIsAQuarterOfTheMachinesMemory) {
+  const std::string path = ::testing::TempDir() + "/meminfo";
+  std::ofstream(path) << "MemFree:         1000 kB\nMemTotal:       24684084 kB\nSwapTotal: 0 kB\n";
+  EXPECT_EQ(server::DefaultBufferedBytes(path), int64_t{24684084} * 1024 / 4);
+  EXPECT_EQ(server::DefaultBufferedBytes(path + ".absent"), int64_t{4} << 30);
 }
 
 }  // namespace
