@@ -189,46 +189,6 @@ TEST(HardeningTest, SizesBeyondTheLimitsAreResourceExhausted) {
       << g.error_message();
 }
 
-// A Smooth stream written message by message and read to its end by the test.
-class OpenStream {
- public:
-  OpenStream(std::shared_ptr<grpc::Channel> channel, std::chrono::seconds deadline)
-      : stub_(v1::MeshSmoother::NewStub(channel)) {
-    ctx_.set_deadline(std::chrono::system_clock::now() + deadline);
-    stream_ = stub_->Smooth(&ctx_);
-  }
-  bool Write(const v1::SmoothRequest& m) { return stream_->Write(m); }
-  // Half-closes, reads every response, and returns the final status.
-  grpc::Status Finish() {
-    stream_->WritesDone();
-    return Drain();
-  }
-  // Reads every response without half-closing (the server ends the call), and the status.
-  grpc::Status Drain() {
-    v1::SmoothResponse r;
-    while (stream_->Read(&r)) {
-    }
-    return stream_->Finish();
-  }
-
- private:
-  std::unique_ptr<v1::MeshSmoother::Stub> stub_;
-  grpc::ClientContext ctx_;
-  std::unique_ptr<grpc::ClientReaderWriter<v1::SmoothRequest, v1::SmoothResponse>> stream_;
-};
-
-v1::SmoothRequest SpecMessage(const v1::JobSpec& spec) {
-  v1::SmoothRequest m;
-  *m.mutable_spec() = spec;
-  return m;
-}
-
-v1::SmoothRequest ChunkMessage(std::string bytes) {
-  v1::SmoothRequest m;
-  m.set_mesh_chunk(std::move(bytes));
-  return m;
-}
-
 // Streams that sent a spec and then nothing held their call slot for ever: with every slot
 // taken, everyone else got "too many concurrent Smooth calls". An upload that stops sending
 // for --upload-idle-seconds now ends with DEADLINE_EXCEEDED, and its slot is free again.

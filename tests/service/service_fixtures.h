@@ -55,21 +55,55 @@ inline absl::StatusOr<SmoothOutcome> Call(std::shared_ptr<grpc::Channel> channel
   return CallSmooth(*stub, ctx, spec, draco, nullptr, 256 << 10);
 }
 
+// A Smooth stream written message by message and read to its end by the test.
+class OpenStream {
+ public:
+  OpenStream(std::shared_ptr<grpc::Channel> channel, std::chrono::seconds deadline)
+      : stub_(v1::MeshSmoother::NewStub(channel)) {
+    ctx_.set_deadline(std::chrono::system_clock::now() + deadline);
+    stream_ = stub_->Smooth(&ctx_);
+  }
+  bool Write(const v1::SmoothRequest& m) { return stream_->Write(m); }
+  // Half-closes, reads every response, and returns the final status.
+  grpc::Status Finish() {
+    stream_->WritesDone();
+    return Drain();
+  }
+  // Reads every response without half-closing (the server ends the call), and the status.
+  grpc::Status Drain() {
+    v1::SmoothResponse r;
+    while (stream_->Read(&r)) {
+    }
+    return stream_->Finish();
+  }
+
+ private:
+  std::unique_ptr<v1::MeshSmoother::Stub> stub_;
+  grpc::ClientContext ctx_;
+  std::unique_ptr<grpc::ClientReaderWriter<v1::SmoothRequest, v1::SmoothResponse>> stream_;
+};
+
+// One message of a Smooth stream: the spec, or a mesh chunk.
+inline v1::SmoothRequest SpecMessage(const v1::JobSpec& spec) {
+  v1::SmoothRequest m;
+  *m.mutable_spec() = spec;
+  return m;
+}
+
+inline v1::SmoothRequest ChunkMessage(std::string bytes) {
+  v1::SmoothRequest m;
+  m.set_mesh_chunk(std::move(bytes));
+  return m;
+}
+
 // A raw Smooth stream of `messages` (what the client library would never send), then
 // half-close; the call's final status.
 inline grpc::Status RawCall(std::shared_ptr<grpc::Channel> channel, const std::vector<v1::SmoothRequest>& messages) {
-  auto stub = v1::MeshSmoother::NewStub(channel);
-  grpc::ClientContext ctx;
-  ctx.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(120));
-  auto stream = stub->Smooth(&ctx);
+  OpenStream stream(channel, std::chrono::seconds(120));
   for (const auto& m : messages) {
-    if (!stream->Write(m)) break;
+    if (!stream.Write(m)) break;
   }
-  stream->WritesDone();
-  v1::SmoothResponse r;
-  while (stream->Read(&r)) {
-  }
-  return stream->Finish();
+  return stream.Finish();
 }
 
 // A job that runs "forever" until cancelled: icosphere(6), many iterations.
