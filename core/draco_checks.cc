@@ -12,6 +12,9 @@ namespace {
 // Points a decoded mesh may have: vertex and point indices are int32 here (and the weld packs
 // a point index into 31 bits).
 constexpr uint32_t kMaxPoints = std::numeric_limits<int32_t>::max();
+// Attributes a decoded mesh may have. Real files carry a handful; every check and copy of a
+// point's attributes, and the search for an attribute by name, is linear in their number.
+constexpr int32_t kMaxAttributes = 256;
 
 }  // namespace
 
@@ -77,6 +80,10 @@ absl::Status CheckDracoLayout(const draco::Mesh& dm) {
   if (n > kMaxPoints) {
     return absl::InvalidArgumentError(absl::StrCat("the Draco mesh has ", n, " points; at most ", kMaxPoints,
                                                    " can be read"));
+  }
+  if (dm.num_attributes() > kMaxAttributes) {
+    return absl::InvalidArgumentError(absl::StrCat("the Draco mesh has ", dm.num_attributes(), " attributes; at most ",
+                                                   kMaxAttributes, " can be read"));
   }
   int positions = 0;
   for (int32_t i = 0; i < dm.num_attributes(); ++i) {

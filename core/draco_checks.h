@@ -24,7 +24,8 @@ absl::Status CheckDracoOptions(const DracoOptions& options);
 absl::Status CheckQuantizedExtent(const draco::PointAttribute& positions);
 
 // What Draco's decoder lets through but no reader of the mesh may meet (coordinates are checked
-// where they are read, CheckCoordinates): more points than an int32 holds, no or several
+// where they are read, CheckCoordinates): more points than an int32 holds, more than 256
+// attributes, no or several
 // POSITION attributes (Draco's Edgebreaker encoder crashes on a second one), an attribute whose
 // values do not fit its buffer or that has no value for some point, a face naming a point past
 // the point count (Draco's encoders then read past the attributes' buffers). InvalidArgument

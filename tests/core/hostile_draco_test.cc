@@ -12,6 +12,8 @@
 #include "core/shapes.h"
 #include "core/topology.h"
 #include "draco/compression/decode.h"
+#include "draco/compression/encode.h"
+#include "draco/mesh/mesh.h"
 #include "gtest/gtest.h"
 #include "tests/hostile_inputs.h"
 
@@ -46,6 +48,46 @@ TEST(HostileDracoTest, SecondPositionAttributeIsRefused) {
   const std::string bytes = RawDraco(TwoRateTorus(20), /*positions=*/2);
   ExpectInvalid(DracoMesh::Decode(bytes).status(), "2 POSITION attributes");
   ExpectInvalid(DecodeDraco(bytes).status(), "2 POSITION attributes");
+}
+
+// Every per-point check and copy is linear in the number of attributes, and a Draco file can
+// declare thousands of constant ones in a few bytes each: more than 256 are refused.
+TEST(HostileDracoTest, MoreThan256AttributesAreRefused) {
+  const Mesh m = Icosphere(0);
+  for (int count : {256, 257}) {
+    draco::Mesh dm;
+    dm.set_num_points(m.num_vertices());
+    draco::GeometryAttribute ga;
+    ga.Init(draco::GeometryAttribute::POSITION, nullptr, 3, draco::DT_FLOAT32, false, 3 * sizeof(float), 0);
+    const int pos = dm.AddAttribute(ga, /*identity_mapping=*/true, m.num_vertices());
+    for (int32_t i = 0; i < m.num_vertices(); ++i) {
+      const float v[3] = {static_cast<float>(m.positions[i].x), static_cast<float>(m.positions[i].y),
+                          static_cast<float>(m.positions[i].z)};
+      dm.attribute(pos)->SetAttributeValue(draco::AttributeValueIndex(i), v);
+    }
+    for (int k = 1; k < count; ++k) {
+      draco::GeometryAttribute g;
+      g.Init(draco::GeometryAttribute::GENERIC, nullptr, 1, draco::DT_UINT8, false, 1, 0);
+      const int id = dm.AddAttribute(g, /*identity_mapping=*/true, m.num_vertices());
+      for (int32_t i = 0; i < m.num_vertices(); ++i) {
+        const uint8_t value = static_cast<uint8_t>(k);
+        dm.attribute(id)->SetAttributeValue(draco::AttributeValueIndex(i), &value);
+      }
+    }
+    for (const Triangle& t : m.triangles) {
+      dm.AddFace({draco::PointIndex(t[0]), draco::PointIndex(t[1]), draco::PointIndex(t[2])});
+    }
+    draco::Encoder encoder;
+    encoder.SetEncodingMethod(draco::MESH_SEQUENTIAL_ENCODING);
+    draco::EncoderBuffer buf;
+    ASSERT_TRUE(encoder.EncodeMeshToBuffer(dm, &buf).ok());
+    const absl::Status s = DracoMesh::Decode(std::string_view(buf.data(), buf.size())).status();
+    if (count == 256) {
+      EXPECT_TRUE(s.ok()) << s;
+    } else {
+      ExpectInvalid(s, "the Draco mesh has 257 attributes; at most 256");
+    }
+  }
 }
 
 // Coordinates must be finite and at most kMaxCoordinate in magnitude: 3.4e38 made Draco's
