@@ -144,7 +144,9 @@ void CheckResult(std::string_view upload, const server::JobParams& params, const
   for (const Vec3& p : out->positions) {
     Check(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z), "a result coordinate is not finite");
     if (!bound.Contains(p)) {
-      std::fprintf(stderr, "fuzz_job: vertex (%g, %g, %g) outside (%g, %g, %g) .. (%g, %g, %g), upload's box (%g, %g, %g) .. (%g, %g, %g)\n",
+      std::fprintf(stderr,
+                   "fuzz_job: vertex (%g, %g, %g) outside (%g, %g, %g) .. (%g, %g, %g), "
+                   "upload's box (%g, %g, %g) .. (%g, %g, %g)\n",
                    p.x, p.y, p.z, bound.lo.x, bound.lo.y, bound.lo.z, bound.hi.x, bound.hi.y, bound.hi.z, box.lo.x,
                    box.lo.y, box.lo.z, box.hi.x, box.hi.y, box.hi.z);
       Fail("a result vertex lies outside what the flow may reach from the upload's box");
