@@ -58,6 +58,14 @@ absl::Status CheckQuantizedExtent(const draco::PointAttribute& positions) {
   return absl::OkStatus();
 }
 
+absl::Status CheckNumericValues(const draco::PointAttribute& a, std::string_view what) {
+  const draco::DataType t = a.data_type();
+  if (t >= draco::DT_INT8 && t <= draco::DT_FLOAT64) return absl::OkStatus();
+  return absl::InvalidArgumentError(absl::StrCat("the Draco mesh's ", absl::string_view(what.data(), what.size()),
+                                                 t == draco::DT_BOOL ? " holds booleans" : " has no data type",
+                                                 "; meshsmooth reads integers or floating-point numbers"));
+}
+
 std::vector<uint8_t> PointsEdgebreakerKeeps(const draco::Mesh& dm) {
   std::vector<uint8_t> used(dm.num_points(), 0);
   for (uint32_t f = 0; f < dm.num_faces(); ++f) {
@@ -119,6 +127,7 @@ absl::Status CheckDracoLayout(const draco::Mesh& dm) {
   if (pos == nullptr || pos->num_components() < 3 || pos->size() == 0) {
     return absl::InvalidArgumentError("the Draco mesh has no 3-D position attribute");
   }
+  if (absl::Status s = CheckNumericValues(*pos, "POSITION attribute"); !s.ok()) return s;
   for (uint32_t f = 0; f < dm.num_faces(); ++f) {
     const draco::Mesh::Face& face = dm.face(draco::FaceIndex(f));
     for (int c = 0; c < 3; ++c) {

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <string_view>
 #include <vector>
 
 #include "absl/status/status.h"
@@ -31,6 +32,11 @@ absl::Status CheckQuantizedExtent(const draco::PointAttribute& positions);
 // the point count (Draco's encoders then read past the attributes' buffers). InvalidArgument
 // naming the attribute, point or face.
 absl::Status CheckDracoLayout(const draco::Mesh& dm);
+
+// InvalidArgument naming `what` unless `a` holds integers or floating-point numbers: Draco's
+// ConvertValue() reads a DT_BOOL value as a bool, undefined for any byte but 0 and 1, which
+// a corrupt file has.
+absl::Status CheckNumericValues(const draco::PointAttribute& a, std::string_view what);
 
 // Edgebreaker leaves out faces with a repeated point and the points no other face uses: marks
 // the points some face of three distinct points uses (every face index < num_points).

@@ -240,6 +240,8 @@ absl::StatusOr<std::vector<float>> DecodeDracoAttribute(std::string_view bytes, 
   const int id = NamedAttributeId(**dm, name);
   if (id < 0) return absl::NotFoundError(absl::StrCat("the Draco mesh has no attribute named '", std::string(name), "'"));
   const draco::PointAttribute* a = (*dm)->attribute(id);
+  const std::string what = absl::StrCat("attribute '", std::string(name), "'");
+  if (absl::Status s = CheckNumericValues(*a, what); !s.ok()) return s;
   const uint32_t n = (*dm)->num_points();
   std::vector<float> values(n);
   for (uint32_t p = 0; p < n; ++p) {

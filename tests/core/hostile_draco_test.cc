@@ -4,6 +4,7 @@
 // with it, and every encoding that is accepted decodes to the welded input's vertices.
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <set>
 #include <string>
 #include <tuple>
@@ -14,6 +15,7 @@
 #include "draco/compression/decode.h"
 #include "draco/compression/encode.h"
 #include "draco/mesh/mesh.h"
+#include "draco/metadata/geometry_metadata.h"
 #include "gtest/gtest.h"
 #include "tests/hostile_inputs.h"
 
@@ -88,6 +90,45 @@ TEST(HostileDracoTest, MoreThan256AttributesAreRefused) {
       ExpectInvalid(s, "the Draco mesh has 257 attributes; at most 256");
     }
   }
+}
+
+// Found by fuzz_job: a raw Draco file whose POSITION attribute says DT_BOOL, with a byte of 49
+// for a value. Reading it as a number loads a bool that is neither 0 nor 1 (undefined; UBSan
+// stops there). Positions and named attributes must be of an integer or floating-point type.
+TEST(HostileDracoTest, PositionsOfTypeBoolAreRefused) {
+  const std::string bytes(
+      "\x44\x52\x41\x43\x4f\x02\x02\x01\x00\x00\x00\x06\x06\x01\x00\x02\x01\x00\x01\x03\x01\x02\x03\x00"
+      "\x03\x02\x00\x01\x04\x02\x02\x03\x01\x01\x00\x0b\x03\x00\x00\x00\x00\x31\x00\x00\x00\x00\x00\x00"
+      "\x00\x00\x00\x00\x00\x00\x80\x3f\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x80\x3f"
+      "\x00\x00\x00\x00\x3f\x00\x00\x00\x00\x50\x96\x06\x3f\x40\xc4\x59\x3f\x7a\x37\x9e\x3a\x20\x76\x61"
+      "\x6c\x75\x65\x20\x69\x73\x20\x6e\x6f\x74\x20\x64\x65\x66\x69\x6e\x65\x64\x3e\xbd\x1b\x4f\x3f\x00"
+      "\x00\x00\x3f\x50\x96\x06\x3f\x00\xa0\x40\x00\x00\xa0\x40",
+      134);
+  ExpectInvalid(DecodeDraco(bytes).status(), "POSITION attribute holds booleans");
+  ExpectInvalid(DracoMesh::Decode(bytes).status(), "POSITION attribute holds booleans");
+
+  // A named attribute of booleans, as DecodeDracoAttribute reads result attributes.
+  const Mesh m = Icosphere(0);
+  draco::DecoderBuffer buffer;
+  const std::string plain = RawDraco(m);
+  buffer.Init(plain.data(), plain.size());
+  std::unique_ptr<draco::Mesh> dm = draco::Decoder().DecodeMeshFromBuffer(&buffer).value();
+  draco::GeometryAttribute ga;
+  ga.Init(draco::GeometryAttribute::GENERIC, nullptr, 1, draco::DT_BOOL, false, 1, 0);
+  const int id = dm->AddAttribute(ga, /*identity_mapping=*/true, dm->num_points());
+  for (uint32_t p = 0; p < dm->num_points(); ++p) {
+    const bool value = p % 2 == 0;
+    dm->attribute(id)->SetAttributeValue(draco::AttributeValueIndex(p), &value);
+  }
+  auto metadata = std::make_unique<draco::AttributeMetadata>();
+  metadata->AddEntryString("name", "kmax");
+  dm->AddAttributeMetadata(id, std::move(metadata));
+  draco::Encoder encoder;
+  encoder.SetEncodingMethod(draco::MESH_SEQUENTIAL_ENCODING);
+  draco::EncoderBuffer out;
+  ASSERT_TRUE(encoder.EncodeMeshToBuffer(*dm, &out).ok());
+  ExpectInvalid(DecodeDracoAttribute(std::string(out.data(), out.size()), "kmax").status(),
+                "attribute 'kmax' holds booleans");
 }
 
 // Coordinates must be finite and at most kMaxCoordinate in magnitude: 3.4e38 made Draco's
