@@ -49,7 +49,9 @@ for target in "${targets[@]}"; do
   # bunny whose mutants would otherwise fill the corpus at a tenth of the speed.
   [ "$target" = fuzz_job ] && args+=(-max_len=73728)
   status=ok
+  start=$SECONDS
   "$out/fuzz/$target" "${args[@]}" "$corpus" "$seeds" >"$log" 2>&1 || status=FAILED
+  elapsed=$((SECONDS - start))
   # libFuzzer's last status line (cov, ft, corp) and its final statistics.
   last=$(grep -E '^#[0-9]+' "$log" | tail -n 1 || true)
   execs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log")
@@ -57,7 +59,7 @@ for target in "${targets[@]}"; do
   cov=$(sed -n 's/.* cov: \([0-9]*\).*/\1/p' <<<"$last")
   ft=$(sed -n 's/.* ft: \([0-9]*\).*/\1/p' <<<"$last")
   corp=$(sed -n 's/.* corp: \([0-9]*\/[0-9]*[a-zA-Z]*\).*/\1/p' <<<"$last")
-  echo "$target: $status, ${seconds} s, executions ${execs:-?}, ${rate:-?} exec/s, cov ${cov:-?}, ft ${ft:-?}, corpus ${corp:-?}"
+  echo "$target: $status, ${elapsed} s, executions ${execs:-?}, ${rate:-?} exec/s, cov ${cov:-?}, ft ${ft:-?}, corpus ${corp:-?}"
   if [ "$status" != ok ]; then
     failed+=("$target")
     grep -E 'ERROR|SUMMARY|invariant violated|Test unit written' "$log" | head -n 5 | sed 's/^/  /'
