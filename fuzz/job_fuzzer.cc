@@ -27,6 +27,7 @@
 #include "core/flows/flow_table.h"
 #include "core/weld.h"
 #include "fuzz/job_input.h"
+#include "server/admission.h"
 #include "server/convert.h"
 #include "server/options.h"
 #include "server/smooth_job.h"
@@ -189,8 +190,16 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     return 0;
   }
   fuzz::RecordingSink sink;
-  server::SmoothJob job("fuzz", *params, std::string(upload), server::Clock::now(), options, &sink);
-  job.Run();
+  // The upload's bytes are held against a budget as a call holds them, and must all come back.
+  server::MemoryBudget budget(int64_t{1} << 30);
+  server::BudgetHold hold(&budget);
+  fuzz::Check(hold.TryGrow(static_cast<int64_t>(upload.size())), "the budget refused a small upload");
+  {
+    server::SmoothJob job("fuzz", *params, std::string(upload), std::move(hold), server::Clock::now(), options,
+                          &sink);
+    job.Run();
+  }
+  fuzz::Check(budget.held() == 0, "the job kept its upload's share of the memory budget");
   fuzz::Check(sink.results + sink.errors == 1, "the job did not end with exactly one result or error");
   if (sink.errors == 1) {
     fuzz::Check(!sink.error.ok() && sink.error.code() != absl::StatusCode::kInternal &&
