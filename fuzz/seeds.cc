@@ -4,6 +4,7 @@
 // target each Draco seed behind a few spec heads (job_input.h).
 //
 // Usage: fuzz_seeds OUT_DIR [SHARED_DIR]   writes OUT_DIR/{job,drc,ply,obj,off,stl}/
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <cstdio>
@@ -81,10 +82,15 @@ class SeedWriter {
   }
 
   // The small files of a shared data folder, by extension; meshes of other formats also go to
-  // the job corpus as the CLI would upload them (Draco, lossless, sequential).
+  // the job corpus as the CLI would upload them (Draco, lossless, sequential). Taken in name
+  // order: each upload's pair of job heads follows its rank, and the corpus must not depend on
+  // the order the file system lists a folder in.
   void AddShared(const fs::path& dir) {
     if (!fs::is_directory(dir)) return;
-    for (const fs::directory_entry& e : fs::directory_iterator(dir)) {
+    std::vector<fs::directory_entry> entries(fs::directory_iterator(dir), fs::directory_iterator{});
+    std::sort(entries.begin(), entries.end(),
+              [](const fs::directory_entry& a, const fs::directory_entry& b) { return a.path() < b.path(); });
+    for (const fs::directory_entry& e : entries) {
       if (!e.is_regular_file() || e.file_size() >= kMaxSharedBytes) continue;
       const std::string ext = e.path().extension().string();
       if (ext != ".drc" && ext != ".ply" && ext != ".obj" && ext != ".off" && ext != ".stl") continue;
