@@ -2,9 +2,12 @@
 # Builds the fuzz preset (clang + libFuzzer, ASan + UBSan; installs its packages if needed) and
 # runs each fuzz target for SECONDS seconds, one after the other, in one process each.
 #
-# Usage: fuzz/run.sh [--no-build] SECONDS [TARGET...]
+# Usage: fuzz/run.sh [--no-build] [--seed N] SECONDS [TARGET...]
 #   TARGET: fuzz_job fuzz_ply fuzz_obj fuzz_off fuzz_stl fuzz_drc (default: all of them)
 #   --no-build: run the binaries already in build-fuzz/ (e.g. a long run beside other builds)
+#   --seed N: libFuzzer's random seed for every target (default: one from the clock). With a
+#     fixed seed and the same corpus, a target makes the same mutations in the same order, so a
+#     run repeats up to where its time runs out (CI fixes it; its corpora start empty).
 #
 # Seeds are written afresh to build-fuzz/fuzz-seeds/ (generated meshes and the small files of
 # ${MESHSMOOTH_SHARED_DIR:-../shared}/data); what a run discovers accumulates in
@@ -14,12 +17,19 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
+usage="usage: fuzz/run.sh [--no-build] [--seed N] SECONDS [TARGET...]"
 build=1
-if [ "${1:-}" = --no-build ]; then
-  build=0
-  shift
-fi
-seconds="${1:?usage: fuzz/run.sh [--no-build] SECONDS [TARGET...]}"
+seed=
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --no-build) build=0; shift ;;
+    --seed)
+      [[ "${2:-}" =~ ^[1-9][0-9]*$ ]] || { echo "fuzz/run.sh: --seed needs a positive integer" >&2; exit 2; }
+      seed="$2"; shift 2 ;;
+    *) break ;;
+  esac
+done
+seconds="${1:?$usage}"
 shift
 targets=("$@")
 [ ${#targets[@]} -gt 0 ] || targets=(fuzz_job fuzz_ply fuzz_obj fuzz_off fuzz_stl fuzz_drc)
@@ -45,6 +55,7 @@ for target in "${targets[@]}"; do
   args=(-max_total_time="$seconds" -timeout=25 -rss_limit_mb=2048 -print_final_stats=1
         -artifact_prefix="$out/fuzz-findings/$target-")
   [ -f "fuzz/$format.dict" ] && args+=(-dict="fuzz/$format.dict")
+  [ -n "$seed" ] && args+=(-seed="$seed")
   # A job's time grows with its mesh: uploads up to car.drc's size (~70 KB), not the 120 KB
   # bunny whose mutants would otherwise fill the corpus at a tenth of the speed.
   [ "$target" = fuzz_job ] && args+=(-max_len=73728)
@@ -59,7 +70,8 @@ for target in "${targets[@]}"; do
   cov=$(sed -n 's/.* cov: \([0-9]*\).*/\1/p' <<<"$last")
   ft=$(sed -n 's/.* ft: \([0-9]*\).*/\1/p' <<<"$last")
   corp=$(sed -n 's/.* corp: \([0-9]*\/[0-9]*[a-zA-Z]*\).*/\1/p' <<<"$last")
-  echo "$target: $status, ${elapsed} s, executions ${execs:-?}, ${rate:-?} exec/s, cov ${cov:-?}, ft ${ft:-?}, corpus ${corp:-?}"
+  used_seed=$(sed -n 's/^INFO: Seed: *//p' "$log" | head -n 1)
+  echo "$target: $status, ${elapsed} s, executions ${execs:-?}, ${rate:-?} exec/s, cov ${cov:-?}, ft ${ft:-?}, corpus ${corp:-?}, seed ${used_seed:-?}"
   if [ "$status" != ok ]; then
     failed+=("$target")
     grep -E 'ERROR|SUMMARY|invariant violated|Test unit written' "$log" | head -n 5 | sed 's/^/  /'
