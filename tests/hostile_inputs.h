@@ -1,5 +1,6 @@
 // Hostile inputs shared by the core and service tests (issue 19): Draco bytes that Draco's
-// decoder accepts but meshsmooth must refuse, and a fan whose centre has a huge valence.
+// decoder accepts but meshsmooth must refuse (a point cloud among them), and a fan whose centre
+// has a huge valence.
 #pragma once
 
 #include <cmath>
@@ -10,6 +11,7 @@
 #include "core/shapes.h"
 #include "draco/compression/encode.h"
 #include "draco/mesh/mesh.h"
+#include "draco/point_cloud/point_cloud.h"
 #include "gtest/gtest.h"
 
 namespace meshsmooth::testing {
@@ -40,6 +42,23 @@ inline std::string RawDraco(const Mesh& m, int positions = 1) {
   encoder.SetEncodingMethod(draco::MESH_SEQUENTIAL_ENCODING);
   draco::EncoderBuffer buf;
   EXPECT_TRUE(encoder.EncodeMeshToBuffer(dm, &buf).ok());
+  return std::string(buf.data(), buf.size());
+}
+
+// Draco bytes of a point cloud of three points: Draco decodes it, but it has no faces.
+inline std::string DracoPointCloud() {
+  draco::PointCloud pc;
+  pc.set_num_points(3);
+  draco::GeometryAttribute ga;
+  ga.Init(draco::GeometryAttribute::POSITION, nullptr, 3, draco::DT_FLOAT32, false, 12, 0);
+  const int att = pc.AddAttribute(ga, true, 3);
+  for (int i = 0; i < 3; ++i) {
+    const float v[3] = {static_cast<float>(i), 1.0f, 2.0f};
+    pc.attribute(att)->SetAttributeValue(draco::AttributeValueIndex(i), v);
+  }
+  draco::Encoder enc;
+  draco::EncoderBuffer buf;
+  EXPECT_TRUE(enc.EncodePointCloudToBuffer(pc, &buf).ok());
   return std::string(buf.data(), buf.size());
 }
 

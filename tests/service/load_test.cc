@@ -17,8 +17,6 @@
 #include "absl/strings/str_join.h"
 #include "core/draco_codec.h"
 #include "core/shapes.h"
-#include "draco/compression/encode.h"
-#include "draco/point_cloud/point_cloud.h"
 #include "gtest/gtest.h"
 #include "tests/hostile_inputs.h"
 #include "tests/service/service_fixtures.h"
@@ -69,21 +67,7 @@ struct Inputs {
     return RawDraco(m);
   }();
   std::string fan = *EncodeDraco(Fan(120000));
-  std::string point_cloud = [] {
-    draco::PointCloud pc;
-    pc.set_num_points(3);
-    draco::GeometryAttribute ga;
-    ga.Init(draco::GeometryAttribute::POSITION, nullptr, 3, draco::DT_FLOAT32, false, 12, 0);
-    const int att = pc.AddAttribute(ga, true, 3);
-    for (int i = 0; i < 3; ++i) {
-      const float v[3] = {static_cast<float>(i), 1.0f, 2.0f};
-      pc.attribute(att)->SetAttributeValue(draco::AttributeValueIndex(i), v);
-    }
-    draco::Encoder enc;
-    draco::EncoderBuffer buf;
-    EXPECT_TRUE(enc.EncodePointCloudToBuffer(pc, &buf).ok());
-    return std::string(buf.data(), buf.size());
-  }();
+  std::string point_cloud = DracoPointCloud();
 };
 
 // A valid job: the service's result against the core's Smooth() of the same input, positions

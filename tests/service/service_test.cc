@@ -14,11 +14,11 @@
 #include "core/io/file_bytes.h"
 #include "core/features/ridges.h"
 #include "draco/compression/decode.h"
-#include "draco/compression/encode.h"
 #include "draco/mesh/mesh.h"
 #include "gtest/gtest.h"
 #include "server/server.h"
 #include "tests/flow_fixtures.h"
+#include "tests/hostile_inputs.h"
 #include "tests/service/service_fixtures.h"
 #include "tests/test_data.h"
 
@@ -144,20 +144,7 @@ TEST(ServiceTest, BadInputsAreRefusedWithClearMessages) {
   auto channel = server->InProcessChannel();
   const std::string sphere = *EncodeDraco(Icosphere(2));
 
-  // A Draco point cloud.
-  draco::PointCloud pc;
-  pc.set_num_points(3);
-  draco::GeometryAttribute ga;
-  ga.Init(draco::GeometryAttribute::POSITION, nullptr, 3, draco::DT_FLOAT32, false, 12, 0);
-  const int att = pc.AddAttribute(ga, true, 3);
-  for (int i = 0; i < 3; ++i) {
-    const float v[3] = {static_cast<float>(i), 1.0f, 2.0f};
-    pc.attribute(att)->SetAttributeValue(draco::AttributeValueIndex(i), v);
-  }
-  draco::Encoder enc;
-  draco::EncoderBuffer pc_buf;
-  ASSERT_TRUE(enc.EncodePointCloudToBuffer(pc, &pc_buf).ok());
-  const std::string point_cloud(pc_buf.data(), pc_buf.size());
+  const std::string point_cloud = DracoPointCloud();
 
   struct Case {
     std::string name;
