@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "core/vec3.h"
@@ -18,8 +19,12 @@ struct Welded {
 // +0.0 and -0.0 are the same position; a point with a NaN coordinate is never merged. Points
 // are grouped by a radix sort of a per-process seeded hash (no hash map, which is much slower
 // on large meshes), and exact equality is checked inside each group, so a hash collision merges
-// nothing and crafted collisions cost O(k log k), not O(k^2). At most 2^31 - 1 points (an
-// index must fit the 31 bits packed beside the hash, and int32): callers check their counts.
+// nothing and crafted collisions cost O(k log k), not O(k^2). At most kMaxWeldPoints points:
+// callers check their counts.
 Welded WeldPoints(const std::vector<Vec3>& points);
+
+// The most points WeldPoints takes, 2^31 - 1: an index must fit the 31 bits packed beside the
+// hash, and int32.
+inline constexpr int64_t kMaxWeldPoints = std::numeric_limits<int32_t>::max();
 
 }  // namespace meshsmooth

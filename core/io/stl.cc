@@ -15,6 +15,14 @@ bool LooksBinary(std::string_view data) {
   return data.size() == 84 + 50 * static_cast<uint64_t>(n);
 }
 
+// OK when `facets` facets have at most kMaxWeldPoints corners, all WeldPoints can number (a
+// binary header can declare 2^32 - 1 facets).
+absl::Status CheckFacetCount(int64_t facets) {
+  if (3 * facets <= kMaxWeldPoints) return absl::OkStatus();
+  return absl::InvalidArgumentError(absl::StrCat("STL: ", facets, " facets have ", 3 * facets,
+                                                 " corners; meshsmooth reads at most ", kMaxWeldPoints, " (2^31 - 1)"));
+}
+
 // Facets of three consecutive corners, welded.
 Mesh FromCorners(const std::vector<Vec3>& corners, ReadInfo& info) {
   Welded w = WeldPoints(corners);
@@ -37,6 +45,7 @@ absl::StatusOr<Mesh> ParseStl(std::string_view data, ReadInfo& info) {
   if (LooksBinary(data)) {
     uint32_t n = 0;
     std::memcpy(&n, data.data() + 80, 4);
+    if (absl::Status s = CheckFacetCount(n); !s.ok()) return s;
     corners.reserve(3 * static_cast<size_t>(n));
     for (uint32_t f = 0; f < n; ++f) {
       const char* rec = data.data() + 84 + 50 * static_cast<size_t>(f);
@@ -62,6 +71,9 @@ absl::StatusOr<Mesh> ParseStl(std::string_view data, ReadInfo& info) {
       }
       if (corner == 3) {
         return absl::InvalidArgumentError(absl::StrCat("STL: facet ", (corners.size() - corner) / 3, " has more than 3 vertices"));
+      }
+      if (corner == 0) {
+        if (absl::Status s = CheckFacetCount(static_cast<int64_t>(corners.size() / 3) + 1); !s.ok()) return s;
       }
       corners.push_back(p);
       ++corner;

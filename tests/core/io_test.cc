@@ -2,6 +2,10 @@
 
 #include <OpenMesh/Core/IO/MeshIO.hh>
 #include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
+#include <fcntl.h>
+#include <sys/mman.h>
+#include <unistd.h>
+
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -88,6 +92,30 @@ TEST(IoTest, StlWeldsCornersAndKeepsFaces) {
   }
   EXPECT_TRUE(Validate(*back).closed());
   fs::remove(path);
+}
+
+// A binary STL whose header declares 715,827,883 facets: 2^31 + 1 corners, more than
+// WeldPoints can number. The file (35.8 GB, its size matching the count) is sparse and mapped,
+// so nothing but its header is ever read; the reader must refuse it by the count, before it
+// reserves or reads a corner (51 GB of them).
+TEST(IoTest, StlWithMoreCornersThanWeldingIndexesIsRefused) {
+  constexpr uint32_t kFacets = 715'827'883;
+  const uint64_t size = 84 + 50 * uint64_t{kFacets};
+  const fs::path path = fs::path(::testing::TempDir()) / "huge.stl";
+  const int fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_TRUNC, 0600);
+  ASSERT_GE(fd, 0);
+  ASSERT_EQ(::ftruncate(fd, static_cast<off_t>(size)), 0);
+  ASSERT_EQ(::pwrite(fd, &kFacets, sizeof kFacets, 80), static_cast<ssize_t>(sizeof kFacets));
+  void* map = ::mmap(nullptr, size, PROT_READ, MAP_SHARED, fd, 0);
+  ::close(fd);
+  fs::remove(path);  // the mapping keeps the file until it is unmapped
+  ASSERT_NE(map, MAP_FAILED);
+  const absl::StatusOr<Mesh> m = ParseMesh(std::string_view(static_cast<const char*>(map), size), MeshFormat::kStl);
+  ::munmap(map, size);
+  ASSERT_FALSE(m.ok());
+  EXPECT_EQ(m.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_NE(m.status().message().find("715827883 facets have 2147483649 corners"), std::string::npos) << m.status();
+  EXPECT_NE(m.status().message().find("at most 2147483647"), std::string::npos) << m.status();
 }
 
 TEST(IoTest, ObjPolygonsAreFannedAndNegativeIndicesResolved) {
