@@ -23,6 +23,9 @@ bool HasVertex(const Triangle& t, int32_t v) { return t[0] == v || t[1] == v || 
 
 Vec3 Centroid(const Vec3* pos, const Triangle& t) { return (pos[t[0]] + pos[t[1]] + pos[t[2]]) * (1.0 / 3.0); }
 
+// The tangential relaxation of a folded face's vertices, as a share of the umbrella (eq. 3).
+constexpr double kUnfoldStep = 0.5;
+
 }  // namespace
 
 absl::Status ValidateNormalFilter(const FlowParams& p, double /*step*/) {
@@ -156,51 +159,154 @@ Vec3 NormalFilterKernel::FilteredNormal(int32_t i, const std::vector<Vec3>& g) c
   return len > 0.0 && std::isfinite(len) ? sum * (1.0 / len) : normal_[i];
 }
 
-void NormalFilterKernel::Prepare(const StepContext& /*c*/, const Vec3* cur, int32_t /*n*/, int /*threads*/) {
-  if (pass_++ % passes() != 0) return;  // the vertex passes of a round keep its normals
-  ComputeGeometry(cur);
-  std::vector<Vec3> filtered(normal_.size());
-  for (int k = 0; k < p_.normal_iterations; ++k) {
-    FilterOnce(filtered);
-    normal_.swap(filtered);
+void NormalFilterKernel::OrientOutliers() {
+  std::vector<Vec3> oriented(normal_.size());
+  ForFaces([&](int32_t i) {
+    oriented[i] = normal_[i];
+    if (area_[i] == 0.0) return;
+    Vec3 around;
+    for (int32_t k = graph_.offsets[i]; k < graph_.offsets[i + 1]; ++k) {
+      const int32_t j = graph_.neighbours[k];
+      if (j != i) around += normal_[j] * area_[j];
+    }
+    // Noise folds thin faces over: their own normal would keep them folded, since the range
+    // weight shuts out every neighbour on the other side.
+    const double len = Norm(around);
+    if (Dot(normal_[i], around) < 0.0 && len > 0.0) oriented[i] = around * (1.0 / len);
+  });
+  normal_.swap(oriented);
+}
+
+void NormalFilterKernel::Prepare(const StepContext& c, const Vec3* cur, int32_t n, int threads) {
+  if (pass_++ % passes() == 0) {  // the vertex passes of a round keep its normals
+    ComputeGeometry(cur);
+    OrientOutliers();
+    std::vector<Vec3> filtered(normal_.size());
+    for (int k = 0; k < p_.normal_iterations; ++k) {
+      FilterOnce(filtered);
+      normal_.swap(filtered);
+    }
+  }
+  UpdateVertices(c, cur, n, threads);
+}
+
+namespace {
+
+// A face's orientation against its filtered normal in a pass's positions.
+enum FaceState : uint8_t {
+  kNoNormal = 0,  // no filtered normal (no area at the round's start)
+  kAgrees = 1,    // its normal . the filtered normal > 0: a pass keeps it so
+  kOpposes = 2,   // folded: its vertices relax tangentially
+};
+
+Vec3 FaceCross(const Vec3* pos, const Triangle& t) { return Cross(pos[t[1]] - pos[t[0]], pos[t[2]] - pos[t[0]]); }
+
+}  // namespace
+
+void NormalFilterKernel::UpdateVertices(const StepContext& c, const Vec3* cur, int32_t n, int threads) {
+  const int32_t nf = static_cast<int32_t>(graph_.faces.size());
+  offset_.resize(nf);
+  state_.resize(nf);
+  ForFaces([&](int32_t f) {
+    const Triangle& t = graph_.faces[f];
+    const Vec3& nf_ = normal_[f];
+    offset_[f] = Dot(nf_, Centroid(cur, t));
+    state_[f] = area_[f] == 0.0 ? kNoNormal : Dot(FaceCross(cur, t), nf_) > 0.0 ? kAgrees : kOpposes;
+  });
+  target_.resize(n);
+  damping_.assign(n, 0);
+  const int32_t blocks = (n + kBlock - 1) / kBlock;
+  capped_.assign(blocks, 0);
+  const double lambda = c.lambda;
+  ForBlocks(n, threads, [&](int32_t b, int32_t begin, int32_t end) {
+    for (int32_t v = begin; v < end; ++v) {
+      const Vec3 x = cur[v];
+      if (c.role[v] == kFixed) {
+        target_[v] = x;
+        continue;
+      }
+      Vec3 f, normal;
+      double weight = 0.0;
+      bool folded = false;
+      for (int32_t k = graph_.vertex_offsets[v]; k < graph_.vertex_offsets[v + 1]; ++k) {
+        const int32_t face = graph_.vertex_faces[k];
+        if (state_[face] == kNoNormal) continue;
+        const Vec3& nf_ = normal_[face];
+        const double a = area_[face];
+        f += nf_ * (a * (offset_[face] - Dot(nf_, x)));
+        normal += nf_ * a;
+        weight += a;
+        folded |= state_[face] == kOpposes;
+      }
+      if (weight > 0.0) f *= 1.0 / weight;
+      // A folded face's vertices also move tangentially towards the centroid of their ring (the
+      // umbrella of eq. 3 without its normal part): the projection alone keeps a fold.
+      if (folded && c.role[v] == kFree && c.offsets[v + 1] > c.offsets[v]) {
+        Vec3 centre;
+        for (int32_t k = c.offsets[v]; k < c.offsets[v + 1]; ++k) centre += cur[c.ring[k]];
+        const Vec3 u = centre * (1.0 / (c.offsets[v + 1] - c.offsets[v])) - x;
+        const double len = Norm(normal);
+        const Vec3 m = len > 0.0 ? normal * (1.0 / len) : Vec3{};
+        f += (u - m * Dot(m, u)) * kUnfoldStep;
+      }
+      if (c.threshold != nullptr) f = Threshold(f, c.threshold[v]);
+      Vec3 step = f * lambda;
+      const double len2 = SquaredNorm(step);
+      if (len2 > c.max_step_sq) {
+        step *= std::sqrt(c.max_step_sq / len2);
+        ++capped_[b];
+      }
+      target_[v] = x + step;
+    }
+  });
+  // The guard: a vertex of a face that the moves would turn against its filtered normal moves
+  // half as far, then not at all, until no face turns. Each round reads target_ and then
+  // writes it, so the result does not depend on the thread count; it ends because every round
+  // damps at least one vertex further and the undamped positions (cur) turn no face.
+  std::vector<uint8_t> damp_more(n);
+  std::vector<int32_t> damped(blocks);
+  for (;;) {
+    ForBlocks(n, threads, [&](int32_t b, int32_t begin, int32_t end) {
+      int32_t count = 0;
+      for (int32_t v = begin; v < end; ++v) {
+        damp_more[v] = 0;
+        if (damping_[v] == 2 || target_[v] == cur[v]) continue;
+        for (int32_t k = graph_.vertex_offsets[v]; k < graph_.vertex_offsets[v + 1]; ++k) {
+          const int32_t face = graph_.vertex_faces[k];
+          if (state_[face] == kAgrees && !(Dot(FaceCross(target_.data(), graph_.faces[face]), normal_[face]) > 0.0)) {
+            damp_more[v] = 1;
+            ++count;
+            break;
+          }
+        }
+      }
+      damped[b] = count;
+    });
+    if (std::all_of(damped.begin(), damped.end(), [](int32_t d) { return d == 0; })) break;
+    ForBlocks(n, threads, [&](int32_t, int32_t begin, int32_t end) {
+      for (int32_t v = begin; v < end; ++v) {
+        if (!damp_more[v]) continue;
+        ++damping_[v];
+        target_[v] = damping_[v] == 1 ? cur[v] + (target_[v] - cur[v]) * 0.5 : cur[v];
+      }
+    });
   }
 }
 
 BlockStats NormalFilterKernel::Step(const StepContext& c, const Vec3* cur, Vec3* next, int32_t begin,
                                     int32_t end) const {
-  const double lambda = c.lambda, max_step_sq = c.max_step_sq;
   double max_sq = 0.0, sum = 0.0;
-  int64_t moved = 0, movable = 0, capped = 0;
+  int64_t moved = 0, movable = 0;
   for (int32_t v = begin; v < end; ++v) {
-    if (c.role[v] == kFixed) {
-      next[v] = cur[v];
-      continue;
-    }
-    Vec3 f;
-    int32_t count = 0;
-    for (int32_t k = graph_.vertex_offsets[v]; k < graph_.vertex_offsets[v + 1]; ++k) {
-      const int32_t face = graph_.vertex_faces[k];
-      const Vec3& nf = normal_[face];
-      if (nf.x == 0.0 && nf.y == 0.0 && nf.z == 0.0) continue;
-      f += nf * Dot(nf, Centroid(cur, graph_.faces[face]) - cur[v]);
-      ++count;
-    }
-    if (count > 0) f *= 1.0 / count;
-    if (c.threshold != nullptr) f = Threshold(f, c.threshold[v]);
-    Vec3 step = f * lambda;
-    const double len2 = SquaredNorm(step);
-    if (len2 > max_step_sq) {
-      step *= std::sqrt(max_step_sq / len2);
-      ++capped;
-    }
-    next[v] = cur[v] + step;
-    const double d2 = SquaredNorm(step);
+    next[v] = target_[v];
+    if (c.role[v] == kFixed) continue;
+    const double d2 = SquaredNorm(target_[v] - cur[v]);
     max_sq = std::max(max_sq, d2);
     sum += std::sqrt(d2);
     moved += d2 > 0.0;
     ++movable;
   }
-  return FinishBlock(max_sq, sum, moved, movable, capped);
+  return FinishBlock(max_sq, sum, moved, movable, capped_[begin / kBlock]);
 }
 
 }  // namespace meshsmooth::flows

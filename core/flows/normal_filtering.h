@@ -1,10 +1,16 @@
-// Internal to core/flows: what the normal-filtering flows (bilateral_normal.cc) share. One round (one iteration of the job) filters the face normals
-// `normal_iterations` times (the flow's FilterOnce), then moves the vertices so that the faces
-// fit the filtered normals, `vertex_iterations` times (one pass each):
-//   x_v += step / |F(v)| * sum_{f in F(v)} n_f (n_f . (c_f - x_v))
+// Internal to core/flows: what the normal-filtering flows (bilateral_normal.cc) share. One
+// round (one iteration of the job) filters the face normals `normal_iterations` times (the
+// flow's FilterOnce), then moves the vertices so that the faces fit the filtered normals,
+// `vertex_iterations` times (one pass each):
+//   x_v += step * sum_{f in F(v)} A_f n_f (n_f . (c_f - x_v)) / sum_{f in F(v)} A_f
 // the orthogonal-projection update of Sun et al. (2007) used by Zheng et al. (2011) and Zhang
-// et al. (2015), with c_f the centroid of face f in the pass's positions. docs/normal-filtering.md
-// gives the equations and the choices made here.
+// et al. (2015), with area weights A_f (the round's areas) and c_f the centroid of face f in the
+// pass's positions. Two guards keep faces from folding, which the projection alone neither
+// prevents nor repairs on scans with needles: a face whose normal opposes its neighbourhood's
+// enters the filter with the neighbourhood's normal, and a pass never turns a face against its
+// filtered normal (a vertex whose move would is moved half as far, then not at); the vertices of
+// a face that is turned against it also relax tangentially, which unfolds it.
+// docs/normal-filtering.md gives the equations and the choices made here.
 #pragma once
 
 #include <array>
@@ -38,9 +44,10 @@ class NormalFilterKernel : public FlowKernel {
   explicit NormalFilterKernel(const NormalFilterParams& p) : p_(p) {}
   int passes() const override { return p_.vertex_iterations; }
   void Bind(const Mesh& mesh, const Topology& topo, int threads) override;
-  // The first pass of a round filters the normals of the round's input.
+  // The first pass of a round filters the normals of the round's input; every pass computes
+  // the vertex update (with its guards) into target_.
   void Prepare(const StepContext& c, const Vec3* cur, int32_t n, int threads) override;
-  // The vertex update of one pass.
+  // The pass's moves, computed by Prepare: copies them and measures them.
   BlockStats Step(const StepContext& c, const Vec3* cur, Vec3* next, int32_t begin, int32_t end) const override;
 
  protected:
@@ -72,7 +79,17 @@ class NormalFilterKernel : public FlowKernel {
  private:
   // Normals, areas and the spatial weights of the positions `pos`.
   void ComputeGeometry(const Vec3* pos);
+  // A face whose normal opposes the area-weighted normal of its neighbours takes theirs.
+  void OrientOutliers();
+  // One pass of the vertex update from `cur` into target_.
+  void UpdateVertices(const StepContext& c, const Vec3* cur, int32_t n, int threads);
+
   int pass_ = 0;  // passes prepared so far
+  std::vector<Vec3> target_;      // per vertex: the pass's result
+  std::vector<double> offset_;    // per face: n_f . c_f in the pass's positions
+  std::vector<uint8_t> state_;    // per face: FaceState in the pass's positions
+  std::vector<uint8_t> damping_;  // per vertex: 0 full move, 1 half, 2 none
+  std::vector<int64_t> capped_;   // per block of kBlock vertices: moves capped at max_step_sq
 };
 
 }  // namespace meshsmooth::flows
