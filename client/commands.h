@@ -18,7 +18,7 @@ inline constexpr int kExitInterrupted = 130;  // Ctrl-C (the job was cancelled o
 struct SmoothOptions {
   std::string input, output;
   std::string flow;  // a name from FlowNames()
-  unsigned iterations = 20;
+  unsigned iterations = 0;  // 0 = automatic (`--iterations auto`)
   double step = 0.0;
   std::string weights = "u0";
   double mu = 0.0, pass_band = 0.0, tangential_weight = -1.0, epsilon = 0.0;

@@ -1,6 +1,6 @@
 // meshsmooth: the command-line client.
 //
-//   meshsmooth smooth IN -o OUT [--flow median] [--iterations N] [--step S] [flow options]
+//   meshsmooth smooth IN -o OUT [--flow bilaplacian] [--iterations auto|N] [--step S] [flow options]
 //                               [--server HOST:PORT]
 //   meshsmooth flows [--server HOST:PORT]
 //   meshsmooth info IN
@@ -15,6 +15,7 @@
 // Exit codes: 0 success; 1 the job or the input failed; 2 bad command line; 3 the server
 // could not be reached; 130 interrupted (Ctrl-C cancels the job on the server).
 #include <algorithm>
+#include <map>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -81,7 +82,13 @@ void AddSmoothOptions(CLI::App* smooth, SmoothOptions& so) {
   smooth->add_option("--flow", so.flow, absl::StrJoin(FlowNames(), " | "))
       ->capture_default_str()
       ->check(CLI::IsMember(FlowNames()));
-  smooth->add_option("--iterations", so.iterations, "number of iterations")->capture_default_str();
+  smooth->add_option("--iterations", so.iterations,
+                     "auto, or a number of iterations to run exactly. auto: estimate the input's noise and stop "
+                     "once the vertices have moved that far along their normals (a clean mesh comes back "
+                     "unchanged; closed meshes keep their volume); the summary prints the estimate and why it "
+                     "stopped")
+      ->transform(CLI::Transformer(std::map<std::string, std::string>{{"auto", "0"}}))
+      ->default_str("auto");
   smooth->add_option("--step", so.step,
                      absl::StrCat("lambda: ", StepUnits(flows),
                                   "; 0 = the flow's default (see `meshsmooth flows`)"))

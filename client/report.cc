@@ -28,6 +28,13 @@ ProgressPrinter::ProgressPrinter(bool quiet) : quiet_(quiet), tty_(isatty(STDERR
 
 void ProgressPrinter::operator()(const v1::Progress& p) {
   if (quiet_) return;
+  if (p.total() == 0) {  // automatic stopping: no total to count down to
+    std::fprintf(stderr, tty_ ? "\riteration %u (automatic stop)  max move %.3g  mean %.3g  elapsed %.1fs "
+                              : "iteration %u (automatic stop) max move %.6g mean %.6g elapsed %.2fs\n",
+                 p.iteration(), p.max_displacement(), p.mean_displacement(), p.elapsed_seconds());
+    bar_shown_ = bar_shown_ || tty_;
+    return;
+  }
   const double frac = p.total() > 0 ? static_cast<double>(p.iteration()) / p.total() : 1.0;
   const double eta = frac > 0 ? p.elapsed_seconds() * (1.0 - frac) / frac : 0.0;
   if (tty_) {
@@ -51,9 +58,16 @@ void ProgressPrinter::Done() {
 void PrintSummary(const v1::Summary& s) {
   const v1::MeshMetrics &a = s.before(), &b = s.after();
   const v1::EffectiveParameters& p = s.parameters();
-  std::printf("job %s: %s, %u of %u iterations (stopped by %s), step %g (effective %g)\n", s.job_id().c_str(),
-              p.flow().c_str(), p.iterations_run(), p.iterations_requested(), p.stop_reason().c_str(), p.step(),
-              p.effective_step());
+  if (p.iterations_requested() == 0) {
+    std::printf("job %s: %s, %u iterations (automatic: stopped by %s), step %g (effective %g)\n", s.job_id().c_str(),
+                p.flow().c_str(), p.iterations_run(), p.stop_reason().c_str(), p.step(), p.effective_step());
+    std::printf("noise estimate %.4f mean edges; vertices moved %.4f mean edges (RMS along their normals)\n",
+                p.noise_estimate(), p.noise_removed());
+  } else {
+    std::printf("job %s: %s, %u of %u iterations (stopped by %s), step %g (effective %g)\n", s.job_id().c_str(),
+                p.flow().c_str(), p.iterations_run(), p.iterations_requested(), p.stop_reason().c_str(), p.step(),
+                p.effective_step());
+  }
   std::printf("%-28s %14s %14s\n", "", "before", "after");
   std::printf("%-28s %14.6g %14.6g\n", "area", a.area(), b.area());
   std::printf("%-28s %14.6g %14.6g\n", "signed volume", a.signed_volume(), b.signed_volume());

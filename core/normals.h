@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "core/mesh.h"
+#include "core/topology.h"
 #include "core/vec3.h"
 
 namespace meshsmooth {
@@ -18,5 +19,23 @@ std::vector<Vec3> VertexNormals(const Mesh& mesh);
 // The same over positions other than the mesh's own (e.g. a moved or rescaled copy), one per
 // vertex.
 std::vector<Vec3> VertexNormals(std::span<const Vec3> positions, std::span<const Triangle> triangles);
+
+// Twice the area-weighted normal of interior vertex `v` from its cyclic ring (the sum of the
+// cross products of its faces, not normalised): the same direction VertexNormals() gives it
+// when its faces are all usable, computed from the ring alone so that a parallel loop over
+// vertices needs no scatter. Zero for a vertex that is not interior.
+inline Vec3 RingNormal(const Topology& topo, const Vec3* positions, int32_t v) {
+  if (topo.kind[v] != VertexKind::kInterior) return {};
+  const int32_t begin = topo.ring_offsets[v], end = topo.ring_offsets[v + 1];
+  const Vec3 p = positions[v];
+  Vec3 sum;
+  Vec3 prev = positions[topo.ring[end - 1]] - p;
+  for (int32_t k = begin; k < end; ++k) {
+    const Vec3 cur = positions[topo.ring[k]] - p;
+    sum += Cross(prev, cur);
+    prev = cur;
+  }
+  return sum;
+}
 
 }  // namespace meshsmooth

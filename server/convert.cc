@@ -40,7 +40,8 @@ absl::StatusOr<JobParams> FromProto(const v1::JobSpec& spec, int max_iterations)
     return absl::InvalidArgumentError(
         absl::StrCat("iterations ", spec.iterations(), " is above this server's limit of ", max_iterations));
   }
-  if (spec.iterations() > 0) p.iterations = static_cast<int>(spec.iterations());
+  p.iterations = static_cast<int>(spec.iterations());  // 0: automatic stopping
+  p.max_auto_iterations = std::min(max_iterations, kMaxAutoIterations);
   if (spec.step() != 0.0) p.step = spec.step();
   p.weights = spec.weights() == v1::UMBRELLA_WEIGHTS_INVERSE_DISTANCE ? UmbrellaWeights::kInverseDistance
                                                                        : UmbrellaWeights::kUniform;
@@ -146,9 +147,11 @@ void ToProto(const JobParams& params, const FlowResult& result, v1::EffectivePar
   out->set_effective_step(result.effective_step);
   out->set_taubin_mu(result.effective_mu);
   out->set_mean_edge_length(result.mean_edge_length);
-  out->set_stop_reason(result.stop_reason == StopReason::kTolerance    ? "tolerance"
-                       : result.stop_reason == StopReason::kTimeBudget ? "time_budget"
-                                                                       : "iterations");
+  out->set_stop_reason(std::string(StopReasonName(result.stop_reason)));
+  if (result.auto_stop) {
+    out->set_noise_estimate(result.auto_stop->noise_sigma_h);
+    out->set_noise_removed(result.auto_stop->displacement_h);
+  }
   out->set_weights(p.weights == UmbrellaWeights::kInverseDistance ? v1::UMBRELLA_WEIGHTS_INVERSE_DISTANCE
                                                                   : v1::UMBRELLA_WEIGHTS_UNIFORM);
   out->set_boundary(p.boundary == BoundaryMode::kCurve ? v1::BOUNDARY_MODE_CURVE : v1::BOUNDARY_MODE_FIXED);
@@ -205,7 +208,9 @@ std::string JobLogLine(const JobReport& report, const JobParams& params) {
                 report.queue_seconds, report.smooth_seconds, report.encode_seconds);
   return absl::StrCat("meshsmoothd job=", report.job_id, " flow=", std::string(FlowOf(params.flow.flow).name),
                       " vertices=", report.vertices, " iterations=", report.flow.iterations_run, "/",
-                      params.flow.iterations, " status=", report.status, " ", seconds);
+                      params.flow.iterations == kAutoIterations ? std::string("auto")
+                                                                : absl::StrCat(params.flow.iterations),
+                      " status=", report.status, " ", seconds);
 }
 
 }  // namespace meshsmooth::server

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -13,6 +14,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
+#include "core/flows/auto_stop.h"
 #include "core/flows/flow_kernel.h"
 #include "core/flows/lane_batches.h"
 #include "core/flows/step_loops.h"
@@ -98,6 +100,8 @@ class FlowRun {
   }
 
   int passes() const { return kernel_->passes(); }
+  const uint8_t* roles() const { return role_.data(); }
+  int threads() const { return threads_; }
 
   // Iteration `it` from `cur` into `*out` (one of next / mid): its displacement statistics.
   BlockStats Iterate(int it, const std::vector<Vec3>& cur, std::vector<Vec3>& next, std::vector<Vec3>& mid,
@@ -125,7 +129,7 @@ class FlowRun {
   Progress ToProgress(int it, const BlockStats& total) const {
     Progress progress;
     progress.iteration = it;
-    progress.total = p_.iterations;
+    progress.total = p_.iterations;  // 0 when the run stops automatically
     progress.max_displacement = std::sqrt(total.max_sq);
     progress.mean_displacement = movable_ > 0 ? total.sum / static_cast<double>(movable_) : 0.0;
     progress.moved_share = movable_ > 0 ? static_cast<double>(total.moved) / static_cast<double>(movable_) : 0.0;
@@ -266,11 +270,23 @@ absl::StatusOr<FlowResult> RunIterations(Mesh& mesh, const Topology& topo, const
   // below). `cur` keeps the iteration's start until the iteration is accepted; passes write
   // `next`, then alternate with `mid` (taubin: cur -> next -> mid), so measuring the
   // displacement of a whole iteration needs no copy of the start.
+  std::optional<AutoStop> auto_stop;
+  int last_iteration = p.iterations;
+  if (p.iterations == kAutoIterations) {
+    auto_stop.emplace(mesh, topo, run.roles(), h, run.threads());
+    result.auto_stop = auto_stop->report();
+    if (auto_stop->nothing_to_do()) {
+      result.stop_reason = StopReason::kNoNoise;
+      return result;
+    }
+    last_iteration = std::min(p.max_auto_iterations, kMaxAutoIterations);
+    result.stop_reason = StopReason::kIterations;
+  }
   const int32_t n = mesh.num_vertices();
   std::vector<Vec3> cur = std::move(mesh.positions), next(n), mid;
   if (run.passes() > 1) mid.resize(n);
   const auto t0 = std::chrono::steady_clock::now();
-  for (int it = 1; it <= p.iterations; ++it) {
+  for (int it = 1; it <= last_iteration; ++it) {
     if (control.cancel != nullptr && control.cancel->load(std::memory_order_relaxed)) {
       mesh.positions = std::move(cur);
       return absl::CancelledError(absl::StrCat("cancelled after ", it - 1, " iterations"));
@@ -286,6 +302,14 @@ absl::StatusOr<FlowResult> RunIterations(Mesh& mesh, const Topology& topo, const
     result.iterations_run = it;
     result.last = progress;
     if (control.on_progress) control.on_progress(progress);
+    if (auto_stop) {
+      const std::optional<StopReason> stop = auto_stop->After(cur.data());
+      result.auto_stop = auto_stop->report();
+      if (stop) {
+        result.stop_reason = *stop;
+        break;
+      }
+    }
     if (p.tolerance > 0.0 && progress.max_displacement < p.tolerance * h) {
       result.stop_reason = StopReason::kTolerance;
       break;
@@ -296,6 +320,7 @@ absl::StatusOr<FlowResult> RunIterations(Mesh& mesh, const Topology& topo, const
       break;
     }
   }
+  if (auto_stop) auto_stop->KeepVolume(cur.data());
   mesh.positions = std::move(cur);
   return result;
 }

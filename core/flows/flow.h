@@ -27,6 +27,7 @@
 #include <functional>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "absl/status/statusor.h"
@@ -75,9 +76,20 @@ struct NormalFilterParams {
   double sigma_range = 0.35;  // (0, 2]
 };
 
+inline constexpr int kMaxIterations = 100000;
+inline constexpr int kAutoIterations = 0;
+// Automatic stopping runs at most this many iterations (or the server's limit, if lower).
+inline constexpr int kMaxAutoIterations = 1000;
+
 struct FlowParams {
-  FlowId flow = FlowId::kMedian;
-  int iterations = 20;  // 1 .. kMaxIterations
+  FlowId flow = kDefaultFlow;
+  // 1 .. kMaxIterations, or kAutoIterations: estimate the input's noise (core/noise.h) and
+  // stop once the flow has moved the vertices that far along their normals (the discrepancy
+  // principle; FlowResult says why it stopped).
+  int iterations = kAutoIterations;
+  // The most iterations automatic stopping may run (1 .. kMaxAutoIterations; a server sets
+  // its own limit here).
+  int max_auto_iterations = kMaxAutoIterations;
   // The paper's lambda: dimensionless for the umbrella flows, relative to h^2 for the
   // curvature flows. Unset = the flow's default (DefaultStep); set, it must be > 0.
   std::optional<double> step;
@@ -112,7 +124,6 @@ struct FlowParams {
   ReorderMode reorder = ReorderMode::kAuto;
 };
 
-inline constexpr int kMaxIterations = 100000;
 
 struct Progress {
   int iteration = 0;  // 1-based, iterations done so far
@@ -130,7 +141,24 @@ struct RunControl {
   double time_budget_seconds = 0.0;                  // > 0: stop when exceeded
 };
 
-enum class StopReason { kIterations, kTolerance, kTimeBudget };
+enum class StopReason {
+  kIterations,    // ran the iterations asked for (or automatic stopping's cap)
+  kTolerance,     // the largest displacement fell below tolerance * h
+  kTimeBudget,
+  kNoiseRemoved,  // automatic: the vertices moved as far as the estimated noise
+  kNoNoise,       // automatic: the input's noise is below what the estimate can tell from its shape
+  kConverged,     // automatic: the flow stopped moving before it removed the estimated noise
+};
+
+// "iterations", "tolerance", "time_budget", "noise_removed", "no_noise", "converged".
+std::string_view StopReasonName(StopReason reason);
+
+// What automatic stopping measured (FlowParams::iterations == kAutoIterations).
+struct AutoStopReport {
+  double noise_sigma_h = 0.0;     // EstimateNoise() of the input, in h
+  double noise_to_remove_h = 0.0;  // the part of it taken for noise (see driver.cc), in h
+  double displacement_h = 0.0;    // RMS normal displacement from the input when it stopped, in h
+};
 
 struct FlowResult {
   int iterations_run = 0;
@@ -139,6 +167,7 @@ struct FlowResult {
   double effective_mu = 0.0;    // taubin's mu
   double mean_edge_length = 0.0;  // h of the input
   Progress last;
+  std::optional<AutoStopReport> auto_stop;  // set when the run stopped automatically
 };
 
 // InvalidArgument with a message naming the parameter when `p` is out of range for `mesh`.

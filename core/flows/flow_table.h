@@ -33,6 +33,10 @@ enum class FlowId : uint8_t {
   kBilateralNormal,
 };
 
+// The flow of a job that names none: the benchmark's best on scans at its automatic stop
+// (docs/quality.md, "How the defaults were chosen").
+inline constexpr FlowId kDefaultFlow = FlowId::kBilaplacian;
+
 // What a flow's step and speed are measured in, and which machinery the driver gives it.
 enum class FlowKind : uint8_t {
   // Umbrella flows: a dimensionless step; the speed |U| is a length (eq. (14)'s T relative to h).

@@ -12,6 +12,25 @@
 #include "core/metrics.h"
 
 namespace meshsmooth {
+namespace {
+
+// What an automatic run typically takes on a noisy scan (docs/quality.md), for the choice of
+// the order it runs in.
+constexpr int kTypicalAutoIterations = 20;
+
+}  // namespace
+
+std::string_view StopReasonName(StopReason reason) {
+  switch (reason) {
+    case StopReason::kIterations: return "iterations";
+    case StopReason::kTolerance: return "tolerance";
+    case StopReason::kTimeBudget: return "time_budget";
+    case StopReason::kNoiseRemoved: return "noise_removed";
+    case StopReason::kNoNoise: return "no_noise";
+    case StopReason::kConverged: return "converged";
+  }
+  return "iterations";
+}
 
 absl::Status ValidateFlowParams(const FlowParams& p, int32_t num_vertices) {
   // The cotangent kernel addresses coordinates as int32 3 * vertex (operators.h, MeanCurvatureLanes).
@@ -23,9 +42,13 @@ absl::Status ValidateFlowParams(const FlowParams& p, int32_t num_vertices) {
     return absl::InvalidArgumentError(absl::StrCat("unknown flow id ", static_cast<int>(p.flow)));
   }
   const FlowRow& row = FlowOf(p.flow);
-  if (p.iterations < 1 || p.iterations > kMaxIterations) {
+  if (p.iterations < kAutoIterations || p.iterations > kMaxIterations) {
+    return absl::InvalidArgumentError(absl::StrCat("iterations must be in 1..", kMaxIterations, " or ",
+                                                   kAutoIterations, " (automatic), got ", p.iterations));
+  }
+  if (p.max_auto_iterations < 1) {
     return absl::InvalidArgumentError(
-        absl::StrCat("iterations must be in 1..", kMaxIterations, ", got ", p.iterations));
+        absl::StrCat("the automatic iteration limit must be >= 1, got ", p.max_auto_iterations));
   }
   const double step = p.step.value_or(row.default_step);
   if (!(step > 0.0) || !(step <= row.max_step)) {
@@ -79,7 +102,8 @@ absl::StatusOr<FlowResult> Smooth(Mesh& mesh, const Topology& topo, const FlowPa
   const bool reorder = FlowOf(p.flow).kind == FlowKind::kNormalFilter ? false
                        : p.reorder == ReorderMode::kAlways
                            ? ReorderableSize(n)
-                           : p.reorder == ReorderMode::kAuto && MortonOrderPaysOff(topo, p.iterations);
+                           : p.reorder == ReorderMode::kAuto &&
+                               MortonOrderPaysOff(topo, p.iterations == kAutoIterations ? kTypicalAutoIterations : p.iterations);
   if (!reorder) return flows::RunIterations(mesh, topo, p, control, h);
 
   const int threads = flows::ThreadsFor(n, p);

@@ -439,7 +439,10 @@ TEST(FlowInvariantsTest, BadParametersAndInputsAreRefusedClearly) {
   FlowParams stray = Params("median", 1);
   stray.flow = static_cast<FlowId>(99);
   bad.push_back({stray, "unknown flow id 99"});
-  bad.push_back({Params("median", 0), "iterations"});
+  bad.push_back({Params("median", -1), "iterations"});
+  FlowParams no_cap = Params("median", kAutoIterations);
+  no_cap.max_auto_iterations = 0;
+  bad.push_back({no_cap, "automatic iteration limit"});
   bad.push_back({Params("median", kMaxIterations + 1), "iterations"});
   bad.push_back({Params("mcf", 1, -1.0), "step"});
   bad.push_back({Params("mcf", 1, std::numeric_limits<double>::quiet_NaN()), "step"});

@@ -160,7 +160,7 @@ def main():
     def help_lists_defaults():
         r = run([cli, "smooth", "--help"])
         assert r.returncode == 0, r.returncode
-        for word in ("--flow", "median", "--iterations", "20", "--server", "--quantization-bits", "--json"):
+        for word in ("--flow", "bilaplacian", "--iterations", "auto", "--server", "--quantization-bits", "--json"):
             assert word in r.stdout, f"'{word}' missing from smooth --help"
         r = run([cli, "--help"])
         assert r.returncode == 0 and "Exit codes" in r.stdout and "builtin:" in r.stdout

@@ -26,19 +26,24 @@ JobReport Finished() {
 }
 
 TEST(JobReportTest, LogLineNamesTheJobItsFlowAndItsTimes) {
-  JobParams params;  // the default flow, median
+  JobParams params;  // the default flow, bilaplacian
   params.flow.iterations = 20;
   JobReport r = Finished();
   EXPECT_EQ(JobLogLine(r, params),
-            "meshsmoothd job=5f3a-7 flow=median vertices=2562 iterations=12/20 status=OK decode=0.012s "
+            "meshsmoothd job=5f3a-7 flow=bilaplacian vertices=2562 iterations=12/20 status=OK decode=0.012s "
             "queue=0.500s smooth=1.250s encode=0.062s");
   JobReport failed;
   failed.job_id = "x";
   failed.status = "RESOURCE_EXHAUSTED";
   failed.queue_seconds = 3.0;
   EXPECT_EQ(JobLogLine(failed, params),
-            "meshsmoothd job=x flow=median vertices=0 iterations=0/20 status=RESOURCE_EXHAUSTED decode=0.000s "
+            "meshsmoothd job=x flow=bilaplacian vertices=0 iterations=0/20 status=RESOURCE_EXHAUSTED decode=0.000s "
             "queue=3.000s smooth=0.000s encode=0.000s");
+  params.flow.iterations = kAutoIterations;
+  r.flow.stop_reason = StopReason::kNoiseRemoved;
+  EXPECT_EQ(JobLogLine(r, params),
+            "meshsmoothd job=5f3a-7 flow=bilaplacian vertices=2562 iterations=12/auto status=OK decode=0.012s "
+            "queue=0.500s smooth=1.250s encode=0.062s");
 }
 
 TEST(JobReportTest, SummaryCarriesWhatTheJobMeasured) {

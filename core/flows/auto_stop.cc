@@ -1,0 +1,111 @@
+#include "core/flows/auto_stop.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/flows/flow_kernel.h"
+#include "core/noise.h"
+#include "core/normals.h"
+
+namespace meshsmooth::flows {
+
+AutoStop::AutoStop(const Mesh& mesh, const Topology& topo, const uint8_t* role, double h, int threads)
+    : topo_(topo), role_(role), h_(h), threads_(threads), start_(mesh.positions) {
+  const NoiseEstimate noise = EstimateNoise(mesh, topo, h, threads);
+  report_.noise_sigma_h = noise.sigma_h;
+  report_.noise_to_remove_h =
+      std::sqrt(std::max(0.0, noise.sigma_h * noise.sigma_h - kEstimatorFloorH * kEstimatorFloorH));
+  target_ = kDiscrepancy * report_.noise_to_remove_h * h;
+  for (int32_t v = 0; v < topo.num_vertices(); ++v) {
+    counted_ += role[v] == kFree && topo.kind[v] == VertexKind::kInterior;
+    closed_ &= topo.kind[v] == VertexKind::kInterior || topo.kind[v] == VertexKind::kIsolated;
+  }
+  if (closed_) start_volume_ = Volume(start_.data());
+}
+
+double AutoStop::Volume(const Vec3* pos) const {
+  // Each face (v, ring[k], ring[k+1]) is met at its three corners with the same triple product.
+  const int32_t n = topo_.num_vertices();
+  std::vector<double> block_sum((n + kBlock - 1) / kBlock, 0.0);
+  ForBlocks(n, threads_, [&](int32_t b, int32_t begin, int32_t end) {
+    double sum = 0.0;
+    for (int32_t v = begin; v < end; ++v) {
+      if (topo_.kind[v] != VertexKind::kInterior) continue;
+      const int32_t first = topo_.ring_offsets[v], last = topo_.ring_offsets[v + 1];
+      Vec3 prev = pos[topo_.ring[last - 1]];
+      for (int32_t k = first; k < last; ++k) {
+        const Vec3 cur = pos[topo_.ring[k]];
+        sum += Dot(pos[v], Cross(prev, cur));
+        prev = cur;
+      }
+    }
+    block_sum[b] = sum;
+  });
+  double total = 0.0;
+  for (double s : block_sum) total += s;
+  return total / 18.0;
+}
+
+void AutoStop::KeepVolume(Vec3* pos) const {
+  if (!closed_ || counted_ == 0) return;
+  const int32_t n = topo_.num_vertices();
+  std::vector<Vec3> unit(n);
+  std::vector<double> block_rate((n + kBlock - 1) / kBlock, 0.0);
+  // A few Newton steps on the common offset d: dV/dd = sum over the free vertices of
+  // |RingNormal| / 6 (the gradient of the volume at v is RingNormal(v) / 6).
+  for (int step = 0; step < 3; ++step) {
+    ForBlocks(n, threads_, [&](int32_t b, int32_t begin, int32_t end) {
+      double rate = 0.0;
+      for (int32_t v = begin; v < end; ++v) {
+        unit[v] = {};
+        if (role_[v] != kFree || topo_.kind[v] != VertexKind::kInterior) continue;
+        const Vec3 normal = RingNormal(topo_, pos, v);
+        const double len = Norm(normal);
+        if (!(len > 0.0) || !std::isfinite(len)) continue;
+        unit[v] = normal * (1.0 / len);
+        rate += len / 6.0;
+      }
+      block_rate[b] = rate;
+    });
+    double rate = 0.0;
+    for (double r : block_rate) rate += r;
+    const double gap = start_volume_ - Volume(pos);
+    if (!(rate > 0.0) || !std::isfinite(gap)) return;
+    const double d = gap / rate;
+    // A correction of more than a mean edge length is not a flow's shrinkage: leave it.
+    if (!(std::abs(d) <= h_)) return;
+    for (int32_t v = 0; v < n; ++v) pos[v] += unit[v] * d;
+  }
+}
+
+double AutoStop::RmsNormalDisplacement(const Vec3* pos) const {
+  const int32_t n = topo_.num_vertices();
+  std::vector<double> block_sum((n + kBlock - 1) / kBlock, 0.0);
+  ForBlocks(n, threads_, [&](int32_t b, int32_t begin, int32_t end) {
+    double sum = 0.0;
+    for (int32_t v = begin; v < end; ++v) {
+      if (role_[v] != kFree || topo_.kind[v] != VertexKind::kInterior) continue;
+      const Vec3 normal = RingNormal(topo_, pos, v);
+      const double len = Norm(normal);
+      if (!(len > 0.0)) continue;
+      const double d = Dot(pos[v] - start_[v], normal) / len;
+      sum += d * d;
+    }
+    block_sum[b] = sum;
+  });
+  double total = 0.0;
+  for (double s : block_sum) total += s;  // block order: the same sum for any thread count
+  return counted_ > 0 ? std::sqrt(total / static_cast<double>(counted_)) : 0.0;
+}
+
+std::optional<StopReason> AutoStop::After(const Vec3* pos) {
+  const double d = RmsNormalDisplacement(pos);
+  report_.displacement_h = d / h_;
+  const double gained = d - last_;
+  last_ = d;
+  if (d >= target_) return StopReason::kNoiseRemoved;
+  if (gained < kConvergedShare * target_) return StopReason::kConverged;
+  return std::nullopt;
+}
+
+}  // namespace meshsmooth::flows

@@ -1,0 +1,68 @@
+// Automatic stopping (FlowParams::iterations == kAutoIterations): the discrepancy principle on
+// the input's estimated noise. docs/quality.md has the figures that chose the constants.
+//
+// Before the run, EstimateNoise() (core/noise.h) reads the input's noise sigma. Part of that
+// reading is the estimator's own misfit on clean, coarse meshes (up to ~0.04 h on the
+// benchmark's clean scans): it is removed in quadrature, sigma_n = sqrt(sigma^2 - floor^2).
+// Below kNoNoiseH there is nothing to remove and the run does no iteration: a clean mesh
+// comes back as it went in. Otherwise, after every iteration, the RMS over the free interior
+// vertices of their displacement from the input along their current normals is compared with
+// kDiscrepancy * sigma_n: the run stops at the first iteration that reaches it (the flow has
+// moved the vertices as far as the noise had), or when an iteration adds almost nothing to it
+// (the flow has converged short of it), or after kMaxAutoIterations.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "core/flows/flow.h"
+
+namespace meshsmooth::flows {
+
+// The estimator's misfit on clean meshes, removed in quadrature (in h).
+inline constexpr double kEstimatorFloorH = 0.04;
+// Below this much noise (in h, after the floor) the run does nothing.
+inline constexpr double kNoNoiseH = 0.02;
+// The displacement the run stops at, in units of the noise.
+inline constexpr double kDiscrepancy = 1.0;
+// An iteration that adds less than this share of the target to the displacement ends the run.
+inline constexpr double kConvergedShare = 1e-3;
+
+class AutoStop {
+ public:
+  // Reads the noise of `mesh` (the run's input; its positions are copied as the reference).
+  // `role` is the run's vertex roles (core/flows/flow_kernel.h), one per vertex.
+  AutoStop(const Mesh& mesh, const Topology& topo, const uint8_t* role, double h, int threads);
+
+  // True when the input has no noise to remove: the run does no iteration.
+  bool nothing_to_do() const { return report_.noise_to_remove_h < kNoNoiseH; }
+
+  // After an accepted iteration with positions `pos`: the reason to stop now, if any.
+  std::optional<StopReason> After(const Vec3* pos);
+
+  // On a closed mesh (every vertex in use interior), moves the free vertices of `pos` along
+  // their normals by the common distance that restores the input's enclosed volume.
+  void KeepVolume(Vec3* pos) const;
+
+  const AutoStopReport& report() const { return report_; }
+
+ private:
+  double RmsNormalDisplacement(const Vec3* pos) const;
+  // Enclosed volume of a closed mesh from the vertices' rings.
+  double Volume(const Vec3* pos) const;
+
+  const Topology& topo_;
+  const uint8_t* role_;
+  double h_;
+  int threads_;
+  std::vector<Vec3> start_;
+  int64_t counted_ = 0;  // free interior vertices
+  bool closed_ = true;   // every vertex in use is interior
+  double start_volume_ = 0.0;
+  double target_ = 0.0;  // in mesh units
+  double last_ = 0.0;
+  AutoStopReport report_;
+};
+
+}  // namespace meshsmooth::flows

@@ -1,0 +1,135 @@
+// Automatic stopping (FlowParams::iterations == kAutoIterations; core/flows/auto_stop.h) and the
+// noise estimate it rests on (core/noise.h), measured against the clean surface.
+#include <cmath>
+
+#include "core/evaluation.h"
+#include "core/flows/flow.h"
+#include "core/io/mesh_io.h"
+#include "core/metrics.h"
+#include "core/noise.h"
+#include "core/shapes.h"
+#include "core/topology.h"
+#include "gtest/gtest.h"
+#include "tests/test_data.h"
+
+namespace meshsmooth {
+namespace {
+
+double EstimateOf(const Mesh& clean, const Mesh& noisy, int threads = 0) {
+  const Topology topo = BuildTopology(clean);
+  return EstimateNoise(noisy, topo, MeanEdgeLength(clean, topo), threads).sigma_h;
+}
+
+// Gaussian offsets of sigma h along the normals read back as sigma: the fit's own variance is
+// taken out (noise.h), so no calibration constant hides in the estimate.
+TEST(NoiseEstimateTest, ReadsGaussianNoiseAlongTheNormals) {
+  const Mesh clean = Icosphere(4);
+  EXPECT_LT(EstimateOf(clean, clean), 0.005) << "a clean sphere is a quadric to a cubic fit";
+  for (double sigma : {0.05, 0.1, 0.2, 0.3}) {
+    Mesh noisy = clean;
+    AddNormalNoise(noisy, sigma, 7);
+    const double e = EstimateOf(clean, noisy);
+    std::printf("sigma %.2f h: estimate %.4f h\n", sigma, e);
+    EXPECT_NEAR(e, sigma, 0.06 * sigma) << sigma;
+  }
+  // Random directions: only the normal component, sigma / sqrt(3), is noise to a surface; the
+  // tangential part moves the fit's sample points too and reads a little lower (0.82x here).
+  Mesh random = clean;
+  AddRandomDirectionNoise(random, 0.3, 7);
+  const double normal_part = 0.3 / std::sqrt(3.0);
+  EXPECT_GT(EstimateOf(clean, random), 0.75 * normal_part);
+  EXPECT_LT(EstimateOf(clean, random), 1.05 * normal_part);
+}
+
+TEST(NoiseEstimateTest, SameForAnyThreadCount) {
+  const Mesh clean = Icosphere(6);  // 40,962 vertices: parallel, and sampled
+  Mesh noisy = clean;
+  AddNormalNoise(noisy, 0.2, 3);
+  EXPECT_EQ(EstimateOf(clean, noisy, 1), EstimateOf(clean, noisy, 2));
+  EXPECT_NEAR(EstimateOf(clean, noisy, 2), 0.2, 0.01);
+}
+
+TEST(AutoStopTest, CleanMeshComesBackUnchanged) {
+  const Mesh clean = TwoRateTorus();
+  Mesh m = clean;
+  FlowParams p;  // the defaults: the default flow, automatic stopping
+  ASSERT_EQ(p.iterations, kAutoIterations);
+  absl::StatusOr<FlowResult> r = Smooth(m, p);
+  ASSERT_TRUE(r.ok()) << r.status();
+  EXPECT_EQ(r->iterations_run, 0);
+  EXPECT_EQ(r->stop_reason, StopReason::kNoNoise);
+  ASSERT_TRUE(r->auto_stop.has_value());
+  EXPECT_LT(r->auto_stop->noise_sigma_h, 0.02);
+  EXPECT_EQ(m.positions, clean.positions);
+}
+
+// The default job on a noisy closed surface: clearly closer to the clean one, its volume
+// kept, no face turned over, and it stops by itself long before the cap.
+TEST(AutoStopTest, NoisySphereComesBackCloserWithItsVolume) {
+  const GroundTruth truth(Icosphere(4));
+  for (double sigma : {0.1, 0.2, 0.3}) {
+    Mesh m = truth.mesh();
+    AddNormalNoise(m, sigma, 11);
+    const absl::StatusOr<Quality> before = truth.Evaluate(m);
+    const double input_volume = ComputeMetrics(m, BuildTopology(m)).signed_volume;
+    absl::StatusOr<FlowResult> r = Smooth(m, FlowParams{});
+    ASSERT_TRUE(r.ok()) << r.status();
+    const absl::StatusOr<Quality> after = truth.Evaluate(m);
+    ASSERT_TRUE(before.ok() && after.ok());
+    std::printf("sigma %.1f: %d iterations (%s), estimate %.3f h, moved %.3f h; RMS %.4f -> %.4f h, normal %.2f -> %.2f deg\n",
+                sigma, r->iterations_run, std::string(StopReasonName(r->stop_reason)).c_str(),
+                r->auto_stop->noise_sigma_h, r->auto_stop->displacement_h, before->rms_distance, after->rms_distance,
+                before->normal_error_deg, after->normal_error_deg);
+    EXPECT_TRUE(r->stop_reason == StopReason::kNoiseRemoved || r->stop_reason == StopReason::kConverged);
+    EXPECT_LT(r->iterations_run, kMaxAutoIterations);
+    EXPECT_LT(after->rms_distance, 0.6 * before->rms_distance) << sigma;
+    EXPECT_LT(after->normal_error_deg, 0.6 * before->normal_error_deg) << sigma;
+    EXPECT_EQ(after->flipped_faces, 0);
+    EXPECT_NEAR(ComputeMetrics(m, BuildTopology(m)).signed_volume / input_volume, 1.0, 1e-6) << "volume kept";
+  }
+}
+
+TEST(AutoStopTest, ExplicitIterationsRunExactly) {
+  Mesh m = Icosphere(3);
+  AddNormalNoise(m, 0.2, 1);
+  FlowParams p;
+  p.iterations = 5;
+  absl::StatusOr<FlowResult> r = Smooth(m, p);
+  ASSERT_TRUE(r.ok()) << r.status();
+  EXPECT_EQ(r->iterations_run, 5);
+  EXPECT_EQ(r->stop_reason, StopReason::kIterations);
+  EXPECT_FALSE(r->auto_stop.has_value());
+}
+
+// A real CAD part with noise: the default job at least halves nothing it should not, keeps the
+// volume within 1% of the clean part's, and turns no face over.
+TEST(AutoStopTest, NoisyFandiskComesBackCloser) {
+  MESHSMOOTH_REQUIRE_SHARED("meshes");
+  absl::StatusOr<Mesh> clean = ReadMesh(testing::SharedData("meshes").append("fandisk.obj").string());
+  ASSERT_TRUE(clean.ok()) << clean.status();
+  const GroundTruth truth(*clean);
+  {
+    Mesh m = *clean;
+    absl::StatusOr<FlowResult> r = Smooth(m, FlowParams{});
+    ASSERT_TRUE(r.ok()) << r.status();
+    EXPECT_EQ(r->iterations_run, 0) << "the clean part has no noise to remove";
+    EXPECT_EQ(m.positions, clean->positions);
+  }
+  Mesh m = *clean;
+  AddNormalNoise(m, 0.2, 1);
+  const absl::StatusOr<Quality> before = truth.Evaluate(m);
+  absl::StatusOr<FlowResult> r = Smooth(m, FlowParams{});
+  ASSERT_TRUE(r.ok()) << r.status();
+  const absl::StatusOr<Quality> after = truth.Evaluate(m);
+  ASSERT_TRUE(before.ok() && after.ok());
+  std::printf("fandisk sigma 0.2: %d iterations, RMS %.4f -> %.4f h, normal %.2f -> %.2f deg, volume %.2f%%\n",
+              r->iterations_run, before->rms_distance, after->rms_distance, before->normal_error_deg,
+              after->normal_error_deg, after->volume_change_percent);
+  EXPECT_LT(after->rms_distance, 0.6 * before->rms_distance);
+  EXPECT_LT(after->normal_error_deg, 0.6 * before->normal_error_deg);
+  EXPECT_NEAR(after->volume_change_percent, 0.0, 1.0);
+  EXPECT_EQ(after->flipped_faces, 0);
+}
+
+}  // namespace
+}  // namespace meshsmooth
