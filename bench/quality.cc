@@ -562,7 +562,10 @@ seeds (the "Inputs" table gives their number per mesh).
   faces with an edge whose clean dihedral angle (between the two faces' normals) is above 30
   degrees ("crease faces" in the Inputs table; — where there are none).
 - *volume*: change of the enclosed volume in %, closed meshes only (— for open ones).
-- *flipped*: faces whose normal points against the clean one (dot product < 0).
+- *flipped*: faces whose normal points against the clean one (dot product < 0), among the faces
+  that are not folded in the clean mesh ("folded faces" in the Inputs table: across one of their
+  edges the other face's normal points more than 90 degrees away). A scan's folds are defects a
+  smoothing should remove; unfolding one would otherwise count as turning it over.
 - *edge CV*, *min angle*: the paper's regularity (edge-length coefficient of variation, smallest
   triangle angle), as core/metrics.h computes them.
 - *time*: wall time of `Smooth()` alone (not the evaluation), on all threads, mean over seeds.
@@ -758,13 +761,14 @@ int main(int argc, char** argv) {
     }
     details.push_back(detail);
     const ValidationReport& r = truth.report();
-    absl::StrAppendFormat(&inputs, "| %s | %s | %d | %d | %s | %d | %d | %d | %.2f / %.2f s |\n", name, subject->what,
-                          truth.mesh().num_vertices(), truth.mesh().num_triangles(), r.closed() ? "yes" : "no",
-                          r.boundary_loops, truth.crease_faces(), seeds, subject->truth_seconds, eval_seconds);
+    absl::StrAppendFormat(&inputs, "| %s | %s | %d | %d | %s | %d | %d | %d | %d | %.2f / %.2f s |\n", name,
+                          subject->what, truth.mesh().num_vertices(), truth.mesh().num_triangles(),
+                          r.closed() ? "yes" : "no", r.boundary_loops, truth.crease_faces(), truth.folded_faces(),
+                          seeds, subject->truth_seconds, eval_seconds);
   }
 
-  body += "\n## Inputs\n\n| mesh | source | vertices | faces | closed | boundary loops | crease faces | seeds | "
-          "ground truth / one evaluation (1 thread) |\n|---|---|---|---|---|---|---|---|---|\n" + inputs;
+  body += "\n## Inputs\n\n| mesh | source | vertices | faces | closed | boundary loops | crease faces | folded faces | "
+          "seeds | ground truth / one evaluation (1 thread) |\n|---|---|---|---|---|---|---|---|---|---|\n" + inputs;
   body += "\n## Summary: the default job against the noisy input and the best oracle row\n";
   for (size_t ci = 0; ci < cases.size(); ++ci) SummaryTable(body, cases[ci], results[ci], jobs);
   body += "\n## Every row, mesh by mesh\n";

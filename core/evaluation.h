@@ -33,7 +33,10 @@ struct Quality {
   double crease_normal_error_deg = 0.0;
   // 100 (V / V_clean - 1) for a closed clean mesh, NaN for an open one.
   double volume_change_percent = 0.0;
-  int64_t flipped_faces = 0;  // result normal . clean normal < 0 (CompareMeshes)
+  // Measured faces, not folded in the clean mesh (GroundTruth::folded_faces), whose normal
+  // points against the clean one (dot product < 0). A face folded in the clean mesh has no
+  // trustworthy orientation: a smoothing that unfolds it would count as turning it over.
+  int64_t flipped_faces = 0;
   double edge_length_cv = 0.0;  // ComputeMetrics of the result
   double min_angle_deg = 0.0;
   int64_t non_finite_vertices = 0;  // when > 0 the distances are NaN
@@ -60,6 +63,9 @@ class GroundTruth {
   // threshold) and, of those, faces next to a crease.
   int64_t measured_faces() const { return measured_faces_; }
   int64_t crease_faces() const { return crease_faces_; }
+  // Measured faces folded in the clean mesh: across one of their edges the other face's normal
+  // points more than 90 degrees away (scans and coarse models hold a few hundred).
+  int64_t folded_faces() const { return folded_faces_; }
   const SurfaceDistance& surface() const { return surface_; }
 
  private:
@@ -70,7 +76,8 @@ class GroundTruth {
   double zero_cross_ = 0.0;  // |cross| below this: a zero-area face (twice the area threshold)
   std::vector<Vec3> face_cross_;  // per topo_.faces entry: cross product of the clean face
   std::vector<uint8_t> face_class_;  // per topo_.faces entry: kSkipped, kPlain or kCrease
-  int64_t measured_faces_ = 0, crease_faces_ = 0;
+  int64_t measured_faces_ = 0, crease_faces_ = 0, folded_faces_ = 0;
+  std::vector<uint8_t> folded_;  // per topo_.faces entry
   SurfaceDistance surface_;
 };
 

@@ -46,6 +46,59 @@ double AutoStop::Volume(const Vec3* pos) const {
   return total / 18.0;
 }
 
+int64_t AutoStop::RepairFolds(Vec3* pos) const {
+  const int32_t n = topo_.num_vertices();
+  const int32_t blocks = (n + kBlock - 1) / kBlock;
+  const double cos_fold = std::cos(kFoldAngleDeg * M_PI / 180.0);
+  std::vector<uint8_t> folded(n, 0);
+  std::vector<Vec3> next;
+  std::vector<int64_t> block_count(blocks, 0);
+  // A vertex is on a folded edge when two consecutive faces of its ring are folded; both ends
+  // of the edge see it.
+  auto find = [&]() {
+    ForBlocks(n, threads_, [&](int32_t b, int32_t begin, int32_t end) {
+      int64_t count = 0;
+      for (int32_t v = begin; v < end; ++v) {
+        folded[v] = 0;
+        if (role_[v] != kFree || topo_.kind[v] != VertexKind::kInterior) continue;
+        const int32_t first = topo_.ring_offsets[v], last = topo_.ring_offsets[v + 1];
+        const Vec3 p = pos[v];
+        Vec3 prev = pos[topo_.ring[last - 1]] - p;
+        Vec3 before = Cross(pos[topo_.ring[last - 2]] - p, prev);
+        for (int32_t k = first; k < last; ++k) {
+          const Vec3 cur = pos[topo_.ring[k]] - p;
+          const Vec3 after = Cross(prev, cur);
+          if (Dot(before, after) < cos_fold * Norm(before) * Norm(after)) folded[v] = 1;
+          before = after;
+          prev = cur;
+        }
+        count += folded[v];
+      }
+      block_count[b] = count;
+    });
+    int64_t total = 0;
+    for (int64_t c : block_count) total += c;
+    return total;
+  };
+  int64_t left = find();
+  for (int round = 0; round < kFoldRepairRounds && left > 0; ++round) {
+    next.assign(pos, pos + n);
+    ForBlocks(n, threads_, [&](int32_t, int32_t begin, int32_t end) {
+      for (int32_t v = begin; v < end; ++v) {
+        if (!folded[v]) continue;
+        const int32_t first = topo_.ring_offsets[v], last = topo_.ring_offsets[v + 1];
+        Vec3 centroid;
+        for (int32_t k = first; k < last; ++k) centroid += pos[topo_.ring[k]];
+        centroid *= 1.0 / static_cast<double>(last - first);
+        next[v] = pos[v] + (centroid - pos[v]) * 0.5;
+      }
+    });
+    std::copy(next.begin(), next.end(), pos);
+    left = find();
+  }
+  return left;
+}
+
 void AutoStop::KeepVolume(Vec3* pos) const {
   if (!closed_ || counted_ == 0) return;
   const int32_t n = topo_.num_vertices();

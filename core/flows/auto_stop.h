@@ -10,6 +10,13 @@
 // kDiscrepancy * sigma_n: the run stops at the first iteration that reaches it (the flow has
 // moved the vertices as far as the noise had), or when an iteration adds almost nothing to it
 // (the flow has converged short of it), or after kMaxAutoIterations.
+//
+// Noise folds thin triangles over, and a run stopped at the discrepancy can leave some folded:
+// RepairFolds() then moves the free vertices of edges whose two faces face nearly opposite ways
+// (normals more than kFoldAngleDeg apart: a fold, not a crease) half-way to their ring's
+// centroid, a few rounds at most. Last, every flow with a step loses some volume: on a closed
+// mesh the run gives the input's enclosed volume back by moving its free vertices along their
+// normals by a common distance (KeepVolume): the shrinkage is a bias of the flow, not noise.
 #pragma once
 
 #include <cstdint>
@@ -28,6 +35,10 @@ inline constexpr double kNoNoiseH = 0.02;
 inline constexpr double kDiscrepancy = 1.0;
 // An iteration that adds less than this share of the target to the displacement ends the run.
 inline constexpr double kConvergedShare = 1e-3;
+// Two faces across an edge whose normals are further apart than this are folded.
+inline constexpr double kFoldAngleDeg = 120.0;
+// At most this many rounds of fold repair.
+inline constexpr int kFoldRepairRounds = 20;
 
 class AutoStop {
  public:
@@ -40,6 +51,10 @@ class AutoStop {
 
   // After an accepted iteration with positions `pos`: the reason to stop now, if any.
   std::optional<StopReason> After(const Vec3* pos);
+
+  // Moves the free interior vertices of folded edges of `pos` half-way to their ring's centroid
+  // until none is folded (at most kFoldRepairRounds rounds). Returns the folded vertices left.
+  int64_t RepairFolds(Vec3* pos) const;
 
   // On a closed mesh (every vertex in use interior), moves the free vertices of `pos` along
   // their normals by the common distance that restores the input's enclosed volume.

@@ -320,7 +320,10 @@ absl::StatusOr<FlowResult> RunIterations(Mesh& mesh, const Topology& topo, const
       break;
     }
   }
-  if (auto_stop) auto_stop->KeepVolume(cur.data());
+  if (auto_stop) {
+    auto_stop->RepairFolds(cur.data());
+    auto_stop->KeepVolume(cur.data());
+  }
   mesh.positions = std::move(cur);
   return result;
 }

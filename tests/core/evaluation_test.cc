@@ -201,6 +201,31 @@ TEST(EvaluationTest, CreaseFacesAreThoseOnEdgesSharperThanThirtyDegrees) {
   EXPECT_GT(q->normal_error_deg, 0.0);
 }
 
+// A clean mesh with a fold: unfolding it is a repair, not a flip; turning a face the fold does
+// not touch still counts.
+TEST(EvaluationTest, FacesFoldedInTheCleanMeshAreNotCountedAsFlipped) {
+  const Mesh sphere = Icosphere(2);
+  Mesh folded = sphere;
+  folded.positions[0] = sphere.positions[0] * -0.5;  // through the sphere: its 5 faces fold
+  const GroundTruth truth(folded);
+  // The 5 faces around vertex 0 and the 5 faces across their outer edges.
+  EXPECT_EQ(truth.folded_faces(), 10);
+  absl::StatusOr<Quality> q = truth.Evaluate(sphere);  // the fold undone
+  ASSERT_TRUE(q.ok()) << q.status();
+  EXPECT_EQ(q->flipped_faces, 0);
+  EXPECT_GT(q->normal_error_deg, 0.0);
+  int32_t far = 0;  // the vertex opposite vertex 0, far from the fold
+  for (int32_t v = 0; v < sphere.num_vertices(); ++v) {
+    if (Dot(sphere.positions[v], sphere.positions[0]) < Dot(sphere.positions[far], sphere.positions[0])) far = v;
+  }
+  Mesh other = folded;
+  other.positions[far] = folded.positions[far] * -0.5;
+  q = truth.Evaluate(other);
+  ASSERT_TRUE(q.ok()) << q.status();
+  EXPECT_EQ(q->flipped_faces, 5);
+  EXPECT_EQ(GroundTruth(sphere).folded_faces(), 0);
+}
+
 TEST(EvaluationTest, VolumeOfAScaledCube) {
   const Mesh clean = Cube();
   const GroundTruth truth(clean);
