@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 
 #include "core/flows/flow_kernel.h"
 #include "core/noise.h"
@@ -16,8 +17,10 @@ AutoStop::AutoStop(const Mesh& mesh, const Topology& topo, const uint8_t* role, 
   report_.noise_to_remove_h =
       std::sqrt(std::max(0.0, noise.sigma_h * noise.sigma_h - kEstimatorFloorH * kEstimatorFloorH));
   target_ = kDiscrepancy * report_.noise_to_remove_h * h;
-  for (int32_t v = 0; v < topo.num_vertices(); ++v) {
-    counted_ += role[v] == kFree && topo.kind[v] == VertexKind::kInterior;
+  const int32_t n = topo.num_vertices();
+  stride_ = std::max<int32_t>(1, (n + kMaxMeasured - 1) / kMaxMeasured);
+  for (int32_t v = 0; v < n; ++v) {
+    counted_ += v % stride_ == 0 && role[v] == kFree && topo.kind[v] == VertexKind::kInterior;
     closed_ &= topo.kind[v] == VertexKind::kInterior || topo.kind[v] == VertexKind::kIsolated;
   }
   if (closed_) start_volume_ = Volume(start_.data());
@@ -46,57 +49,54 @@ double AutoStop::Volume(const Vec3* pos) const {
   return total / 18.0;
 }
 
+bool AutoStop::Folded(const Vec3* pos, int32_t v) const {
+  if (role_[v] != kFree || topo_.kind[v] != VertexKind::kInterior) return false;
+  const int32_t first = topo_.ring_offsets[v], last = topo_.ring_offsets[v + 1];
+  const Vec3 p = pos[v];
+  Vec3 prev = pos[topo_.ring[last - 1]] - p;
+  Vec3 before = Cross(pos[topo_.ring[last - 2]] - p, prev);
+  for (int32_t k = first; k < last; ++k) {
+    const Vec3 cur = pos[topo_.ring[k]] - p;
+    const Vec3 after = Cross(prev, cur);
+    if (Dot(before, after) < cos_fold_ * Norm(before) * Norm(after)) return true;
+    before = after;
+    prev = cur;
+  }
+  return false;
+}
+
 int64_t AutoStop::RepairFolds(Vec3* pos) const {
   const int32_t n = topo_.num_vertices();
-  const int32_t blocks = (n + kBlock - 1) / kBlock;
-  const double cos_fold = std::cos(kFoldAngleDeg * M_PI / 180.0);
+  // The folded vertices, found once over the mesh, then followed on their own (a round moves
+  // only them, and only they are checked again): the repair costs nothing where nothing is
+  // folded.
   std::vector<uint8_t> folded(n, 0);
-  std::vector<Vec3> next;
-  std::vector<int64_t> block_count(blocks, 0);
-  // A vertex is on a folded edge when two consecutive faces of its ring are folded; both ends
-  // of the edge see it.
-  auto find = [&]() {
-    ForBlocks(n, threads_, [&](int32_t b, int32_t begin, int32_t end) {
-      int64_t count = 0;
-      for (int32_t v = begin; v < end; ++v) {
-        folded[v] = 0;
-        if (role_[v] != kFree || topo_.kind[v] != VertexKind::kInterior) continue;
-        const int32_t first = topo_.ring_offsets[v], last = topo_.ring_offsets[v + 1];
-        const Vec3 p = pos[v];
-        Vec3 prev = pos[topo_.ring[last - 1]] - p;
-        Vec3 before = Cross(pos[topo_.ring[last - 2]] - p, prev);
-        for (int32_t k = first; k < last; ++k) {
-          const Vec3 cur = pos[topo_.ring[k]] - p;
-          const Vec3 after = Cross(prev, cur);
-          if (Dot(before, after) < cos_fold * Norm(before) * Norm(after)) folded[v] = 1;
-          before = after;
-          prev = cur;
-        }
-        count += folded[v];
-      }
-      block_count[b] = count;
-    });
-    int64_t total = 0;
-    for (int64_t c : block_count) total += c;
-    return total;
-  };
-  int64_t left = find();
-  for (int round = 0; round < kFoldRepairRounds && left > 0; ++round) {
-    next.assign(pos, pos + n);
-    ForBlocks(n, threads_, [&](int32_t, int32_t begin, int32_t end) {
-      for (int32_t v = begin; v < end; ++v) {
-        if (!folded[v]) continue;
-        const int32_t first = topo_.ring_offsets[v], last = topo_.ring_offsets[v + 1];
-        Vec3 centroid;
-        for (int32_t k = first; k < last; ++k) centroid += pos[topo_.ring[k]];
-        centroid *= 1.0 / static_cast<double>(last - first);
-        next[v] = pos[v] + (centroid - pos[v]) * 0.5;
-      }
-    });
-    std::copy(next.begin(), next.end(), pos);
-    left = find();
+  ForBlocks(n, threads_, [&](int32_t, int32_t begin, int32_t end) {
+    for (int32_t v = begin; v < end; ++v) folded[v] = Folded(pos, v);
+  });
+  std::vector<int32_t> list;
+  for (int32_t v = 0; v < n; ++v) {
+    if (folded[v]) list.push_back(v);
   }
-  return left;
+  std::vector<Vec3> moved(list.size());
+  for (int round = 0; round < kFoldRepairRounds && !list.empty(); ++round) {
+    for (size_t i = 0; i < list.size(); ++i) {  // Jacobi: every move reads the round's start
+      const int32_t v = list[i];
+      const int32_t first = topo_.ring_offsets[v], last = topo_.ring_offsets[v + 1];
+      Vec3 centroid;
+      for (int32_t k = first; k < last; ++k) centroid += pos[topo_.ring[k]];
+      centroid *= 1.0 / static_cast<double>(last - first);
+      moved[i] = pos[v] + (centroid - pos[v]) * 0.5;
+    }
+    for (size_t i = 0; i < list.size(); ++i) pos[list[i]] = moved[i];
+    size_t kept = 0;
+    for (int32_t v : list) {
+      if (Folded(pos, v)) list[kept++] = v;
+    }
+    list.resize(kept);
+    moved.resize(kept);
+  }
+  return static_cast<int64_t>(list.size());
 }
 
 void AutoStop::KeepVolume(Vec3* pos) const {
@@ -137,7 +137,7 @@ double AutoStop::RmsNormalDisplacement(const Vec3* pos) const {
   ForBlocks(n, threads_, [&](int32_t b, int32_t begin, int32_t end) {
     double sum = 0.0;
     for (int32_t v = begin; v < end; ++v) {
-      if (role_[v] != kFree || topo_.kind[v] != VertexKind::kInterior) continue;
+      if (v % stride_ != 0 || role_[v] != kFree || topo_.kind[v] != VertexKind::kInterior) continue;
       const Vec3 normal = RingNormal(topo_, pos, v);
       const double len = Norm(normal);
       if (!(len > 0.0)) continue;
