@@ -58,7 +58,7 @@ double Median(std::vector<double> v) {
 
 struct Options {
   int runs = 5;
-  bool quick = false, service = true, peers = true;
+  bool quick = false, service = true, peers = true, default_job_only = false;
   std::vector<int> levels = {6, 7, 8, 9};
   std::vector<std::string> only;  // empty: every flow
   std::vector<std::string> files;
@@ -319,6 +319,48 @@ void ServiceBreakdown(const NamedMesh& nm, int runs) {
   }
 }
 
+// Times of `runs` calls of one job through a one-worker server on loopback TCP (ms), and what
+// the last call's summary says about its iterations.
+struct ServiceTimes {
+  std::vector<double> total, smooth, decode, encode, queue;
+  int iterations = 0;
+  std::string stop_reason;
+  double noise_estimate = 0.0;
+};
+
+absl::StatusOr<ServiceTimes> TimeThroughService(const std::string& draco, const v1::JobSpec& spec, int runs) {
+  server::ServerOptions o;
+  o.listen = "127.0.0.1:0";
+  o.log_jobs = false;
+  o.workers = 1;
+  auto server = server::Server::Start(o);
+  if (!server.ok()) return server.status();
+  auto channel = grpc::CreateChannel("127.0.0.1:" + std::to_string((*server)->port()), grpc::InsecureChannelCredentials());
+  auto stub = v1::MeshSmoother::NewStub(channel);
+  ServiceTimes t;
+  for (int r = 0; r < runs; ++r) {
+    grpc::ClientContext ctx;
+    const auto t0 = Clock::now();
+    absl::StatusOr<client::SmoothOutcome> out = client::CallSmooth(*stub, ctx, spec, draco);
+    const double ms = Ms(t0, Clock::now());
+    if (!out.ok()) {
+      (*server)->Shutdown();
+      return out.status();
+    }
+    const v1::Summary& s = out->summary;
+    t.total.push_back(ms);
+    t.smooth.push_back(1000 * s.timings().smooth_seconds());
+    t.decode.push_back(1000 * s.timings().decode_seconds());
+    t.encode.push_back(1000 * s.timings().encode_seconds());
+    t.queue.push_back(1000 * s.timings().queue_seconds());
+    t.iterations = static_cast<int>(s.parameters().iterations_run());
+    t.stop_reason = s.parameters().stop_reason();
+    t.noise_estimate = s.parameters().noise_estimate();
+  }
+  (*server)->Shutdown();
+  return t;
+}
+
 // One row of the service table; returns the bare Draco decode + encode (ms), or -1 on failure.
 double ServiceRow(const NamedMesh& nm, int iterations, int runs) {
   Mesh mesh = nm.mesh;
@@ -344,38 +386,37 @@ double ServiceRow(const NamedMesh& nm, int iterations, int runs) {
     bare.push_back(Ms(t0, t1));
     ours.push_back(Ms(t1, Clock::now()));
   }
-  server::ServerOptions o;
-  o.listen = "127.0.0.1:0";
-  o.log_jobs = false;
-  o.workers = 1;
-  auto server = server::Server::Start(o);
-  auto channel = grpc::CreateChannel("127.0.0.1:" + std::to_string((*server)->port()), grpc::InsecureChannelCredentials());
-  auto stub = v1::MeshSmoother::NewStub(channel);
   v1::JobSpec spec;
   spec.set_flow("laplacian");
   spec.set_iterations(static_cast<uint32_t>(iterations));
-  std::vector<double> total, smooth, decode, encode, queue;
-  for (int r = 0; r < runs; ++r) {
-    grpc::ClientContext ctx;
-    const auto t0 = Clock::now();
-    absl::StatusOr<client::SmoothOutcome> out = client::CallSmooth(*stub, ctx, spec, draco);
-    const double ms = Ms(t0, Clock::now());
-    if (!out.ok()) {
-      std::printf("| %s | failed: %s |\n", nm.name.c_str(), std::string(out.status().message()).c_str());
-      return -1.0;
-    }
-    total.push_back(ms);
-    smooth.push_back(1000 * out->summary.timings().smooth_seconds());
-    decode.push_back(1000 * out->summary.timings().decode_seconds());
-    encode.push_back(1000 * out->summary.timings().encode_seconds());
-    queue.push_back(1000 * out->summary.timings().queue_seconds());
+  absl::StatusOr<ServiceTimes> t = TimeThroughService(draco, spec, runs);
+  if (!t.ok()) {
+    std::printf("| %s | failed: %s |\n", nm.name.c_str(), std::string(t.status().message()).c_str());
+    return -1.0;
   }
-  (*server)->Shutdown();
-  const double overhead = Median(total) - Median(smooth);
+  const double overhead = Median(t->total) - Median(t->smooth);
   std::printf("| %s | %.1f MB | %.0f | %.0f | %.0f | %.0f | %.0f | %.0f | %.0f | %.2f | %.0f |\n", nm.name.c_str(),
-              draco.size() / 1e6, Median(total), Median(decode), Median(queue), Median(smooth), Median(encode),
-              overhead, Median(bare), overhead / Median(bare), Median(ours));
+              draco.size() / 1e6, Median(t->total), Median(t->decode), Median(t->queue), Median(t->smooth),
+              Median(t->encode), overhead, Median(bare), overhead / Median(bare), Median(ours));
   return Median(bare);
+}
+
+// The default job (a JobSpec with no field set) through the service, on the mesh as it is and
+// on a copy with Gaussian noise of 0.2 h along the normals (seed 1).
+void DefaultJobRows(const NamedMesh& nm, int runs) {
+  for (double sigma : {0.0, 0.2}) {
+    Mesh mesh = nm.mesh;
+    if (sigma > 0.0) AddNormalNoise(mesh, sigma, 1);
+    for (Vec3& p : mesh.positions) p = RoundToFloat(p);
+    absl::StatusOr<ServiceTimes> t = TimeThroughService(*EncodeDraco(mesh), v1::JobSpec(), runs);
+    if (!t.ok()) {
+      std::printf("| %s | %g | failed: %s |\n", nm.name.c_str(), sigma, std::string(t.status().message()).c_str());
+      continue;
+    }
+    std::printf("| %s | %g | %d, %s (%.3f) | %.0f | %.0f | %.0f | %.0f |\n", nm.name.c_str(), sigma, t->iterations,
+                t->stop_reason.c_str(), t->noise_estimate, Median(t->total), Median(t->decode), Median(t->smooth),
+                Median(t->encode));
+  }
 }
 
 // Raw TCP on loopback: `bytes` from a client socket to a thread that sends as many back (an
@@ -501,13 +542,15 @@ int main(int argc, char** argv) {
     else if (a == "--runs" && i + 1 < argc) opt.runs = std::max(1, std::atoi(argv[++i]));
     else if (a == "--no-service") opt.service = false;
     else if (a == "--no-peers") opt.peers = false;
+    else if (a == "--default-job-only") opt.default_job_only = true;
     else if (a == "--peak-child" && i + 1 < argc) return PeakChild(argv[i + 1]);
     else if (a == "--help" || a == "-h") {
-      std::printf("usage: %s [--quick] [--runs N] [--no-service] [--no-peers] [--levels 6,7,8,9] [--only LABEL,...] [MESH_FILE ...]\n", argv[0]);
+      std::printf("usage: %s [--quick] [--runs N] [--no-service] [--no-peers] [--levels 6,7,8,9] [--only LABEL,...] [--default-job-only] [MESH_FILE ...]\n", argv[0]);
       return 0;
     } else opt.files.push_back(a);
   }
   std::setvbuf(stdout, nullptr, _IOLBF, 0);  // rows appear as they are measured
+  if (opt.default_job_only) opt.levels.clear();
   char self_buf[4096] = {};
   const ssize_t self_len = readlink("/proc/self/exe", self_buf, sizeof self_buf - 1);
   const std::string self = self_len > 0 ? std::string(self_buf, self_len) : std::string(argv[0]);
@@ -516,12 +559,17 @@ int main(int argc, char** argv) {
   for (int i = 0; i < argc; ++i) std::printf("%s%s", i ? " " : "", argv[i]);
   std::printf("`. Times are medians of %d runs.\n", opt.runs);
 
-  std::printf("\n## Memory bandwidth (STREAM-like triad, 24 bytes per element)\n\n| arrays | 1 thread | 2 threads |\n|---|---|---|\n");
-  const double bw_cache1 = Triad(256 << 10, 1), bw_cache2 = Triad(256 << 10, std::min(2, hw));
-  std::printf("| 3 x 256 KiB (cache) | %.1f GB/s | %.1f GB/s |\n", bw_cache1, bw_cache2);
-  const size_t big = opt.quick ? (size_t{256} << 20) : (size_t{1} << 30);
-  const double bw1 = Triad(big, 1), bw2 = Triad(big, std::min(2, hw));
-  std::printf("| 3 x %zu MiB (DRAM) | %.1f GB/s | %.1f GB/s |\n", big >> 20, bw1, bw2);
+  double bw1 = 0.0, bw2 = 0.0, bw_cache1 = 0.0, bw_cache2 = 0.0;
+  if (!opt.default_job_only) {
+    std::printf("\n## Memory bandwidth (STREAM-like triad, 24 bytes per element)\n\n| arrays | 1 thread | 2 threads |\n|---|---|---|\n");
+    bw_cache1 = Triad(256 << 10, 1);
+    bw_cache2 = Triad(256 << 10, std::min(2, hw));
+    std::printf("| 3 x 256 KiB (cache) | %.1f GB/s | %.1f GB/s |\n", bw_cache1, bw_cache2);
+    const size_t big = opt.quick ? (size_t{256} << 20) : (size_t{1} << 30);
+    bw1 = Triad(big, 1);
+    bw2 = Triad(big, std::min(2, hw));
+    std::printf("| 3 x %zu MiB (DRAM) | %.1f GB/s | %.1f GB/s |\n", big >> 20, bw1, bw2);
+  }
 
   std::vector<NamedMesh> meshes;
   for (int level : opt.levels) {
@@ -536,6 +584,14 @@ int main(int argc, char** argv) {
     }
     meshes.push_back({f.substr(f.rfind('/') + 1), *std::move(m)});
   }
+
+  if (opt.service) {
+    std::printf("\n## The default job through the service (loopback TCP, no JobSpec field set; clean, and with "
+                "Gaussian noise of 0.2 h along the normals)\n\n| mesh | noise (h) | iterations, stop (noise estimate, h) "
+                "| total ms | decode+validate | smooth | encode |\n|---|---|---|---|---|---|---|\n");
+    for (const NamedMesh& nm : meshes) DefaultJobRows(nm, opt.runs);
+  }
+  if (opt.default_job_only) return 0;
 
   std::vector<Peer> peers;
   if (opt.peers) {
