@@ -220,6 +220,50 @@ struct NamedMesh {
   Mesh mesh;
 };
 
+// The normal-filtering flow's parts on `mesh`, beside laplacian U0 (ms per U0 iteration with 1
+// and 2 threads): one filter pass and one vertex pass (differences of runs that do one more per
+// iteration), one round with the default parameters and the set-up (face graph), each the
+// median of `runs`. docs/normal-filtering.md ("Speed") explains the rows.
+void NormalFilterRows(const Mesh& mesh, const Topology& topo, const double u0_ms[2], int hw, int runs) {
+  constexpr int kIterations = 4;
+  auto total_ms = [&](const FlowParams& p) {
+    std::vector<double> t;
+    for (int r = 0; r < runs; ++r) {
+      Mesh m = mesh;
+      const auto t0 = Clock::now();
+      absl::StatusOr<FlowResult> res = Smooth(m, topo, p);
+      t.push_back(res.ok() ? Ms(t0, Clock::now()) : -1.0);
+    }
+    return Median(t);
+  };
+  double filter[2], vertex[2], round[2], setup[2];
+  for (int k = 0; k < 2; ++k) {
+    FlowParams base;
+    base.flow = FlowId::kBilateralNormal;
+    base.threads = k == 0 ? 1 : std::min(2, hw);
+    base.iterations = kIterations;
+    FlowParams one = base;  // one filter pass and one vertex pass per iteration
+    one.normal_filter.normal_iterations = one.normal_filter.vertex_iterations = 1;
+    FlowParams two_filters = one, two_updates = one, single = base;
+    two_filters.normal_filter.normal_iterations = 2;
+    two_updates.normal_filter.vertex_iterations = 2;
+    single.iterations = 1;
+    const double t_one = total_ms(one), t_base = total_ms(base), t_single = total_ms(single);
+    filter[k] = (total_ms(two_filters) - t_one) / kIterations;
+    vertex[k] = (total_ms(two_updates) - t_one) / kIterations;
+    round[k] = (t_base - t_single) / (kIterations - 1);
+    setup[k] = t_single - round[k];
+  }
+  std::printf("\n| bilateral_normal (default parameters) | ms, 1 thread | 2 threads | / laplacian U0 iteration, 1 thread | 2 threads |\n|---|---|---|---|---|\n");
+  auto row = [&](const char* what, const double* t) {
+    std::printf("| %s | %.2f | %.2f | %.2fx | %.2fx |\n", what, t[0], t[1], t[0] / u0_ms[0], t[1] / u0_ms[1]);
+  };
+  row("one filter pass over the face normals", filter);
+  row("one vertex pass (update and guards)", vertex);
+  row("one iteration (1 filter pass, 5 vertex passes, face geometry)", round);
+  row("set-up (face graph) and first touch of the buffers", setup);
+}
+
 Mesh NoisyIcosphere(int level) {
   Mesh m = Icosphere(level);
   AddUniformNoise(m, 0.3, 1);
@@ -401,19 +445,23 @@ double ServiceRow(const NamedMesh& nm, int iterations, int runs) {
   return Median(bare);
 }
 
-// The default job (a JobSpec with no field set) through the service, on the mesh as it is and
-// on a copy with Gaussian noise of 0.2 h along the normals (seed 1).
-void DefaultJobRows(const NamedMesh& nm, int runs) {
+// The default job (a JobSpec with no field set but `flow`, empty: the default flow) through the
+// service, on the mesh as it is and on a copy with Gaussian noise of 0.2 h along the normals
+// (seed 1).
+void DefaultJobRows(const NamedMesh& nm, const std::string& flow, int runs) {
+  v1::JobSpec spec;
+  spec.set_flow(flow);
+  const std::string label = flow.empty() ? nm.name : absl::StrCat(nm.name, " (", flow, ")");
   for (double sigma : {0.0, 0.2}) {
     Mesh mesh = nm.mesh;
     if (sigma > 0.0) AddNormalNoise(mesh, sigma, 1);
     for (Vec3& p : mesh.positions) p = RoundToFloat(p);
-    absl::StatusOr<ServiceTimes> t = TimeThroughService(*EncodeDraco(mesh), v1::JobSpec(), runs);
+    absl::StatusOr<ServiceTimes> t = TimeThroughService(*EncodeDraco(mesh), spec, runs);
     if (!t.ok()) {
-      std::printf("| %s | %g | failed: %s |\n", nm.name.c_str(), sigma, std::string(t.status().message()).c_str());
+      std::printf("| %s | %g | failed: %s |\n", label.c_str(), sigma, std::string(t.status().message()).c_str());
       continue;
     }
-    std::printf("| %s | %g | %d, %s (%.3f) | %.0f | %.0f | %.0f | %.0f |\n", nm.name.c_str(), sigma, t->iterations,
+    std::printf("| %s | %g | %d, %s (%.3f) | %.0f | %.0f | %.0f | %.0f |\n", label.c_str(), sigma, t->iterations,
                 t->stop_reason.c_str(), t->noise_estimate, Median(t->total), Median(t->decode), Median(t->smooth),
                 Median(t->encode));
   }
@@ -589,7 +637,11 @@ int main(int argc, char** argv) {
     std::printf("\n## The default job through the service (loopback TCP, no JobSpec field set; clean, and with "
                 "Gaussian noise of 0.2 h along the normals)\n\n| mesh | noise (h) | iterations, stop (noise estimate, h) "
                 "| total ms | decode+validate | smooth | encode |\n|---|---|---|---|---|---|---|\n");
-    for (const NamedMesh& nm : meshes) DefaultJobRows(nm, opt.runs);
+    for (const NamedMesh& nm : meshes) DefaultJobRows(nm, "", opt.runs);
+    // The normal-filtering flow's default job, for the files given (issue: under 2 s on the dragon).
+    if (opt.Wanted("bilateral_normal")) {
+      for (size_t i = opt.levels.size(); i < meshes.size(); ++i) DefaultJobRows(meshes[i], "bilateral_normal", opt.runs);
+    }
   }
   if (opt.default_job_only) return 0;
 
@@ -606,14 +658,14 @@ int main(int argc, char** argv) {
     std::printf("\n## %s (%d vertices, %d iterations per run, %s)\n\n", nm.name.c_str(), n, iterations,
                 MortonOrderPaysOff(topo, iterations) ? "run on a Morton-ordered copy" : "run in its own order");
     std::printf("| flow | ms/iteration, 1 thread | 2 threads | speed-up | Mvertex-it/s (2 threads) | bytes/vertex | share of DRAM bound (2 threads) | set-up ms (1 thread) |\n|---|---|---|---|---|---|---|---|\n");
-    double u0_ms = 0.0;
+    double u0_ms = 0.0, u0_ms2[2] = {0.0, 0.0};
     for (const Variant& v : Variants()) {
       if (!opt.Wanted(v.label) && v.label != "laplacian U0") continue;  // U0 is every ratio's base
       const OurTiming one = TimeOurs(nm.mesh, topo, v.params, iterations, 1, opt.runs);
       const OurTiming two = TimeOurs(nm.mesh, topo, v.params, iterations, std::min(2, hw), opt.runs);
       const double t1 = one.per_iteration_ms, t2 = two.per_iteration_ms;
       ours_1t[nm.name][v.label] = t1;
-      if (v.label == "laplacian U0") u0_ms = t1;
+      if (v.label == "laplacian U0") u0_ms = u0_ms2[0] = t1, u0_ms2[1] = t2;
       const double bytes = BytesPerVertex(v.params.flow, valence);
       const double gbs = bytes * n / (t2 / 1000.0) / 1e9;
       std::printf("| %s | %.2f | %.2f | %.2fx | %.0f | %.0f | %.0f%% | %.1f |\n", v.label.c_str(), t1, t2, t1 / t2,
@@ -625,6 +677,7 @@ int main(int argc, char** argv) {
       std::printf("| (reference) plain CSR U0 loop, same order, no checks | %.2f | %.2f | %.2fx | %.0f | %.0f | %.0f%% | - |\n", t1,
                   t2, t1 / t2, n / (t2 / 1000.0) / 1e6, bytes, 100.0 * bytes * n / (t2 / 1000.0) / 1e9 / bw2);
     }
+    if (opt.Wanted("bilateral_normal")) NormalFilterRows(nm.mesh, topo, u0_ms2, hw, opt.runs);
     std::string ratios;  // none when --only left the cotangent flows out
     for (const char* flow : {"mcf", "mcf_tangential", "median"}) {
       const auto it = ours_1t[nm.name].find(flow);
