@@ -4,6 +4,7 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -25,9 +26,15 @@ constexpr int kMinFitPoints = 14;
 constexpr double kMinRelativePivot = 1e-9;
 // 1 / Phi^-1(3/4): the median of |x| for x ~ N(0, sigma^2) is sigma / 1.4826.
 constexpr double kMadToSigma = 1.4826;
+// Marks a vertex whose fit was tried but not well posed.
+constexpr double kUnusable = -1.0;
 // At most about this many vertices are fitted (every k-th vertex of a larger mesh): the median
 // of 50,000 residuals is within ~0.5% of the whole mesh's, at a fraction of the time.
 constexpr int32_t kMaxFits = 50000;
+// The least number of well-posed fits, absolute and as a share of the vertices tried, for the
+// median to be an estimate.
+constexpr int64_t kMinWellPosed = 25;
+constexpr int64_t kMinWellPosedPerTried = 4;  // one in four
 
 // The normalised residual r / sqrt(1 + g) of vertex v (header comment), or NaN when its fit is
 // not well posed. `mark`/`stamp` find v's second ring without a set.
@@ -61,13 +68,32 @@ double NormalisedResidual(const Mesh& mesh, const Topology& topo, int32_t v, dou
   }
   if (static_cast<int>(ring2.size()) < kMinFitPoints) return std::numeric_limits<double>::quiet_NaN();
 
-  // Normal equations in units of h (well scaled whatever the mesh's units).
-  Mat ata = Mat::Zero();
-  Col atz = Col::Zero();
+  // The ring in the tangent plane, whitened: along the principal axes of its second moment
+  // about v, each scaled to unit spread. A cubic in (x, y) is a cubic in any linear map of them,
+  // so the prediction at v and its variance do not change, but the normal equations of a
+  // needle-shaped ring (CAD tessellations) stay well conditioned. Heights in units of h.
   const Vec3 p = pos[v];
+  Eigen::Matrix2d moment = Eigen::Matrix2d::Zero();
   for (int32_t u : ring2) {
     const Vec3 q = (pos[u] - p) * inv_h;
-    const double x = Dot(q, t1), y = Dot(q, t2), z = Dot(q, n);
+    const Eigen::Vector2d xy(Dot(q, t1), Dot(q, t2));
+    moment += xy * xy.transpose();
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> axes(moment);
+  const Eigen::Vector2d spread = axes.eigenvalues();
+  if (axes.info() != Eigen::Success || !(spread(0) > kMinRelativePivot * spread(1))) {
+    return std::numeric_limits<double>::quiet_NaN();
+  }
+  Eigen::Matrix2d whiten = axes.eigenvectors().transpose();
+  whiten.row(0) /= std::sqrt(spread(0) / static_cast<double>(ring2.size()));
+  whiten.row(1) /= std::sqrt(spread(1) / static_cast<double>(ring2.size()));
+
+  Mat ata = Mat::Zero();
+  Col atz = Col::Zero();
+  for (int32_t u : ring2) {
+    const Vec3 q = (pos[u] - p) * inv_h;
+    const Eigen::Vector2d xy = whiten * Eigen::Vector2d(Dot(q, t1), Dot(q, t2));
+    const double x = xy(0), y = xy(1), z = Dot(q, n);
     Col row;
     row << 1.0, x, y, x * x, x * y, y * y, x * x * x, x * x * y, x * y * y, y * y * y;
     ata.selfadjointView<Eigen::Lower>().rankUpdate(row);
@@ -113,16 +139,22 @@ NoiseEstimate EstimateNoise(const Mesh& mesh, const Topology& topo, double h, in
       give_up = stopped;
       if (give_up || v % stride != 0 || topo.kind[v] != VertexKind::kInterior) continue;
       residual[v] = std::abs(NormalisedResidual(mesh, topo, v, inv_h, mark, v, ring2));
+      if (std::isnan(residual[v])) residual[v] = kUnusable;
     }
   }
   if (stopped) return estimate;
-  // NaN (no fit) sorts to the end once removed; the median of what is left.
-  residual.erase(std::remove_if(residual.begin(), residual.end(), [](double r) { return std::isnan(r); }),
+  // NaN: not tried; kUnusable: tried, the fit not well posed. The median of the rest.
+  for (double r : residual) estimate.vertices_tried += !std::isnan(r);
+  residual.erase(std::remove_if(residual.begin(), residual.end(), [](double r) { return !(r >= 0.0); }),
                  residual.end());
-  if (residual.empty()) return estimate;
+  estimate.vertices_used = static_cast<int64_t>(residual.size());
+  if (estimate.vertices_used < kMinWellPosed ||
+      estimate.vertices_used * kMinWellPosedPerTried < estimate.vertices_tried) {
+    return estimate;
+  }
   const size_t mid = residual.size() / 2;
   std::nth_element(residual.begin(), residual.begin() + static_cast<std::ptrdiff_t>(mid), residual.end());
-  estimate.vertices_used = static_cast<int64_t>(residual.size());
+  estimate.reliable = true;
   estimate.sigma_h = kMadToSigma * residual[mid];
   estimate.sigma = estimate.sigma_h * h;
   return estimate;

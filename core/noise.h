@@ -25,11 +25,16 @@ namespace meshsmooth {
 struct NoiseEstimate {
   double sigma = 0.0;   // in the mesh's units
   double sigma_h = 0.0;  // relative to the mean edge length h
-  int64_t vertices_used = 0;  // interior vertices with a well-posed fit
+  int64_t vertices_used = 0;   // interior vertices with a well-posed fit
+  int64_t vertices_tried = 0;  // interior vertices fitted (every k-th one of a large mesh)
+  // False when too few fits were well posed for the median to mean anything (fewer than 25,
+  // or fewer than a quarter of those tried: e.g. a fan whose rim vertices all see one circle);
+  // sigma is then 0.
+  bool reliable = false;
 };
 
-// The estimate for `mesh`; zero when no vertex has a well-posed fit (fewer than 9 second-ring
-// neighbours, or a degenerate ring). `threads`: 0 = all hardware threads. Deterministic for
+// The estimate for `mesh`; zero and not reliable when too few vertices have a well-posed fit
+// (fewer than 14 second-ring neighbours, or a ring too degenerate for a cubic). `threads`: 0 = all hardware threads. Deterministic for
 // any thread count. Returns early (an estimate of zero) once `stop` fires.
 NoiseEstimate EstimateNoise(const Mesh& mesh, const Topology& topo, double h, int threads = 0,
                             const StopToken& stop = {});

@@ -13,6 +13,7 @@ namespace meshsmooth::flows {
 AutoStop::AutoStop(const Mesh& mesh, const Topology& topo, const uint8_t* role, double h, int threads)
     : topo_(topo), role_(role), h_(h), threads_(threads), start_(mesh.positions) {
   const NoiseEstimate noise = EstimateNoise(mesh, topo, h, threads);
+  estimated_ = noise.reliable;
   report_.noise_sigma_h = noise.sigma_h;
   report_.noise_to_remove_h =
       std::sqrt(std::max(0.0, noise.sigma_h * noise.sigma_h - kEstimatorFloorH * kEstimatorFloorH));

@@ -5,7 +5,8 @@
 // reading is the estimator's own misfit on clean, coarse meshes (up to ~0.04 h on the
 // benchmark's clean scans): it is removed in quadrature, sigma_n = sqrt(sigma^2 - floor^2).
 // Below kNoNoiseH there is nothing to remove and the run does no iteration: a clean mesh
-// comes back as it went in. Otherwise, after every iteration, the RMS over the free interior
+// comes back as it went in; so does a mesh on which too few vertices allow an estimate (a fan
+// whose rim sees one circle, a strip one triangle wide). Otherwise, after every iteration, the RMS over the free interior
 // vertices (every k-th one of a large mesh) of their displacement from the input along their
 // current normals is compared with kDiscrepancy * sigma_n: the run stops at the first iteration that reaches it (the flow has
 // moved the vertices as far as the noise had), or when an iteration adds almost nothing to it
@@ -53,7 +54,9 @@ class AutoStop {
   AutoStop(const Mesh& mesh, const Topology& topo, const uint8_t* role, double h, int threads);
 
   // True when the input has no noise to remove: the run does no iteration.
-  bool nothing_to_do() const { return report_.noise_to_remove_h < kNoNoiseH; }
+  bool nothing_to_do() const { return !estimated_ || report_.noise_to_remove_h < kNoNoiseH; }
+  // Why the run does nothing when nothing_to_do().
+  StopReason idle_reason() const { return estimated_ ? StopReason::kNoNoise : StopReason::kNoEstimate; }
 
   // After an accepted iteration with positions `pos`: the reason to stop now, if any.
   std::optional<StopReason> After(const Vec3* pos);
@@ -80,6 +83,7 @@ class AutoStop {
   double h_;
   int threads_;
   std::vector<Vec3> start_;
+  bool estimated_ = false;  // the noise estimate is reliable (core/noise.h)
   int32_t stride_ = 1;    // every stride_-th vertex is measured
   int64_t counted_ = 0;   // free interior vertices measured
   double cos_fold_ = std::cos(kFoldAngleDeg * std::numbers::pi / 180.0);

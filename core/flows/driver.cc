@@ -276,7 +276,7 @@ absl::StatusOr<FlowResult> RunIterations(Mesh& mesh, const Topology& topo, const
     auto_stop.emplace(mesh, topo, run.roles(), h, run.threads());
     result.auto_stop = auto_stop->report();
     if (auto_stop->nothing_to_do()) {
-      result.stop_reason = StopReason::kNoNoise;
+      result.stop_reason = auto_stop->idle_reason();
       return result;
     }
     last_iteration = std::min(p.max_auto_iterations, kMaxAutoIterations);

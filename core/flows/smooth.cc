@@ -28,6 +28,7 @@ std::string_view StopReasonName(StopReason reason) {
     case StopReason::kNoiseRemoved: return "noise_removed";
     case StopReason::kNoNoise: return "no_noise";
     case StopReason::kConverged: return "converged";
+    case StopReason::kNoEstimate: return "no_estimate";
   }
   return "iterations";
 }
