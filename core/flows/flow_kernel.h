@@ -109,6 +109,7 @@ std::unique_ptr<FlowKernel> MakeMcf(const FlowParams& p, double step);
 std::unique_ptr<FlowKernel> MakeMcfTangential(const FlowParams& p, double step);
 std::unique_ptr<FlowKernel> MakeMedian(const FlowParams& p, double step);
 std::unique_ptr<FlowKernel> MakeBilateralNormal(const FlowParams& p, double step);
+std::unique_ptr<FlowKernel> MakeGuidedNormal(const FlowParams& p, double step);
 
 // Checks of a flow's own parameters that involve the step (the flow table's `validate`):
 // InvalidArgument naming the parameters.

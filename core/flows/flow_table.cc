@@ -69,6 +69,12 @@ std::vector<FlowRow> MakeTable() {
                   "sharp creases; one iteration = normal_iterations filter passes + vertex_iterations vertex updates",
                   "Zheng et al. 2011 (docs/normal-filtering.md)", NormalFilterParameters(d.normal_filter), {},
                   flows::ValidateNormalFilter, flows::MakeBilateralNormal});
+  rows.push_back({FlowId::kGuidedNormal, "guided_normal", FlowKind::kNormalFilter, 1.0, 1.0,
+                  "Guided filtering of the face normals (the range weight compares the mean normals of each "
+                  "face's most consistent patch), then vertices fitted to them: keeps the creases and corners of "
+                  "CAD parts; one iteration as bilateral_normal",
+                  "Zhang et al. 2015, eqs. (3)-(6) (docs/normal-filtering.md)", NormalFilterParameters(d.normal_filter),
+                  {}, flows::ValidateNormalFilter, flows::MakeGuidedNormal});
   return rows;
 }
 

@@ -31,6 +31,7 @@ enum class FlowId : uint8_t {
   kMcfTangential,
   kMedian,
   kBilateralNormal,
+  kGuidedNormal,
 };
 
 // The flow of a job that names none: the benchmark's best on scans at its automatic stop

@@ -1,7 +1,7 @@
-// Internal to core/flows: what the normal-filtering flows (bilateral_normal.cc) share. One
-// round (one iteration of the job) filters the face normals `normal_iterations` times (the
-// flow's FilterOnce), then moves the vertices so that the faces fit the filtered normals,
-// `vertex_iterations` times (one pass each):
+// Internal to core/flows: what the normal-filtering flows (bilateral_normal.cc,
+// guided_normal.cc) share. One round (one iteration of the job) filters the face normals
+// `normal_iterations` times (the flow's FilterOnce), then moves the vertices so that the faces
+// fit the filtered normals, `vertex_iterations` times (one pass each):
 //   x_v += step * sum_{f in F(v)} A_f n_f (n_f . (c_f - x_v)) / sum_{f in F(v)} A_f
 // the orthogonal-projection update of Sun et al. (2007) used by Zheng et al. (2011) and Zhang
 // et al. (2015), with area weights A_f (the round's areas) and c_f the centroid of face f in the

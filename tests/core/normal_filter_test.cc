@@ -1,4 +1,4 @@
-// The normal-filtering flow bilateral_normal: creases stay sharp where the
+// The normal-filtering flows bilateral_normal and guided_normal: creases stay sharp where the
 // paper's flows round them, on a noisy cube and on fandisk (a CAD part).
 #include <cmath>
 #include <map>
@@ -106,7 +106,7 @@ int FlippedFaces(const Mesh& m, const Mesh& clean) {
 TEST(NormalFilterTest, NoisyCubeComesBackWithSharpEdgesAndCorners) {
   const Mesh clean = GridCube(12);
   const Mesh noisy = WithNormalNoise(clean, 0.1, 7);
-  for (const char* flow : {"bilateral_normal"}) {
+  for (const char* flow : {"bilateral_normal", "guided_normal"}) {
     SCOPED_TRACE(flow);
     const Mesh out = testing::Smoothed(noisy, Params(flow, 20));
     // Every edge of the clean cube's 12 edges (corners included): the dihedral angle between
@@ -142,7 +142,8 @@ TEST(NormalFilterTest, NoisyCubeComesBackWithSharpEdgesAndCorners) {
 }
 
 // Issue-level figures on fandisk at sigma = 0.2 h, one seed (the quality benchmark gives the
-// means over seeds and the other noise levels).
+// means over seeds and the other noise levels). guided_normal's overall bound is above the
+// issue's 1.9 degrees, which it does not reach yet (docs/normal-filtering.md).
 TEST(NormalFilterTest, FandiskKeepsItsCreases) {
   const std::filesystem::path path = testing::SharedData("meshes") / "fandisk.obj";
   if (!std::filesystem::exists(path)) GTEST_SKIP() << path << " absent";
@@ -154,7 +155,7 @@ TEST(NormalFilterTest, FandiskKeepsItsCreases) {
     const char* flow;
     double all, crease;
   };
-  for (const Bound& b : {Bound{"bilateral_normal", 2.2, 3.6}}) {
+  for (const Bound& b : {Bound{"bilateral_normal", 2.2, 3.6}, Bound{"guided_normal", 2.2, 3.0}}) {
     SCOPED_TRACE(b.flow);
     const Mesh out = testing::Smoothed(noisy, Params(b.flow, 20));
     const auto [all, crease] = NormalErrors(out, clean);
@@ -192,7 +193,7 @@ TEST(NormalFilterTest, NeedlesComeBackUnfolded) {
   for (uint64_t seed : {1, 2, 3}) {
     const Mesh noisy = WithNormalNoise(clean, 0.2, seed);
     const int noisy_flips = FlippedFaces(noisy, clean);
-    for (const char* flow : {"bilateral_normal"}) {
+    for (const char* flow : {"bilateral_normal", "guided_normal"}) {
       SCOPED_TRACE(flow);
       const Mesh out = testing::Smoothed(noisy, Params(flow, 20));
       std::printf("%s, seed %d: %d flipped faces (noisy %d)\n", flow, static_cast<int>(seed), FlippedFaces(out, clean),
@@ -210,7 +211,7 @@ TEST(NormalFilterTest, DegenerateFacesAndLockedVerticesAreSafe) {
   Mesh m = WithNormalNoise(Icosphere(3), 0.3, 5);
   const int32_t a = m.triangles[0][0], b = m.triangles[0][1];
   m.positions[b] = m.positions[a];  // two faces collapse to zero area
-  for (const char* flow : {"bilateral_normal"}) {
+  for (const char* flow : {"bilateral_normal", "guided_normal"}) {
     FlowParams p = Params(flow, 5);
     p.locked.assign(m.positions.size(), 0);
     p.locked[7] = 1;

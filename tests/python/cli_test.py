@@ -188,7 +188,7 @@ def main():
         assert r.returncode == 0, r.stderr
         names = [f["name"] for f in json.loads(r.stdout)["flows"]]
         assert names == ["laplacian", "taubin", "bilaplacian", "mcf", "mcf_tangential", "median",
-                         "bilateral_normal"], names
+                         "bilateral_normal", "guided_normal"], names
     check("flows --json lists every flow", flows_json)
 
     def flow_choices_are_the_flows():
