@@ -625,9 +625,13 @@ near 1/sqrt(2N)), and each of its seeds adds several minutes to the run.
 - **Flow: `bilaplacian`.** At its best count it is the best flow, or within 1.1× of it, on
   every scan (the oracle rows), it keeps the volume best of the umbrella flows, and an iteration
   costs a fraction of `bilateral_normal`'s. `bilateral_normal` is the better flow on the CAD
-  parts (fandisk, turbine) and the smooth synthetic shapes, but with automatic stopping it ends
-  beyond its best count (fandisk sigma = 0.2: 140 iterations, RMS 0.105 h against 0.052 h at
-  20) and on the scans it turns faces over: not the default yet. `median` (the former default,
+  parts (fandisk, turbine) and the smooth synthetic shapes at its best count, but its
+  displacement does not track the noise it removes: with automatic stopping it ends far from its
+  best count (fandisk sigma = 0.2: 126 iterations, RMS 0.106 h against 0.052 h at 20; `--quick
+  --flows none --job 'flow: "bilateral_normal"'`), and at factors 0.6 / 0.75 / 0.9 instead of 1
+  its mean RMS over the best oracle's is 2.61 / 2.16 / 1.82 (fandisk, bunny-small, turbine,
+  camelhead, sphere at sigma 0.1 and 0.3, one seed): not the default until it has a stopping
+  rule of its own. `median` (the former default,
   20 iterations, step 0.1 h^2) moved clean meshes by 0.15–0.38 h and lost up to 16% of the
   volume: dropped.
 - **Volume.** On a closed mesh the automatic job moves the free vertices along their normals
