@@ -34,12 +34,14 @@ constexpr int32_t kMaxFits = 50000;
 // The least number of well-posed fits, absolute and as a share of the vertices tried, for the
 // median to be an estimate.
 constexpr int64_t kMinWellPosed = 25;
+// A second ring is gathered from at most this many ring entries (regular meshes: ~40).
+constexpr size_t kMaxGather = 1024;
 constexpr int64_t kMinWellPosedPerTried = 4;  // one in four
 
 // The normalised residual r / sqrt(1 + g) of vertex v (header comment), or NaN when its fit is
-// not well posed. `mark`/`stamp` find v's second ring without a set.
-double NormalisedResidual(const Mesh& mesh, const Topology& topo, int32_t v, double inv_h, std::vector<int32_t>& mark,
-                          int32_t stamp, std::vector<int32_t>& ring2) {
+// not well posed (or v's second ring too large to gather: a fan's rim around a centre of huge
+// valence, skipped in bounded time).
+double NormalisedResidual(const Mesh& mesh, const Topology& topo, int32_t v, double inv_h, std::vector<int32_t>& ring2) {
   const Vec3* pos = mesh.positions.data();
   const Vec3 normal = RingNormal(topo, pos, v);
   const double len = Norm(normal);
@@ -50,22 +52,20 @@ double NormalisedResidual(const Mesh& mesh, const Topology& topo, int32_t v, dou
   const Vec3 t1 = Normalized(Cross(n, helper));
   const Vec3 t2 = Cross(n, t1);
 
+  // The first and second rings, v left out; duplicates removed after a bounded gather.
   ring2.clear();
-  mark[v] = stamp;
   for (int32_t k = topo.ring_offsets[v]; k < topo.ring_offsets[v + 1]; ++k) {
     const int32_t u = topo.ring[k];
-    if (mark[u] != stamp) {
-      mark[u] = stamp;
-      ring2.push_back(u);
+    const int32_t first = topo.ring_offsets[u], last = topo.ring_offsets[u + 1];
+    if (ring2.size() + 1 + static_cast<size_t>(last - first) > kMaxGather) {
+      return std::numeric_limits<double>::quiet_NaN();
     }
-    for (int32_t j = topo.ring_offsets[u]; j < topo.ring_offsets[u + 1]; ++j) {
-      const int32_t w = topo.ring[j];
-      if (mark[w] != stamp) {
-        mark[w] = stamp;
-        ring2.push_back(w);
-      }
-    }
+    ring2.push_back(u);
+    ring2.insert(ring2.end(), topo.ring.begin() + first, topo.ring.begin() + last);
   }
+  std::sort(ring2.begin(), ring2.end());
+  ring2.erase(std::unique(ring2.begin(), ring2.end()), ring2.end());
+  ring2.erase(std::remove(ring2.begin(), ring2.end(), v), ring2.end());
   if (static_cast<int>(ring2.size()) < kMinFitPoints) return std::numeric_limits<double>::quiet_NaN();
 
   // The ring in the tangent plane, whitened: along the principal axes of its second moment
@@ -123,23 +123,26 @@ NoiseEstimate EstimateNoise(const Mesh& mesh, const Topology& topo, double h, in
   if (threads <= 0) threads = omp_get_max_threads();
   const double inv_h = 1.0 / h;
   const int32_t stride = std::max<int32_t>(1, (n + kMaxFits - 1) / kMaxFits);
-  std::vector<double> residual(n, std::numeric_limits<double>::quiet_NaN());
+  // One entry per vertex tried (every stride-th one): bounded by ~kMaxFits, whatever the mesh.
+  std::vector<double> residual((n + stride - 1) / stride, std::numeric_limits<double>::quiet_NaN());
   bool stopped = false;
 #pragma omp parallel num_threads(threads) if (threads > 1 && n > 20000)
   {
-    std::vector<int32_t> mark(n, -1), ring2;
-#pragma omp for schedule(static, 4096)
-    for (int32_t v = 0; v < n; ++v) {
-      if (v % kStopPollInterval == 0 && stop.Fired()) {
+    std::vector<int32_t> ring2;
+    const auto tried = static_cast<int32_t>(residual.size());
+#pragma omp for schedule(static, 512)
+    for (int32_t i = 0; i < tried; ++i) {
+      if (i % 256 == 0 && stop.Fired()) {
 #pragma omp atomic write
         stopped = true;
       }
       bool give_up;
 #pragma omp atomic read
       give_up = stopped;
-      if (give_up || v % stride != 0 || topo.kind[v] != VertexKind::kInterior) continue;
-      residual[v] = std::abs(NormalisedResidual(mesh, topo, v, inv_h, mark, v, ring2));
-      if (std::isnan(residual[v])) residual[v] = kUnusable;
+      const int32_t v = i * stride;
+      if (give_up || topo.kind[v] != VertexKind::kInterior) continue;
+      residual[i] = std::abs(NormalisedResidual(mesh, topo, v, inv_h, ring2));
+      if (std::isnan(residual[i])) residual[i] = kUnusable;
     }
   }
   if (stopped) return estimate;

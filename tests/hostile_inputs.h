@@ -83,4 +83,24 @@ inline Mesh Fan(int32_t valence) {
   return m;
 }
 
+// A closed bipyramid: `valence` vertices on the unit circle and two apexes at z = +-0.5, each
+// apex of valence `valence`; the rim vertices have valence 4, and every face is a needle once
+// the valence is large.
+inline Mesh ClosedFan(int32_t valence) {
+  Mesh m;
+  for (int32_t i = 0; i < valence; ++i) {
+    const double a = 2.0 * std::numbers::pi * i / valence;
+    m.positions.push_back({std::cos(a), std::sin(a), 0.0});
+  }
+  const int32_t top = valence, bottom = valence + 1;
+  m.positions.push_back({0.0, 0.0, 0.5});
+  m.positions.push_back({0.0, 0.0, -0.5});
+  for (int32_t i = 0; i < valence; ++i) {
+    const int32_t j = (i + 1) % valence;
+    m.triangles.push_back({i, j, top});
+    m.triangles.push_back({j, i, bottom});
+  }
+  return m;
+}
+
 }  // namespace meshsmooth::testing

@@ -93,38 +93,17 @@ TEST(AutoStopTest, NoisySphereComesBackCloserWithItsVolume) {
   }
 }
 
-// A closed bipyramid: a ring of `around` vertices and two apexes of valence `around`; the ring
-// vertices have valence 4 and the faces are needles when the ring is wide against the height.
-Mesh Bipyramid(int around, double radius, double half_height) {
-  Mesh m;
-  for (int i = 0; i < around; ++i) {
-    const double a = 2.0 * std::numbers::pi * i / around;
-    m.positions.push_back({radius * std::cos(a), radius * std::sin(a), 0.0});
-  }
-  const int top = around, bottom = around + 1;
-  m.positions.push_back({0.0, 0.0, half_height});
-  m.positions.push_back({0.0, 0.0, -half_height});
-  for (int i = 0; i < around; ++i) {
-    const int j = (i + 1) % around;
-    m.triangles.push_back({i, j, top});
-    m.triangles.push_back({j, i, bottom});
-  }
-  return m;
-}
-
-// No mesh that validates as manifold fails with the default job: needles (a tube of 10 x 0.13
-// triangles), fans (apexes of valence 2,000 over faces 2,000 times longer than wide), noise on
-// all of them. Every coordinate stays finite and a closed mesh keeps its volume.
-TEST(AutoStopTest, DefaultJobNeverFailsOnNeedlesAndFans) {
+// No mesh that validates as manifold fails with the default job: needles (a tube of 4 x 0.13
+// triangles) with noise; every coordinate stays finite. (Fans of huge valence:
+// tests/core/long_work_test.cc.)
+TEST(AutoStopTest, DefaultJobNeverFailsOnNeedles) {
   std::vector<std::pair<std::string, Mesh>> meshes;
   meshes.emplace_back("needle tube", Cylinder(1.0, 20.0, 48, 6));
-  meshes.emplace_back("fan bipyramid", Bipyramid(2000, 1.0, 0.5));
   for (auto& [name, clean] : meshes) {
     for (double sigma : {0.0, 0.1, 0.3}) {
       Mesh m = clean;
       if (sigma > 0.0) AddNormalNoise(m, sigma, 5);
       const Topology topo = BuildTopology(m);
-      const double volume = ComputeMetrics(m, topo).signed_volume;
       absl::StatusOr<FlowResult> r = Smooth(m, topo, FlowParams{});
       ASSERT_TRUE(r.ok()) << name << " sigma " << sigma << ": " << r.status();
       for (const Vec3& p : m.positions) ASSERT_TRUE(IsFinite(p)) << name;
@@ -132,12 +111,6 @@ TEST(AutoStopTest, DefaultJobNeverFailsOnNeedlesAndFans) {
                   std::string(StopReasonName(r->stop_reason)).c_str());
       if (name == "needle tube" && sigma > 0.0) {
         EXPECT_GT(r->iterations_run, 0) << "the tube's middle rings allow an estimate";
-      }
-      if (name == "fan bipyramid") {
-        // Its 2,000 rim vertices each see one circle: no fit, no estimate, nothing done.
-        EXPECT_EQ(r->stop_reason, StopReason::kNoEstimate);
-        EXPECT_EQ(r->iterations_run, 0);
-        EXPECT_EQ(ComputeMetrics(m, topo).signed_volume, volume);
       }
     }
   }

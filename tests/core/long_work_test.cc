@@ -5,6 +5,7 @@
 
 #include "core/draco_codec.h"
 #include "core/features/ridges.h"
+#include "core/flows/flow.h"
 #include "core/metrics.h"
 #include "core/shapes.h"
 #include "core/stop_token.h"
@@ -38,6 +39,24 @@ TEST(LongWorkTest, HighValenceFanTopologyIsLinearInTheValence) {
   EXPECT_EQ(r.boundary_loops, 1);
   EXPECT_EQ(r.nonmanifold_vertices, 0);
   EXPECT_EQ(SquaredValenceSum(topo), int64_t{kValence} * kValence + 9 * int64_t{kValence});
+}
+
+// The default job on a closed fan whose two apexes have valence 120,000 and whose rim vertices
+// each see that many second-ring neighbours: the noise estimate gives up on such rings in
+// bounded time (core/noise.cc, kMaxGather) instead of gathering 120,000 points per vertex, and
+// with no estimate the job does nothing. The bound is generous.
+TEST(LongWorkTest, DefaultJobOnAHugeClosedFanIsBounded) {
+  Mesh fan = testing::ClosedFan(120000);
+  AddNormalNoise(fan, 0.1, 3);
+  const Mesh input = fan;
+  const Topology topo = BuildTopology(fan);
+  const auto t0 = std::chrono::steady_clock::now();
+  absl::StatusOr<FlowResult> r = Smooth(fan, topo, FlowParams{});
+  EXPECT_LT(SecondsSince(t0), 5.0);
+  ASSERT_TRUE(r.ok()) << r.status();
+  EXPECT_EQ(r->stop_reason, StopReason::kNoEstimate);
+  EXPECT_EQ(r->iterations_run, 0);
+  EXPECT_EQ(fan.positions, input.positions);
 }
 
 // The general path (boundary, non-manifold, inconsistently oriented fans) is linear too: the
