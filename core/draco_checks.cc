@@ -5,6 +5,11 @@
 #include <limits>
 
 #include "absl/strings/str_cat.h"
+#include "draco/compression/config/compression_shared.h"
+#include "draco/compression/point_cloud/point_cloud_decoder.h"
+#include "draco/core/varint_decoding.h"
+#include "draco/metadata/geometry_metadata.h"
+#include "draco/metadata/metadata_decoder.h"
 
 namespace meshsmooth {
 namespace {
@@ -36,6 +41,46 @@ absl::Status CheckDracoOptions(const DracoOptions& options) {
   }
   if (options.speed < 0 || options.speed > 10) {
     return absl::InvalidArgumentError(absl::StrCat("Draco speed must be 0..10, got ", options.speed));
+  }
+  return absl::OkStatus();
+}
+
+absl::Status CheckDeclaredEdgebreakerSizes(std::string_view bytes, int64_t max_vertices) {
+  draco::DecoderBuffer buffer;
+  buffer.Init(bytes.data(), bytes.size());
+  draco::DracoHeader header;
+  if (!draco::PointCloudDecoder::DecodeHeader(&buffer, &header).ok()) return absl::OkStatus();
+  if (header.encoder_type != draco::TRIANGULAR_MESH || header.encoder_method != draco::MESH_EDGEBREAKER_ENCODING) {
+    return absl::OkStatus();
+  }
+  // The layout PointCloudDecoder::Decode and MeshEdgebreakerDecoderImpl::DecodeConnectivity
+  // read: metadata (from 1.3, when flagged), the traversal's type, then the counts, raw
+  // uint32 before 2.0 and varints after; before 2.2 a count of new vertices comes first.
+  const uint16_t version = DRACO_BITSTREAM_VERSION(header.version_major, header.version_minor);
+  buffer.set_bitstream_version(version);
+  if (version >= DRACO_BITSTREAM_VERSION(1, 3) && (header.flags & METADATA_FLAG_MASK)) {
+    draco::GeometryMetadata metadata;
+    if (!draco::MetadataDecoder().DecodeGeometryMetadata(&buffer, &metadata)) return absl::OkStatus();
+  }
+  uint8_t traversal = 0;
+  if (!buffer.Decode(&traversal)) return absl::OkStatus();
+  auto count = [&](uint32_t& out) {
+    return version < DRACO_BITSTREAM_VERSION(2, 0) ? buffer.Decode(&out) : draco::DecodeVarint(&out, &buffer);
+  };
+  uint32_t new_vertices = 0, vertices = 0, faces = 0, symbols = 0, split_symbols = 0;
+  uint8_t attribute_data = 0;
+  if (version < DRACO_BITSTREAM_VERSION(2, 2) && !count(new_vertices)) return absl::OkStatus();
+  if (!count(vertices) || !count(faces) || !buffer.Decode(&attribute_data) || !count(symbols) ||
+      !count(split_symbols)) {
+    return absl::OkStatus();
+  }
+  // Draco refuses more split symbols than symbols; counted anyway, the bound stays an upper one.
+  const int64_t declared_vertices = int64_t{vertices} + new_vertices + split_symbols;
+  if (faces > 4 * max_vertices || declared_vertices > 2 * max_vertices) {
+    return absl::ResourceExhaustedError(absl::StrCat(
+        "the Draco data declares ", faces, " faces and ", declared_vertices, " vertices (Edgebreaker); with a limit of ",
+        max_vertices, " vertices at most ", 4 * max_vertices, " faces and ", 2 * max_vertices,
+        " vertices are decoded"));
   }
   return absl::OkStatus();
 }

@@ -38,6 +38,17 @@ absl::Status CheckDracoLayout(const draco::Mesh& dm);
 // a corrupt file has.
 absl::Status CheckNumericValues(const draco::PointAttribute& a, std::string_view what);
 
+// Draco's Edgebreaker decoder sizes its connectivity tables (3 corners a face, an entry a
+// vertex) from counts at the head of the bitstream, before it reads the symbols that should
+// back them: a 1.4 KB file can declare 235 million faces, 2.8 GB. Those counts are read here
+// first (Draco's header and metadata decoders, then the counts, in every bitstream version):
+// ResourceExhausted when a file declares more than 2 * `max_vertices` vertices or 4 *
+// `max_vertices` faces (a mesh within the limit has about 2 faces a vertex; the room is for
+// high genus and split non-manifold vertices). OK for the sequential method, whose counts
+// Draco bounds by the data's size, and for bytes too short to hold the counts (the decoder
+// refuses those).
+absl::Status CheckDeclaredEdgebreakerSizes(std::string_view bytes, int64_t max_vertices);
+
 // Edgebreaker leaves out faces with a repeated point and the points no other face uses: marks
 // the points some face of three distinct points uses (every face index < num_points).
 std::vector<uint8_t> PointsEdgebreakerKeeps(const draco::Mesh& dm);

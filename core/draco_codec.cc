@@ -58,8 +58,9 @@ absl::StatusOr<std::string> EncodeDraco(const Mesh& mesh, const DracoOptions& op
 
 namespace {
 
-// Decodes a Draco triangle mesh with clear errors; its layout is checked (CheckDracoLayout).
-absl::StatusOr<std::unique_ptr<draco::Mesh>> DecodeToDraco(std::string_view bytes) {
+// Decodes a Draco triangle mesh with clear errors; the sizes it declares are checked before
+// Draco allocates for them (CheckDeclaredEdgebreakerSizes), its layout after (CheckDracoLayout).
+absl::StatusOr<std::unique_ptr<draco::Mesh>> DecodeToDraco(std::string_view bytes, int64_t max_vertices) {
   if (bytes.empty()) return absl::InvalidArgumentError("empty Draco data");
   draco::DecoderBuffer buffer;
   buffer.Init(bytes.data(), bytes.size());
@@ -74,6 +75,7 @@ absl::StatusOr<std::unique_ptr<draco::Mesh>> DecodeToDraco(std::string_view byte
   if (type.value() != draco::TRIANGULAR_MESH) {
     return absl::InvalidArgumentError("the Draco data holds no triangle mesh (invalid geometry type)");
   }
+  if (absl::Status s = CheckDeclaredEdgebreakerSizes(bytes, max_vertices); !s.ok()) return s;
   std::unique_ptr<draco::Mesh> dm;
   try {
     buffer.Init(bytes.data(), bytes.size());
@@ -174,7 +176,7 @@ absl::StatusOr<std::string> EncodeWithOptions(const draco::Mesh& dm, const Draco
 }  // namespace
 
 absl::StatusOr<Mesh> DecodeDraco(std::string_view bytes) {
-  absl::StatusOr<std::unique_ptr<draco::Mesh>> dm = DecodeToDraco(bytes);
+  absl::StatusOr<std::unique_ptr<draco::Mesh>> dm = DecodeToDraco(bytes, kMaxDracoVertices);
   if (!dm.ok()) return dm.status();
   return PointMesh(**dm);
 }
@@ -193,9 +195,9 @@ DracoMesh::DracoMesh(DracoMesh&&) noexcept = default;
 DracoMesh& DracoMesh::operator=(DracoMesh&&) noexcept = default;
 DracoMesh::~DracoMesh() = default;
 
-absl::StatusOr<DracoMesh> DracoMesh::Decode(std::string_view bytes, const StopToken& stop) {
+absl::StatusOr<DracoMesh> DracoMesh::Decode(std::string_view bytes, const StopToken& stop, int64_t max_vertices) {
   // Draco's decoder runs as one call; the token is checked between the steps around it.
-  absl::StatusOr<std::unique_ptr<draco::Mesh>> dm = DecodeToDraco(bytes);
+  absl::StatusOr<std::unique_ptr<draco::Mesh>> dm = DecodeToDraco(bytes, max_vertices);
   if (!dm.ok()) return dm.status();
   if (absl::Status s = stop.Check(); !s.ok()) return s;
   absl::StatusOr<Mesh> points = PointMesh(**dm);
@@ -234,7 +236,7 @@ int64_t DracoMesh::num_points() const { return impl_->draco->num_points(); }
 int64_t DracoMesh::seam_points() const { return impl_->seam_points; }
 
 absl::StatusOr<std::vector<float>> DecodeDracoAttribute(std::string_view bytes, std::string_view name) {
-  absl::StatusOr<std::unique_ptr<draco::Mesh>> dm = DecodeToDraco(bytes);
+  absl::StatusOr<std::unique_ptr<draco::Mesh>> dm = DecodeToDraco(bytes, kMaxDracoVertices);
   if (!dm.ok()) return dm.status();
   if (absl::StatusOr<Mesh> points = PointMesh(**dm); !points.ok()) return points.status();  // the coordinates
   const int id = NamedAttributeId(**dm, name);

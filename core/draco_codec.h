@@ -14,6 +14,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <string>
 #include <string_view>
@@ -65,6 +66,9 @@ absl::StatusOr<std::string> EncodeDraco(const Mesh& mesh, const DracoOptions& op
 // kMaxCoordinate in magnitude. Vertices are Draco's points (attribute seams stay split).
 absl::StatusOr<Mesh> DecodeDraco(std::string_view bytes);
 
+// Vertices a Draco mesh may have: an int32 holds every index.
+inline constexpr int64_t kMaxDracoVertices = std::numeric_limits<int32_t>::max();
+
 // Per-vertex values stored as a one-component Draco GENERIC attribute, named by the attribute
 // metadata entry "name" (how Draco files label generic data).
 struct GenericAttribute {
@@ -87,8 +91,11 @@ absl::StatusOr<std::vector<float>> DecodeDracoAttribute(std::string_view bytes, 
 class DracoMesh {
  public:
   // Same errors as DecodeDraco(); Cancelled or DeadlineExceeded once `stop` fires (checked
-  // between Draco's decoder and the steps after it).
-  static absl::StatusOr<DracoMesh> Decode(std::string_view bytes, const StopToken& stop = {});
+  // between Draco's decoder and the steps after it); ResourceExhausted, before Draco's decoder
+  // allocates anything, for Edgebreaker data that declares more than 2 * `max_vertices`
+  // vertices or 4 * `max_vertices` faces (a 1.4 KB upload could make it allocate 2.8 GB).
+  static absl::StatusOr<DracoMesh> Decode(std::string_view bytes, const StopToken& stop = {},
+                                          int64_t max_vertices = kMaxDracoVertices);
 
   DracoMesh(DracoMesh&&) noexcept;
   DracoMesh& operator=(DracoMesh&&) noexcept;

@@ -182,6 +182,9 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   server::ServerOptions options;  // the service's defaults, but quiet and on one thread
   options.threads_per_job = 1;
   options.log_jobs = false;
+  // A vertex limit that keeps what the sizes an upload declares may cost inside run.sh's 2 GB
+  // (the default, 20 million, admits a few GB); uploads of at most 72 KB hold far fewer.
+  options.max_vertices = 1 << 20;
   const v1::JobSpec spec = fuzz::SpecFromBytes(head);
   fuzz::current_spec = &spec;
   absl::StatusOr<server::JobParams> params = server::FromProto(spec, options.max_iterations);

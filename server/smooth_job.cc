@@ -99,7 +99,7 @@ absl::StatusOr<DracoMesh> SmoothJob::DecodeUpload(const StopToken& stop) {
     upload.swap(upload_);
     hold = std::move(upload_hold_);
   }
-  absl::StatusOr<DracoMesh> draco = DracoMesh::Decode(upload, stop);
+  absl::StatusOr<DracoMesh> draco = DracoMesh::Decode(upload, stop, options_.max_vertices);
   std::string().swap(upload);  // the bytes are not needed past decoding
   hold.Release();
   return draco;

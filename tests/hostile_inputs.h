@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cmath>
+#include <cstdint>
 #include <numbers>
 #include <string>
 
@@ -60,6 +61,30 @@ inline std::string DracoPointCloud() {
   draco::EncoderBuffer buf;
   EXPECT_TRUE(enc.EncodePointCloudToBuffer(pc, &buf).ok());
   return std::string(buf.data(), buf.size());
+}
+
+// The head of an Edgebreaker bitstream declaring `faces` faces and `vertices` vertices, as
+// bitstream 1.2 writes it (raw uint32 counts, a count of new vertices first) or 2.2 (varints),
+// followed by bytes no decoder gets far into. Draco's own checks on the counts hold.
+inline std::string EdgebreakerHead(bool v22, uint32_t vertices, uint32_t faces) {
+  std::string out = "DRACO";
+  out += v22 ? std::string{'\x02', '\x02'} : std::string{'\x01', '\x02'};
+  out += std::string{'\x01', '\x01', '\x00', '\x00', '\x00'};  // mesh, Edgebreaker, no flags, standard
+  auto put = [&](uint32_t v) {
+    if (!v22) {
+      out.append(reinterpret_cast<const char*>(&v), 4);
+      return;
+    }
+    for (; v >= 0x80; v >>= 7) out += static_cast<char>(0x80 | (v & 0x7f));
+    out += static_cast<char>(v);
+  };
+  if (!v22) put(2);  // new vertices
+  put(vertices);
+  put(faces);
+  out += '\x01';     // attribute data
+  put(faces);        // symbols
+  put(0);            // split symbols
+  return out + std::string(1300, '\x0b');
 }
 
 // The example: a 20 x 15 torus (1160 vertices here) with one face index set to 65535.

@@ -1,7 +1,8 @@
 // Hostile Draco uploads (issue 19): face indices past the point count, a second POSITION
 // attribute, extreme or non-finite coordinates, and output encodings whose cost or result
-// would be unbounded. Each is refused with INVALID_ARGUMENT before anything indexes or encodes
-// with it, and every encoding that is accepted decodes to the welded input's vertices.
+// would be unbounded. Each is refused with INVALID_ARGUMENT (sizes beyond the vertex limit with
+// RESOURCE_EXHAUSTED) before anything indexes, allocates or encodes with it, and every encoding
+// that is accepted decodes to the welded input's vertices.
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -22,6 +23,7 @@
 namespace meshsmooth {
 namespace {
 
+using testing::EdgebreakerHead;
 using testing::RawDraco;
 using testing::TorusWithIndexPastThePoints;
 
@@ -197,6 +199,40 @@ TEST(HostileDracoTest, EdgebreakerThatWouldDropAVertexIsRefused) {
   absl::StatusOr<DracoMesh> sm = DracoMesh::Decode(*EncodeDraco(seam));
   ASSERT_TRUE(sm.ok()) << sm.status();
   EXPECT_TRUE(sm->CheckEncodable(eb).ok());
+}
+
+// Draco's Edgebreaker decoder allocated its corner table from the declared counts before it
+// read a symbol (fuzz_job: 1.4 KB declaring 235 million faces took 2.8 GB); the counts are now
+// checked against the vertex limit first.
+TEST(HostileDracoTest, EdgebreakerSizesBeyondTheVertexLimitAreRefusedBeforeDecoding) {
+  constexpr int64_t kLimit = 1 << 20;
+  for (bool v22 : {false, true}) {
+    SCOPED_TRACE(v22 ? "bitstream 2.2" : "bitstream 1.2");
+    const absl::Status faces = DracoMesh::Decode(EdgebreakerHead(v22, 1000, 235'472'908), {}, kLimit).status();
+    EXPECT_EQ(faces.code(), absl::StatusCode::kResourceExhausted) << faces;
+    EXPECT_NE(faces.message().find("declares 235472908 faces"), std::string::npos) << faces;
+    EXPECT_NE(faces.message().find("at most 4194304 faces"), std::string::npos) << faces;
+    const absl::Status vertices = DracoMesh::Decode(EdgebreakerHead(v22, 3'000'000, 1'500'000), {}, kLimit).status();
+    EXPECT_EQ(vertices.code(), absl::StatusCode::kResourceExhausted) << vertices;
+    EXPECT_NE(vertices.message().find(v22 ? "3000000 vertices" : "3000002 vertices"), std::string::npos) << vertices;
+    // Within the limit the counts pass, and Draco's decoder refuses the garbage after them.
+    const absl::Status small = DracoMesh::Decode(EdgebreakerHead(v22, 1000, 2000), {}, kLimit).status();
+    EXPECT_EQ(small.code(), absl::StatusCode::kInvalidArgument) << small;
+  }
+  // A real Edgebreaker mesh (162 vertices, 320 faces; it declares 163 vertices, its one split
+  // symbol counted): at its own vertex count as the limit it decodes, and so it does down to a
+  // limit of 82 (2 * 82 >= 163); at 81 it is refused.
+  DracoOptions eb;
+  eb.method = DracoMethod::kEdgebreaker;
+  const Mesh sphere = Icosphere(2);
+  const std::string bytes = *EncodeDraco(sphere, eb);
+  for (int64_t limit : {int64_t{sphere.num_vertices()}, int64_t{82}}) {
+    const absl::Status s = DracoMesh::Decode(bytes, {}, limit).status();
+    EXPECT_TRUE(s.ok()) << limit << ": " << s;
+  }
+  const absl::Status tight = DracoMesh::Decode(bytes, {}, 81).status();
+  EXPECT_EQ(tight.code(), absl::StatusCode::kResourceExhausted) << tight;
+  EXPECT_NE(tight.message().find("declares 320 faces and 163 vertices"), std::string::npos) << tight;
 }
 
 // Welded vertices of a decoded result, as a set of exact positions.

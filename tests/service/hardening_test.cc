@@ -52,6 +52,9 @@ TEST(HardeningTest, HostileDracoUploadsAreRefusedAndTheServerServesOn) {
   isolated.positions.push_back({3, 3, 3});
   ExpectStatus(Call(channel, Output(Spec("median", 3), 11, true), *EncodeDraco(isolated)).status(),
                absl::StatusCode::kInvalidArgument, "Edgebreaker would drop 1 vertex");
+  // 1.3 KB declaring 235 million faces: Draco's decoder would allocate 2.8 GB for them.
+  ExpectStatus(Call(channel, Spec("median", 3), EdgebreakerHead(true, 1000, 235'472'908)).status(),
+               absl::StatusCode::kResourceExhausted, "declares 235472908 faces");
 
   absl::StatusOr<SmoothOutcome> ok = Call(channel, Output(Spec("median", 3), 11, true), *EncodeDraco(Icosphere(2)));
   ASSERT_TRUE(ok.ok()) << ok.status();
