@@ -17,6 +17,7 @@
 // guide for it (kMinGuideCosine), ties go to the patch of the smaller face index, and the vertex
 // update and its guards are those of normal_filtering.h.
 #include <algorithm>
+#include <cmath>
 #include <limits>
 
 #include "core/flows/normal_filtering.h"
@@ -64,15 +65,16 @@ class GuidedNormal final : public NormalFilterKernel {
   void Patch(int32_t j) {
     const int32_t* const first = &graph_.neighbours[graph_.offsets[j]];
     const int32_t* const last = first + (graph_.offsets[j + 1] - graph_.offsets[j]);
-    double spread = 0.0, most = 0.0, total = 0.0;
+    // The patch's normals side by side: D(P) compares every pair, from contiguous memory.
+    thread_local std::vector<Vec3> normals;
+    normals.clear();
+    double most = 0.0, total = 0.0;
     Vec3 mean;
     for (const int32_t* a = first; a != last; ++a) {
       if (area_[*a] == 0.0) continue;  // no normal: not part of the patch's measures
       const Vec3 na = normal_[*a];
+      normals.push_back(na);
       mean += na * area_[*a];
-      for (const int32_t* b = a + 1; b != last; ++b) {
-        if (area_[*b] > 0.0) spread = std::max(spread, SquaredNorm(na - normal_[*b]));
-      }
       for (int32_t other : graph_.across[*a]) {  // each inside edge once, from its smaller face
         if (other > *a && area_[other] > 0.0 && std::binary_search(first, last, other)) {
           const double phi = Norm(na - normal_[other]);
@@ -80,6 +82,11 @@ class GuidedNormal final : public NormalFilterKernel {
           total += phi;
         }
       }
+    }
+    double spread = 0.0;
+    const size_t m = normals.size();
+    for (size_t a = 0; a < m; ++a) {
+      for (size_t b = a + 1; b < m; ++b) spread = std::max(spread, SquaredNorm(normals[a] - normals[b]));
     }
     consistency_[j] = std::sqrt(spread) * (most / (kSaliencyEpsilon + total));
     const double len = Norm(mean);
