@@ -8,10 +8,42 @@ namespace {
 
 constexpr int32_t kParallelMin = 4096;  // below this the OpenMP team costs more than the loop
 
+// Where the curvature field has no estimate (boundary, non-manifold, degenerate vertices), the
+// mean of the estimates of the neighbours that have one, so that the vertices next to them can
+// still be compared along their curvature lines. known[v] is 0 where neither exists.
+struct Filled {
+  std::vector<double> kmax, kmin;
+  std::vector<uint8_t> known;
+};
+
+Filled FillFromNeighbours(const Topology& topo, const CurvatureField& f) {
+  const int32_t n = topo.num_vertices();
+  Filled out{f.kmax, f.kmin, f.valid};
+#pragma omp parallel for schedule(static) if (n >= kParallelMin)
+  for (int32_t v = 0; v < n; ++v) {
+    if (f.valid[v]) continue;
+    double kmax = 0.0, kmin = 0.0;
+    int32_t count = 0;
+    for (int32_t i = topo.ring_offsets[v]; i < topo.ring_offsets[v + 1]; ++i) {
+      const int32_t q = topo.ring[i];
+      if (!f.valid[q]) continue;
+      kmax += f.kmax[q];
+      kmin += f.kmin[q];
+      ++count;
+    }
+    if (count == 0) continue;
+    out.kmax[v] = kmax / count;
+    out.kmin[v] = kmin / count;
+    out.known[v] = 1;
+  }
+  return out;
+}
+
 // True when values[v] * sign is strictly above its linear interpolation at both points where
-// the plane through P spanned by the normal and `dir` cuts the closed one-ring polygon.
+// the plane through P spanned by the normal and `dir` cuts the closed one-ring polygon (the
+// nearest crossing on each side that has a known end point).
 bool IsExtremumAlong(const Mesh& mesh, const Topology& topo, const CurvatureField& f, int32_t v, const Vec3& dir,
-                     const std::vector<double>& values, double sign) {
+                     const std::vector<double>& values, const std::vector<uint8_t>& known, double sign) {
   const int32_t* ring = topo.ring.data() + topo.ring_offsets[v];
   const int32_t n = topo.valence(v);
   const Vec3 p = mesh.positions[v];
@@ -28,8 +60,15 @@ bool IsExtremumAlong(const Mesh& mesh, const Topology& topo, const CurvatureFiel
     if ((s0 >= 0.0) != (s1 >= 0.0)) {
       const double t = s0 / (s0 - s1);  // the signs differ, so the denominator is not zero
       const double along = Dot(dir, e0) + t * Dot(dir, e1 - e0);
-      const double value = values[q0] + t * (values[q1] - values[q0]);
-      if (along > 0.0 && along < ahead_along) {
+      // From the end points with a value only: one poor neighbour does not hide a crest. An
+      // edge with neither gives no crossing.
+      const bool valid0 = known[q0] != 0, valid1 = known[q1] != 0;
+      const double value = valid0 && valid1 ? values[q0] + t * (values[q1] - values[q0])
+                           : valid0        ? values[q0]
+                                           : values[q1];
+      if (!valid0 && !valid1) {
+        // no value on this edge
+      } else if (along > 0.0 && along < ahead_along) {
         ahead_along = along;
         ahead_value = value;
       } else if (along < 0.0 && along > behind_along) {
@@ -46,16 +85,13 @@ bool IsExtremumAlong(const Mesh& mesh, const Topology& topo, const CurvatureFiel
   return here > sign * ahead_value && here > sign * behind_value;
 }
 
-FeatureLabel Classify(const Mesh& mesh, const Topology& topo, const CurvatureField& f, int32_t v,
-                      double threshold) {
+FeatureLabel Classify(const Mesh& mesh, const Topology& topo, const CurvatureField& f, const Filled& filled,
+                      int32_t v, double threshold) {
   if (!f.valid[v]) return FeatureLabel::kNone;
-  for (int32_t i = topo.ring_offsets[v]; i < topo.ring_offsets[v + 1]; ++i) {
-    if (!f.valid[topo.ring[i]]) return FeatureLabel::kNone;
-  }
   const double kmax = f.kmax[v], kmin = f.kmin[v];
-  const bool ridge = kmax > 0.0 && kmax > threshold && IsExtremumAlong(mesh, topo, f, v, f.dir_max[v], f.kmax, 1.0);
+  const bool ridge = kmax > 0.0 && kmax > threshold && IsExtremumAlong(mesh, topo, f, v, f.dir_max[v], filled.kmax, filled.known, 1.0);
   const bool ravine =
-      kmin < 0.0 && -kmin > threshold && IsExtremumAlong(mesh, topo, f, v, f.dir_min[v], f.kmin, -1.0);
+      kmin < 0.0 && -kmin > threshold && IsExtremumAlong(mesh, topo, f, v, f.dir_min[v], filled.kmin, filled.known, -1.0);
   if (ridge && ravine) return kmax >= -kmin ? FeatureLabel::kRidge : FeatureLabel::kRavine;
   if (ridge) return FeatureLabel::kRidge;
   return ravine ? FeatureLabel::kRavine : FeatureLabel::kNone;
@@ -70,13 +106,14 @@ Features DetectFeatures(const Mesh& mesh, const Topology& topology, const Featur
   const int32_t n = topology.num_vertices();
   out.labels.assign(n, static_cast<uint8_t>(FeatureLabel::kNone));
   const CurvatureField& f = out.curvature;
+  const Filled filled = FillFromNeighbours(topology, f);
   // Each vertex writes only its own label: the result does not depend on the thread count.
   std::atomic<bool> stopped{false};
 #pragma omp parallel for schedule(static) if (n >= kParallelMin)
   for (int32_t v = 0; v < n; ++v) {
     if (v % kStopPollInterval == 0 && stop.Fired()) stopped.store(true, std::memory_order_relaxed);
     if (stopped.load(std::memory_order_relaxed)) continue;
-    out.labels[v] = static_cast<uint8_t>(Classify(mesh, topology, f, v, options.min_abs_curvature));
+    out.labels[v] = static_cast<uint8_t>(Classify(mesh, topology, f, filled, v, options.min_abs_curvature));
   }
   for (uint8_t valid : f.valid) out.classified += valid != 0;
   for (uint8_t l : out.labels) {
