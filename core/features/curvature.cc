@@ -117,19 +117,22 @@ VertexEstimate EstimateAt(const Mesh& mesh, const Topology& topo, const std::vec
     }
     const Vec3 perp = nf - normal * ndot, dperp = (normal + nf) * (1.0 / (1.0 + ndot));
     const Vec3 x1 = t1 - dperp * Dot(perp, t1), x2 = t2 - dperp * Dot(perp, t2);
-    // The edges Q_k+1 - Q_k, P - Q_k+1, Q_k - P and the normal changes along them; normal
-    // equations M (xx xy yy)^T = r of the rows (u w 0) -> dn.x1 and (0 u w) -> dn.x2.
-    const Vec3 edges[3] = {b - a, b * -1.0, a}, changes[3] = {nb - na, normal - nb, na - normal};
+    // The edges Q_k - P, Q_k+1 - Q_k, P - Q_k+1 and the normal changes along them (each triple
+    // sums to zero, so the third's coordinates follow from the first two); normal equations
+    // M (xx xy yy)^T = r of the rows (u w 0) -> dn.x1 and (0 u w) -> dn.x2.
+    const Vec3 c = b - a, dc = nb - na, dan = na - normal;
+    const double u[3] = {Dot(a, x1), Dot(c, x1), 0.0}, wv[3] = {Dot(a, x2), Dot(c, x2), 0.0};
+    const double d1[3] = {Dot(dan, x1), Dot(dc, x1), 0.0}, d2[3] = {Dot(dan, x2), Dot(dc, x2), 0.0};
     double m11 = 0.0, m12 = 0.0, m33 = 0.0, r1 = 0.0, r2 = 0.0, r3 = 0.0;
     for (int i = 0; i < 3; ++i) {
-      const double u = Dot(edges[i], x1), wv = Dot(edges[i], x2);
-      const double d1 = Dot(changes[i], x1), d2 = Dot(changes[i], x2);
-      m11 += u * u;
-      m12 += u * wv;
-      m33 += wv * wv;
-      r1 += u * d1;
-      r2 += wv * d1 + u * d2;
-      r3 += wv * d2;
+      const double ui = i < 2 ? u[i] : -(u[0] + u[1]), wi = i < 2 ? wv[i] : -(wv[0] + wv[1]);
+      const double d1i = i < 2 ? d1[i] : -(d1[0] + d1[1]), d2i = i < 2 ? d2[i] : -(d2[0] + d2[1]);
+      m11 += ui * ui;
+      m12 += ui * wi;
+      m33 += wi * wi;
+      r1 += ui * d1i;
+      r2 += wi * d1i + ui * d2i;
+      r3 += wi * d2i;
     }
     // M = (m11 m12 0; m12 m11+m33 m12; 0 m12 m33), solved by its cofactors.
     const double m22 = m11 + m33;

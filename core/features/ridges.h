@@ -32,16 +32,19 @@ struct Features {
 };
 
 // Labels every vertex of `mesh` (`topology` = BuildTopology(mesh)), Section 5 of the paper.
-// With the curvatures of EstimateCurvature() (positive where the surface bends away from the
-// normal), a vertex P is a ridge vertex when kmax(P) > 0, kmax(P) > min_abs_curvature, and
-// kmax(P) exceeds its linear interpolation at both points where the plane through P spanned
-// by the normal and dir_max cuts the one-ring polygon (kmax interpolated along each crossed
-// ring edge; on each side of P the crossing nearest to P counts). A ravine vertex likewise
-// has kmin(P) < 0, -kmin(P) > min_abs_curvature and kmin(P) below its interpolations along
-// the plane of the normal and dir_min. A vertex that is both gets the label of the larger
-// |kappa|. Not classified (kNone): vertices that are not valid in the curvature field
-// (boundary, non-manifold, isolated, degenerate), vertices with an invalid neighbour (the
-// interpolation is undefined), and vertices whose plane misses one side of the ring. Once
+// The values compared are ring means of EstimateCurvature()'s kmax and kmin (positive where the
+// surface bends away from the normal): at a vertex with an estimate, the mean over it and its
+// neighbours that have one (a one-ring filter of the estimate's scatter on irregular meshes); at
+// one without, the mean over its neighbours that have one. A vertex P with an estimate is a
+// ridge vertex when its mean kmax is > 0 and > min_abs_curvature and exceeds its linear
+// interpolation at both points where the plane through P spanned by the normal and dir_max cuts
+// the one-ring polygon (along each crossed ring edge from its end points that have a value; on
+// each side of P the nearest crossing that has one counts). A ravine vertex likewise has mean
+// kmin < 0, -kmin > min_abs_curvature and kmin below its interpolations along the plane of the
+// normal and dir_min. A vertex that is both gets the label of the larger |kappa|. Not
+// classified (kNone): vertices without an estimate (boundary, non-manifold, isolated,
+// degenerate) and vertices whose plane finds no value on one side of the ring; a poor neighbour
+// does not stop a vertex from being classified. O(n), deterministic for any thread count. Once
 // `stop` fires the vertices left are not classified: a caller that passes a token checks it.
 Features DetectFeatures(const Mesh& mesh, const Topology& topology, const FeatureOptions& options = {},
                         const StopToken& stop = {});
