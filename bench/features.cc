@@ -1,7 +1,7 @@
 // Times curvature estimation and ridge/ravine detection (core/features/) on one mesh: the
 // fastest and the median wall time of several runs of EstimateCurvature and of DetectFeatures
 // (which includes an estimate), with the thread count OpenMP chooses. On a shared machine the
-// fastest run is the steadier figure. docs/performance.md quotes it:
+// fastest run is the steadier figure. docs/performance.md ("Curvature and ridges") quotes it:
 //   flock /tmp/meshsmooth-build.lock build/bench/meshsmooth_features_bench ../shared/data/meshes/stanford-dragon.ply 7
 #include <omp.h>
 
