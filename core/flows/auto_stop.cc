@@ -28,21 +28,14 @@ AutoStop::AutoStop(const Mesh& mesh, const Topology& topo, const uint8_t* role, 
 }
 
 double AutoStop::Volume(const Vec3* pos) const {
-  // Each face (v, ring[k], ring[k+1]) is met at its three corners with the same triple product.
+  // Each face (v, a, b) around v contributes v . (a x b) / 6, and is met at its three corners.
+  // Around a closed ring the sum of (a - v) x (b - v) equals the sum of a x b, so the corner's
+  // share is v . RingNormal(v), the ring walk the displacement and KeepVolume use too.
   const int32_t n = topo_.num_vertices();
   std::vector<double> block_sum((n + kBlock - 1) / kBlock, 0.0);
   ForBlocks(n, threads_, [&](int32_t b, int32_t begin, int32_t end) {
     double sum = 0.0;
-    for (int32_t v = begin; v < end; ++v) {
-      if (topo_.kind[v] != VertexKind::kInterior) continue;
-      const int32_t first = topo_.ring_offsets[v], last = topo_.ring_offsets[v + 1];
-      Vec3 prev = pos[topo_.ring[last - 1]];
-      for (int32_t k = first; k < last; ++k) {
-        const Vec3 cur = pos[topo_.ring[k]];
-        sum += Dot(pos[v], Cross(prev, cur));
-        prev = cur;
-      }
-    }
+    for (int32_t v = begin; v < end; ++v) sum += Dot(pos[v], RingNormal(topo_, pos, v));
     block_sum[b] = sum;
   });
   double total = 0.0;
