@@ -44,7 +44,9 @@ absl::Status CheckNumericValues(const draco::PointAttribute& a, std::string_view
 // first (Draco's header and metadata decoders, then the counts, in every bitstream version):
 // ResourceExhausted when a file declares more than 2 * `max_vertices` vertices or 4 *
 // `max_vertices` faces (a mesh within the limit has about 2 faces a vertex; the room is for
-// high genus and split non-manifold vertices). OK for the sequential method, whose counts
+// high genus and split non-manifold vertices). InvalidArgument, whatever the limit, when the
+// counts are beyond what the file's size can encode (about 1,000 faces a byte; the densest real
+// encoding holds under 70). OK for the sequential method, whose counts
 // Draco bounds by the data's size, and for bytes too short to hold the counts (the decoder
 // refuses those).
 absl::Status CheckDeclaredEdgebreakerSizes(std::string_view bytes, int64_t max_vertices);
