@@ -12,6 +12,7 @@ packages=(
   libdraco-dev draco libopenmesh-dev libabsl-dev libgtest-dev libgmock-dev
   libcli11-dev libeigen3-dev libbenchmark-dev libpng-dev
   python3-grpcio python3-protobuf python3-numpy python3-scipy openssl
+  nginx
 )
 if [ "$preset" = fuzz ]; then packages+=(clang libfuzzer-14-dev libomp-dev); fi
 missing=()
@@ -23,6 +24,14 @@ if [ ${#missing[@]} -gt 0 ]; then
   sudo_cmd=()
   [ "$(id -u)" -eq 0 ] || sudo_cmd=(sudo)
   "${sudo_cmd[@]}" apt-get update -qq
+  # Debian starts a packaged service as it installs it (nginx: a system daemon on port 80). The
+  # tests run nginx of their own, unprivileged; a policy-rc.d that refuses every start keeps the
+  # system one stopped (one already there, as in Debian's container images, is left alone).
+  if [ ! -e /usr/sbin/policy-rc.d ]; then
+    printf '#!/bin/sh\nexit 101\n' | "${sudo_cmd[@]}" tee /usr/sbin/policy-rc.d >/dev/null
+    "${sudo_cmd[@]}" chmod 755 /usr/sbin/policy-rc.d
+    trap '"${sudo_cmd[@]}" rm -f /usr/sbin/policy-rc.d' EXIT
+  fi
   DEBIAN_FRONTEND=noninteractive "${sudo_cmd[@]}" apt-get install -y -qq "${missing[@]}" >/dev/null
 fi
 
