@@ -1,5 +1,7 @@
 #include "client/commands.h"
 
+#include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <functional>
@@ -13,6 +15,7 @@
 #include "client/inputs.h"
 #include "client/json.h"
 #include "client/report.h"
+#include "client/retry.h"
 #include "client/smooth_client.h"
 #include "core/draco_codec.h"
 #include "core/features/ridges.h"
@@ -39,6 +42,7 @@ int Fail(const std::string& what, const absl::Status& s) {
 
 v1::JobSpec SpecFrom(const SmoothOptions& o) {
   v1::JobSpec spec;
+  spec.set_job_id(o.job_id);
   spec.set_flow(o.flow);
   spec.set_iterations(o.iterations);
   spec.set_step(o.step);
@@ -139,14 +143,24 @@ int RunSmooth(const SmoothOptions& o, const ConnectionOptions& c) {
   absl::StatusOr<std::shared_ptr<grpc::Channel>> channel = Connect(c, embedded);
   if (!channel.ok()) return Fail("", channel.status());
   auto stub = v1::MeshSmoother::NewStub(*channel);
-  grpc::ClientContext ctx;
-  if (absl::Status s = PrepareContext(c, ctx); !s.ok()) return Fail("", s);
-  ProgressPrinter progress(o.quiet || o.json);
+  RetryPolicy policy;
+  policy.max_attempts = 1 + std::max(0, c.retries);
+  const bool quiet = o.quiet || o.json;
+  const auto deadline = CallDeadline(c);  // one deadline for every attempt
+  RetryingSmooth call(
+      policy, [&c, deadline](grpc::ClientContext& ctx) { return PrepareContext(c, ctx, deadline); }, deadline,
+      [quiet](int retry, const absl::Status& s, std::chrono::milliseconds wait) {
+        if (quiet) return;
+        std::fprintf(stderr, "meshsmooth: attempt %d failed (%s: %s); retrying in %.1f s\n", retry,
+                     std::string(absl::StatusCodeToString(s.code())).c_str(), std::string(s.message()).c_str(),
+                     static_cast<double>(wait.count()) / 1000.0);
+      });
+  ProgressPrinter progress(quiet);
   absl::StatusOr<SmoothOutcome> outcome;
   bool interrupted = false;
   {
-    InterruptWatcher watcher(&ctx);
-    outcome = CallSmooth(*stub, ctx, spec, upload->draco, std::ref(progress));
+    InterruptWatcher watcher([&call] { call.Cancel(); });
+    outcome = call.Run(*stub, spec, upload->draco, std::ref(progress));
     interrupted = watcher.interrupted();
   }
   progress.Done();
@@ -178,7 +192,7 @@ int RunFlows(const ConnectionOptions& c, bool json) {
   }
   auto stub = v1::MeshSmoother::NewStub(*channel);
   grpc::ClientContext ctx;
-  if (absl::Status s = PrepareContext(c, ctx); !s.ok()) {
+  if (absl::Status s = PrepareContext(c, ctx, CallDeadline(c)); !s.ok()) {
     std::cerr << "meshsmooth: " << s.message() << "\n";
     return kExitFailure;
   }

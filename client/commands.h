@@ -35,6 +35,7 @@ struct SmoothOptions {
   bool quiet = false, json = false;
   bool ridges = false;
   double ridge_threshold = 0.0;
+  std::string job_id;  // JobSpec.job_id; empty = the server makes one up
 };
 
 // `meshsmooth render`.

@@ -1,12 +1,105 @@
 #include "client/connection.h"
 
-#include <chrono>
+#include <arpa/inet.h>
 
+#include <algorithm>
+#include <chrono>
+#include <random>
+#include <string_view>
+#include <vector>
+
+#include "absl/strings/numbers.h"
 #include "absl/strings/str_cat.h"
+#include "absl/strings/str_join.h"
+#include "absl/strings/str_split.h"
 #include "core/io/file_bytes.h"
 #include "core/shutdown_signals.h"
 
 namespace meshsmooth::client {
+namespace {
+
+// Schemes of gRPC's name resolvers: a target starting with one goes to gRPC as it is.
+constexpr std::string_view kSchemes[] = {"dns:", "ipv4:", "ipv6:", "unix:", "unix-abstract:", "vsock:", "xds:"};
+
+// Keepalive of the CLI's channel: a ping every 30 s without traffic, the connection given up 10 s
+// after an unanswered one, also while a queued job sends nothing (meshsmoothd accepts a ping
+// every 10 s without data; README, "Running many replicas").
+constexpr int kKeepaliveTimeMs = 30'000;
+constexpr int kKeepaliveTimeoutMs = 10'000;
+
+struct ListEntry {
+  int family;  // AF_INET or AF_INET6
+  std::string address;
+};
+
+// One "IP:PORT" of a --server list.
+absl::StatusOr<ListEntry> ParseListEntry(const std::string& entry) {
+  const auto bad = [&](const char* why) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        "'", entry, "' ", why,
+        "; a list is IP:PORT,IP:PORT (IPv4, localhost or [IPv6]); for host names use dns:///NAME:PORT"));
+  };
+  const size_t colon = entry.rfind(':');
+  if (colon == std::string::npos) return bad("has no port");
+  int port = 0;
+  if (!absl::SimpleAtoi(absl::string_view(entry).substr(colon + 1), &port) || port < 1 || port > 65535) return bad("has no valid port");
+  std::string host(entry.substr(0, colon));
+  unsigned char ip[16];
+  if (host.size() > 2 && host.front() == '[' && host.back() == ']') {
+    if (inet_pton(AF_INET6, host.substr(1, host.size() - 2).c_str(), ip) != 1) return bad("is not an IPv6 address");
+    return ListEntry{AF_INET6, entry};
+  }
+  if (host == "localhost") host = "127.0.0.1";
+  if (inet_pton(AF_INET, host.c_str(), ip) != 1) return bad("is not an IP address");
+  return ListEntry{AF_INET, absl::StrCat(host, ":", port)};
+}
+
+}  // namespace
+
+absl::StatusOr<std::string> ChannelTarget(const std::string& server, bool shuffle) {
+  std::string scheme;
+  std::vector<std::string> addresses;
+  for (const char* list_scheme : {"ipv4:", "ipv6:"}) {
+    if (server.rfind(list_scheme, 0) == 0) {
+      scheme = list_scheme;
+      addresses = absl::StrSplit(absl::string_view(server).substr(scheme.size()), ',');
+    }
+  }
+  if (scheme.empty()) {
+    for (std::string_view s : kSchemes) {
+      if (std::string_view(server).substr(0, s.size()) == s) return server;
+    }
+    if (server.find(',') == std::string::npos) return server;  // one host:port: gRPC's DNS resolver
+    int family = 0;
+    for (const std::string& entry : std::vector<std::string>(absl::StrSplit(server, ',', absl::SkipWhitespace()))) {
+      absl::StatusOr<ListEntry> e = ParseListEntry(entry);
+      if (!e.ok()) return e.status();
+      if (family != 0 && e->family != family) {
+        return absl::InvalidArgumentError("a list mixes IPv4 and IPv6 addresses; gRPC takes one family");
+      }
+      family = e->family;
+      addresses.push_back(e->address);
+    }
+    if (addresses.empty()) return absl::InvalidArgumentError("an empty list of addresses");
+    scheme = family == AF_INET ? "ipv4:" : "ipv6:";
+  }
+  if (shuffle) std::shuffle(addresses.begin(), addresses.end(), std::mt19937_64(std::random_device{}()));
+  return absl::StrCat(scheme, absl::StrJoin(addresses, ","));
+}
+
+std::string ServiceConfigJson(int retries) {
+  std::string retry_policy;
+  if (retries > 0) {
+    // gRPC caps maxAttempts at 5; backoff with full jitter, within the call's deadline.
+    retry_policy = absl::StrCat(R"(,"retryPolicy":{"maxAttempts":)", std::min(retries + 1, 5),
+                                R"(,"initialBackoff":"0.2s","maxBackoff":"5s","backoffMultiplier":2,)",
+                                R"("retryableStatusCodes":["UNAVAILABLE","RESOURCE_EXHAUSTED"]})");
+  }
+  // The Smooth entry is more specific than the service's: it leaves Smooth to RetryingSmooth.
+  return absl::StrCat(R"({"loadBalancingConfig":[{"round_robin":{}}],"methodConfig":[)",
+                      R"({"name":[{"service":"meshsmooth.v1.MeshSmoother"}])", retry_policy, "},",
+                      R"({"name":[{"service":"meshsmooth.v1.MeshSmoother","method":"Smooth"}]}]})");
+}
 
 absl::StatusOr<std::shared_ptr<grpc::Channel>> Connect(const ConnectionOptions& options,
                                                        std::unique_ptr<server::Server>& embedded) {
@@ -27,12 +120,24 @@ absl::StatusOr<std::shared_ptr<grpc::Channel>> Connect(const ConnectionOptions& 
     ssl.pem_root_certs = std::move(*ca);
     creds = grpc::SslCredentials(ssl);
   }
-  return grpc::CreateChannel(options.server, creds);
+  absl::StatusOr<std::string> target = ChannelTarget(options.server, /*shuffle=*/true);
+  if (!target.ok()) return target.status();
+  grpc::ChannelArguments args;
+  args.SetServiceConfigJSON(ServiceConfigJson(options.retries));
+  args.SetInt(GRPC_ARG_KEEPALIVE_TIME_MS, kKeepaliveTimeMs);
+  args.SetInt(GRPC_ARG_KEEPALIVE_TIMEOUT_MS, kKeepaliveTimeoutMs);
+  args.SetInt(GRPC_ARG_HTTP2_MAX_PINGS_WITHOUT_DATA, 0);  // keep pinging while a job waits in a queue
+  return grpc::CreateCustomChannel(*target, creds, args);
 }
 
-absl::Status PrepareContext(const ConnectionOptions& options, grpc::ClientContext& context) {
-  context.set_deadline(std::chrono::system_clock::now() +
-                       std::chrono::milliseconds(static_cast<int64_t>(options.timeout_seconds * 1000)));
+std::chrono::system_clock::time_point CallDeadline(const ConnectionOptions& options) {
+  return std::chrono::system_clock::now() +
+         std::chrono::milliseconds(static_cast<int64_t>(options.timeout_seconds * 1000));
+}
+
+absl::Status PrepareContext(const ConnectionOptions& options, grpc::ClientContext& context,
+                            std::chrono::system_clock::time_point deadline) {
+  context.set_deadline(deadline);
   if (!options.token_file.empty()) {
     absl::StatusOr<std::string> token = ReadTokenFile(options.token_file);
     if (!token.ok()) return token.status();
@@ -41,13 +146,13 @@ absl::Status PrepareContext(const ConnectionOptions& options, grpc::ClientContex
   return absl::OkStatus();
 }
 
-InterruptWatcher::InterruptWatcher(grpc::ClientContext* context) : context_(context) {
+InterruptWatcher::InterruptWatcher(std::function<void()> on_interrupt) : on_interrupt_(std::move(on_interrupt)) {
   thread_ = std::thread([this] {
     // Wakes every 100 ms to see whether the call is over.
     while (!stop_.load()) {
       if (WaitForShutdownSignal(std::chrono::milliseconds(100)) != 0) {
         interrupted_.store(true);
-        context_->TryCancel();
+        on_interrupt_();
         return;
       }
     }

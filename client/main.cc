@@ -1,8 +1,8 @@
 // meshsmooth: the command-line client.
 //
 //   meshsmooth smooth IN -o OUT [--flow bilaplacian] [--iterations auto|N] [--step S] [flow options]
-//                               [--server HOST:PORT]
-//   meshsmooth flows [--server HOST:PORT]
+//                               [--server TARGET] [--retries N] [--job-id ID]
+//   meshsmooth flows [--server TARGET]
 //   meshsmooth info IN
 //   meshsmooth ridges IN -o OUT.ply [--threshold K]      (locally, no smoothing)
 //   meshsmooth render IN -o OUT.png [--view V] [--size WxH] [--shading flat|gouraud]
@@ -152,13 +152,30 @@ void AddSmoothOptions(CLI::App* smooth, SmoothOptions& so) {
   smooth->add_option("--ridge-threshold", so.ridge_threshold,
                      "with --ridges: ignore features with |curvature| at or below this (1/mesh units)")
       ->capture_default_str();
+  smooth->add_option("--job-id", so.job_id,
+                     "the job's id in the server's log and the summary (1-128 printable ASCII characters, no "
+                     "spaces); default: the server makes one up. Retries send the same id");
 }
 
 void AddConnectionOptions(CLI::App* app, ConnectionOptions& c) {
-  app->add_option("--server", c.server, "HOST:PORT of a meshsmoothd; default: an in-process server");
+  app->add_option("--server", c.server,
+                  "meshsmoothd replicas, any gRPC target: HOST:PORT, dns:///NAME:PORT (every address the name "
+                  "has), ipv4:IP:PORT,IP:PORT, unix:PATH, or a list IP:PORT,IP:PORT; calls go round-robin over "
+                  "the addresses. Default: an in-process server")
+      ->check([](const std::string& s) {
+        absl::StatusOr<std::string> target = ChannelTarget(s);
+        return target.ok() ? std::string() : std::string(target.status().message());
+      });
   app->add_option("--token-file", c.token_file, "file with the bearer token the server expects");
   app->add_option("--tls-ca", c.tls_ca, "PEM CA certificates: connect with TLS");
-  app->add_option("--timeout", c.timeout_seconds, "deadline of the call, seconds")->capture_default_str();
+  app->add_option("--timeout", c.timeout_seconds, "deadline of the call, seconds, retries included")
+      ->capture_default_str();
+  app->add_option("--retries", c.retries,
+                  "retries of a call refused with UNAVAILABLE or RESOURCE_EXHAUSTED before any result arrived, "
+                  "after a random wait of up to 0.2 s, 0.4 s, ... 5 s (a job is a pure function of its input, "
+                  "so a retry is safe); 0 = none")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 100));
 }
 
 }  // namespace

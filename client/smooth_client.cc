@@ -11,7 +11,9 @@ absl::Status FromGrpc(const grpc::Status& status) {
 absl::StatusOr<SmoothOutcome> CallSmooth(v1::MeshSmoother::StubInterface& stub, grpc::ClientContext& context,
                                          const v1::JobSpec& spec, std::string_view draco,
                                          const std::function<void(const v1::Progress&)>& on_progress,
-                                         size_t chunk_bytes) {
+                                         size_t chunk_bytes, CallState* state) {
+  CallState ignored;
+  if (state == nullptr) state = &ignored;
   chunk_bytes = std::clamp<size_t>(chunk_bytes, 1, 1 << 20);
   auto stream = stub.Smooth(&context);
   v1::SmoothRequest request;
@@ -35,6 +37,7 @@ absl::StatusOr<SmoothOutcome> CallSmooth(v1::MeshSmoother::StubInterface& stub, 
         order_ok &= stage == kStart;
         out.accepted = response.accepted();
         stage = kAccepted;
+        state->accepted = true;
         break;
       case v1::SmoothResponse::kProgress:
         order_ok &= stage == kAccepted;
@@ -45,6 +48,7 @@ absl::StatusOr<SmoothOutcome> CallSmooth(v1::MeshSmoother::StubInterface& stub, 
         order_ok &= stage == kAccepted || stage == kResult;
         out.result.append(response.result_chunk());
         stage = kResult;
+        state->result_started = true;
         break;
       case v1::SmoothResponse::kSummary:
         order_ok &= stage == kResult;

@@ -18,14 +18,21 @@ struct SmoothOutcome {
   int progress_events = 0;
 };
 
+// How far a Smooth call got, also when it failed (whether a retry could lose or repeat output).
+struct CallState {
+  bool accepted = false;        // Accepted arrived: a worker took the job
+  bool result_started = false;  // at least one result chunk arrived
+};
+
 // Runs one Smooth call on `context` (set its deadline and metadata before; TryCancel() on it
 // from another thread cancels). Sends `draco` in chunks of `chunk_bytes` (<= 1 MiB). Returns
 // the server's status as an absl::Status (same codes and message) when the call fails, and
-// Internal when the server breaks the message order.
+// Internal when the server breaks the message order. `state`, when given, says how far the
+// call got.
 absl::StatusOr<SmoothOutcome> CallSmooth(v1::MeshSmoother::StubInterface& stub, grpc::ClientContext& context,
                                          const v1::JobSpec& spec, std::string_view draco,
                                          const std::function<void(const v1::Progress&)>& on_progress = nullptr,
-                                         size_t chunk_bytes = 1 << 20);
+                                         size_t chunk_bytes = 1 << 20, CallState* state = nullptr);
 
 // gRPC status -> absl::Status (the codes share their numbers).
 absl::Status FromGrpc(const grpc::Status& status);

@@ -21,6 +21,24 @@ absl::Status CheckEnum(const char* field, int value, const google::protobuf::Enu
       absl::StrCat(field, ": unknown value ", value, " (this server knows ", absl::StrJoin(names, ", "), ")"));
 }
 
+// JobSpec.job_id: empty, or 1..kMaxJobIdLength visible ASCII characters (no space, so that the
+// log line's "job=ID" stays one field).
+absl::Status CheckJobId(const std::string& id) {
+  if (id.size() > kMaxJobIdLength) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("job_id: ", id.size(), " characters, above the limit of ", kMaxJobIdLength));
+  }
+  for (size_t i = 0; i < id.size(); ++i) {
+    const unsigned char c = static_cast<unsigned char>(id[i]);
+    if (c < 0x21 || c > 0x7e) {
+      return absl::InvalidArgumentError(absl::StrCat(
+          "job_id: character ", i, " is byte ", static_cast<int>(c),
+          "; a job id is printable ASCII without spaces (0x21-0x7E)"));
+    }
+  }
+  return absl::OkStatus();
+}
+
 }  // namespace
 
 absl::StatusOr<JobParams> FromProto(const v1::JobSpec& spec, int max_iterations) {
@@ -29,7 +47,9 @@ absl::StatusOr<JobParams> FromProto(const v1::JobSpec& spec, int max_iterations)
                                 CheckEnum("adaptive.mode", spec.adaptive().mode(), v1::AdaptiveMode_descriptor())}) {
     if (!s.ok()) return s;
   }
+  if (absl::Status s = CheckJobId(spec.job_id()); !s.ok()) return s;
   JobParams j;
+  j.job_id = spec.job_id();
   FlowParams& p = j.flow;
   if (!spec.flow().empty()) {
     absl::StatusOr<FlowId> flow = ParseFlowName(spec.flow());

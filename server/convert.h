@@ -22,7 +22,11 @@ struct JobParams {
   DracoOptions output;
   bool detect_features = false;
   FeatureOptions features;
+  std::string job_id;  // the client's JobSpec.job_id (checked); empty = the server makes one up
 };
+
+// JobSpec.job_id's longest length.
+inline constexpr size_t kMaxJobIdLength = 128;
 
 // Ridges and ravines a job found (Features without the per-vertex data).
 struct FeatureSummary {

@@ -198,7 +198,9 @@ class SmoothReactor final : public grpc::ServerBidiReactor<v1::SmoothRequest, v1
     if (upload_.empty()) {
       return Abort(InvalidArgument("no mesh arrived: send the Draco bytes in mesh_chunk messages after the spec"));
     }
-    const std::string id = absl::StrFormat("%x-%d", service_->start_tag_, service_->next_job_.fetch_add(1));
+    const std::string id = !params_->job_id.empty()
+                               ? params_->job_id
+                               : absl::StrFormat("%x-%d", service_->start_tag_, service_->next_job_.fetch_add(1));
     auto job = std::make_shared<SmoothJob>(id, std::move(*params_), upload_.TakeBytes(), upload_.TakeHold(),
                                            received_, service_->options_, this);
     {

@@ -1,0 +1,226 @@
+#!/usr/bin/python3
+"""meshsmoothd as one replica of many, driven as a user runs it: the CLI's --server lists with
+round-robin, its retries (a replica down, a saturated replica), client-chosen job ids, and the
+server's side of it: SIGTERM (health NOT_SERVING at once, new jobs refused, exit within the
+grace + 1 s) and --max-queue-wait.
+
+Run by ctest: replicas_test.py --cli build/client/meshsmooth --server build/server/meshsmoothd
+Prints one line per check and ends with 'N passed, M failed'.
+"""
+import argparse
+import json
+import os
+import re
+import signal
+import socket
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+
+passed, failed = 0, 0
+
+
+def check(name, fn):
+    global passed, failed
+    try:
+        fn()
+        passed += 1
+        print(f"ok: {name}", flush=True)
+    except Exception as e:  # noqa: BLE001 - one failure must not hide the others
+        failed += 1
+        print(f"FAIL: {name}: {e!r}", flush=True)
+
+
+def run(cmd, timeout=120):
+    return subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
+
+
+def free_port():
+    """A loopback port nothing listens on (bound, then closed)."""
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+class Replica:
+    """One meshsmoothd on a free loopback port; its stderr lines are kept with their times."""
+
+    def __init__(self, binary, *flags):
+        self.proc = subprocess.Popen([binary, "--listen", "127.0.0.1:0", *flags], stdout=subprocess.PIPE,
+                                     stderr=subprocess.PIPE, text=True)
+        line = self.proc.stdout.readline()
+        m = re.match(r"meshsmoothd listening on (\S+)$", line.strip())
+        assert m, f"no ready line: {line!r}"
+        self.address = m.group(1)
+        self.lines = []  # (time.monotonic(), line)
+        self._reader = threading.Thread(target=self._read, daemon=True)
+        self._reader.start()
+
+    def _read(self):
+        for line in self.proc.stderr:
+            self.lines.append((time.monotonic(), line.rstrip("\n")))
+
+    def jobs(self, status=None):
+        """The job ids of the server's log lines, optionally only those with `status`."""
+        ids = []
+        for _, line in list(self.lines):
+            m = re.match(r"meshsmoothd job=(\S+) .* status=(\S+) ", line)
+            if m and (status is None or m.group(2) == status):
+                ids.append(m.group(1))
+        return ids
+
+    def stop(self):
+        if self.proc.poll() is None:
+            self.proc.send_signal(signal.SIGTERM)
+            try:
+                self.proc.wait(timeout=15)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+                self.proc.wait()
+        self._reader.join(timeout=5)
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--cli", required=True)
+    ap.add_argument("--server", required=True)
+    a = ap.parse_args()
+    tmp = tempfile.mkdtemp()
+    cli, server = a.cli, a.server
+
+    def smooth(address, *extra, out="out.ply", timeout=120):
+        return run([cli, "smooth", "builtin:noisy-sphere", "-o", os.path.join(tmp, out), "--iterations", "3",
+                    "--server", address, *extra], timeout=timeout)
+
+    # A job that keeps one worker busy for a few seconds: Taubin neither shrinks nor diverges.
+    def busy(address, iterations):
+        return subprocess.Popen([cli, "smooth", "builtin:noisy-sphere-large", "-o", os.path.join(tmp, "busy.ply"),
+                                 "--flow", "taubin", "--iterations", iterations, "--server", address, "--quiet"],
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+    def help_documents_flags():
+        r = run([cli, "smooth", "--help"])
+        assert r.returncode == 0, r.returncode
+        for word in ("--retries", "--job-id", "dns:///", "ipv4:", "round-robin"):
+            assert word in r.stdout, f"'{word}' missing from smooth --help"
+    check("smooth --help documents --retries, --job-id and the target forms", help_documents_flags)
+
+    def bad_targets():
+        for target in ("host-a:50051,host-b:50051", "127.0.0.1:5,[::1]:6", "127.0.0.1:x,127.0.0.1:2"):
+            r = smooth(target)
+            assert r.returncode == 2, (target, r.returncode, r.stderr)
+            assert "--server" in r.stderr, (target, r.stderr)
+    check("a --server list naming a host, mixing families or without a port exits 2 naming --server", bad_targets)
+
+    one = Replica(server, "--workers", "1")
+    two = Replica(server, "--workers", "1")
+    try:
+        def job_id_everywhere():
+            r = smooth(one.address, "--job-id", "scan-0042/turntable:7", "--json")
+            assert r.returncode == 0, r.stderr
+            assert json.loads(r.stdout)["job_id"] == "scan-0042/turntable:7", r.stdout
+            r = smooth(one.address, "--job-id", "scan-0043")
+            assert r.returncode == 0, r.stderr
+            assert r.stdout.startswith("job scan-0043: "), r.stdout
+            time.sleep(0.2)
+            assert one.jobs("OK")[-2:] == ["scan-0042/turntable:7", "scan-0043"], one.jobs()
+            # Without --job-id the server makes one up, "<hex>-<n>".
+            r = smooth(one.address, "--json")
+            assert r.returncode == 0, r.stderr
+            assert re.fullmatch(r"[0-9a-f]+-\d+", json.loads(r.stdout)["job_id"]), r.stdout
+        check("--job-id is the job's id in the summary, the CLI's report and the server's log", job_id_everywhere)
+
+        def bad_job_ids():
+            for job_id, words in (("two words", ["job_id", "byte 32"]), ("x" * 129, ["job_id", "129", "128"]),
+                                  ("caf\u00e9", ["job_id", "byte 195"])):
+                r = smooth(one.address, "--job-id", job_id)
+                assert r.returncode == 1, (job_id, r.returncode, r.stderr)
+                assert "INVALID_ARGUMENT" in r.stderr and "retrying" not in r.stderr, (job_id, r.stderr)
+                for w in words:
+                    assert w in r.stderr, (job_id, w, r.stderr)
+            r = smooth(one.address, "--job-id", "x" * 128)
+            assert r.returncode == 0, r.stderr
+        check("a job id with a space, above 128 characters or not ASCII is INVALID_ARGUMENT naming job_id, "
+              "not retried", bad_job_ids)
+
+        def one_replica_down():
+            down = f"127.0.0.1:{free_port()}"
+            before = len(one.jobs("OK"))
+            for i in range(4):
+                r = smooth(f"{down},{one.address}", "--job-id", f"down-{i}", "--timeout", "30")
+                assert r.returncode == 0, (i, r.returncode, r.stderr)
+            assert one.jobs("OK")[before:] == [f"down-{i}" for i in range(4)], one.jobs()
+        check("with one address of the list down, every job runs on the other", one_replica_down)
+
+        def round_robin_spreads():
+            counts = [len(one.jobs()), len(two.jobs())]
+            for i in range(16):
+                target = f"{one.address},{two.address}" if i % 2 else f"ipv4:{one.address},{two.address}"
+                r = smooth(target, "--job-id", f"rr-{i}")
+                assert r.returncode == 0, (i, r.stderr)
+            time.sleep(0.2)
+            got = [len(one.jobs()) - counts[0], len(two.jobs()) - counts[1]]
+            assert sum(got) == 16, got
+            # Each one-job CLI picks a replica at random: 16 jobs leave fewer than 2 on one of
+            # them with a probability of 0.05 %.
+            assert min(got) >= 2, f"jobs per replica {got}"
+            ids = sorted(one.jobs()[counts[0]:] + two.jobs()[counts[1]:])
+            assert ids == sorted(f"rr-{i}" for i in range(16)), ids
+        check("a list of two replicas spreads one-job CLIs over both (server logs), each job once",
+              round_robin_spreads)
+    finally:
+        one.stop()
+        two.stop()
+
+    saturated = Replica(server, "--workers", "1", "--queue-depth", "0")
+    try:
+        def retried_until_a_worker_is_free():
+            b = busy(saturated.address, "1500")
+            try:
+                time.sleep(0.8)  # the busy job holds the only worker; the queue takes none
+                r = smooth(saturated.address, "--retries", "12", "--job-id", "patient", timeout=120)
+                assert r.returncode == 0, (r.returncode, r.stderr)
+                assert "attempt 1 failed (RESOURCE_EXHAUSTED: the job queue is full" in r.stderr, r.stderr
+                assert saturated.jobs("OK").count("patient") == 1, saturated.jobs()
+            finally:
+                b.wait(timeout=120)
+            assert b.returncode == 0, b.stderr.read()
+        check("a saturated replica: RESOURCE_EXHAUSTED, then success after retries, the job run once",
+              retried_until_a_worker_is_free)
+
+        def retries_are_bounded():
+            b = busy(saturated.address, "10000")
+            try:
+                time.sleep(0.8)
+                r = smooth(saturated.address, "--retries", "0")
+                assert r.returncode == 1, (r.returncode, r.stderr)
+                assert "RESOURCE_EXHAUSTED: the job queue is full" in r.stderr and "retrying" not in r.stderr, r.stderr
+                t0 = time.monotonic()
+                r = smooth(saturated.address, "--retries", "2")
+                assert r.returncode == 1, (r.returncode, r.stderr)
+                retries = re.findall(r"attempt (\d) failed \(RESOURCE_EXHAUSTED", r.stderr)
+                assert retries == ["1", "2"], r.stderr
+                assert r.stderr.rstrip().endswith("RESOURCE_EXHAUSTED: the job queue is full (0 jobs waiting); "
+                                                  "retry later"), r.stderr
+                assert time.monotonic() - t0 < 10, "two waits of at most 0.2 s and 0.4 s"
+                # The deadline bounds the retries too: 20 retries do not outlast --timeout 2.
+                t0 = time.monotonic()
+                r = smooth(saturated.address, "--retries", "20", "--timeout", "2")
+                assert r.returncode == 1 and "RESOURCE_EXHAUSTED" in r.stderr, (r.returncode, r.stderr)
+                assert time.monotonic() - t0 < 4, time.monotonic() - t0
+            finally:
+                b.kill()
+                b.wait()
+        check("--retries 0 does not retry; --retries 2 makes 3 attempts, then the last status; --timeout bounds them",
+              retries_are_bounded)
+    finally:
+        saturated.stop()
+
+    print(f"{passed} passed, {failed} failed")
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
