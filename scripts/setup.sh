@@ -11,7 +11,7 @@ packages=(
   libgrpc++-dev libgrpc-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler grpc-proto
   libdraco-dev draco libopenmesh-dev libabsl-dev libgtest-dev libgmock-dev
   libcli11-dev libeigen3-dev libbenchmark-dev libpng-dev
-  python3-grpcio python3-protobuf python3-numpy python3-scipy openssl
+  python3-grpcio python3-protobuf python3-numpy python3-scipy python3-yaml openssl
   nginx
 )
 if [ "$preset" = fuzz ]; then packages+=(clang libfuzzer-14-dev libomp-dev); fi

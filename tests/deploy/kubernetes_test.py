@@ -1,0 +1,226 @@
+#!/usr/bin/python3
+"""deploy/kubernetes/ without a cluster: the manifests parse, hang together and fit meshsmoothd.
+
+`kubectl apply --dry-run=client` needs an API server to map kinds, so this checks the structure
+itself (no schema): kinds and API versions, label selectors against the pod's labels, the gRPC
+probes and Services against the port the image listens on, every server flag against
+`meshsmoothd --help`, the termination grace against --grace-seconds, the memory limit against the
+measured peak per vertex, and the image's user. With kubectl on PATH, `kubectl kustomize` must
+also render the directory.
+
+Run by ctest: kubernetes_test.py --deploy deploy/kubernetes --dockerfile docker/Dockerfile
+                                 --server build/server/meshsmoothd
+Prints one line per check and ends with 'N passed, M failed'.
+"""
+import argparse
+import os
+import re
+import shutil
+import subprocess
+import sys
+
+import yaml
+
+# meshsmoothd's peak resident memory per vertex of one job (the most any flow measured, 410,
+# rounded up) and an allowance for the process itself (17 MiB idle): scripts/peak-memory.sh,
+# docs/deployment.md "Memory".
+PEAK_BYTES_PER_VERTEX = 420
+IDLE_BYTES = 64 << 20
+
+passed, failed = 0, 0
+
+
+def check(name, fn):
+    global passed, failed
+    try:
+        fn()
+        passed += 1
+        print(f"ok: {name}")
+    except Exception as e:  # noqa: BLE001 - one failure must not hide the others
+        failed += 1
+        print(f"FAIL: {name}: {type(e).__name__}: {e}")
+
+
+def quantity(value):
+    """A Kubernetes quantity ("3Gi", "512M", "1500m", 2) as a number."""
+    s = str(value)
+    for suffix, factor in (("Ki", 1 << 10), ("Mi", 1 << 20), ("Gi", 1 << 30), ("Ti", 1 << 40),
+                           ("k", 10**3), ("M", 10**6), ("G", 10**9), ("T", 10**12), ("m", 1e-3)):
+        if s.endswith(suffix):
+            return float(s[: -len(suffix)]) * factor
+    return float(s)
+
+
+def subset(labels, of):
+    return all(of.get(k) == v for k, v in labels.items())
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--deploy", required=True)
+    ap.add_argument("--dockerfile", required=True)
+    ap.add_argument("--server", required=True, help="meshsmoothd, for its --help")
+    a = ap.parse_args()
+
+    files = sorted(f for f in os.listdir(a.deploy) if f.endswith((".yaml", ".yml")))
+    docs = {}  # file -> list of objects
+
+    def parse():
+        for f in files:
+            with open(os.path.join(a.deploy, f)) as fh:
+                objs = [d for d in yaml.safe_load_all(fh) if d is not None]
+            assert objs, f"{f}: no object"
+            for d in objs:
+                assert isinstance(d, dict), f"{f}: not a mapping"
+                for key in ("apiVersion", "kind"):
+                    assert d.get(key), f"{f}: no {key}"
+                if d["kind"] != "Kustomization":
+                    assert d.get("metadata", {}).get("name"), f"{f}: no metadata.name"
+            docs[f] = objs
+    check("every file is YAML with apiVersion, kind and a name", parse)
+    if not docs:
+        print(f"{passed} passed, {failed} failed")
+        return 1
+    objs = [d for ds in docs.values() for d in ds]
+
+    def of_kind(kind):
+        return [d for d in objs if d["kind"] == kind]
+
+    def kinds():
+        want = {"Kustomization": "kustomize.config.k8s.io/v1beta1", "Namespace": "v1",
+                "Deployment": "apps/v1", "PodDisruptionBudget": "policy/v1", "Service": "v1"}
+        for d in objs:
+            assert d["kind"] in want, f"unexpected kind {d['kind']}"
+            assert d["apiVersion"] == want[d["kind"]], f"{d['kind']}: apiVersion {d['apiVersion']}"
+        counts = {k: len(of_kind(k)) for k in want}
+        assert counts == {"Kustomization": 1, "Namespace": 1, "Deployment": 1,
+                          "PodDisruptionBudget": 1, "Service": 2}, counts
+    check("one Deployment, one PodDisruptionBudget, two Services, a Namespace, a Kustomization", kinds)
+
+    def kustomization():
+        k = of_kind("Kustomization")[0]
+        listed = sorted(k["resources"])
+        others = sorted(f for f in files if f not in ("kustomization.yaml", "kustomization.yml"))
+        assert listed == others, f"resources {listed} but the directory has {others}"
+        assert k["namespace"] == of_kind("Namespace")[0]["metadata"]["name"], "namespace"
+    check("the kustomization lists every manifest and the Namespace's name", kustomization)
+
+    dep = of_kind("Deployment")[0]
+    pod = dep["spec"]["template"]["spec"]
+    pod_labels = dep["spec"]["template"]["metadata"]["labels"]
+    containers = pod["containers"]
+    c = containers[0]
+    args = c.get("args", [])
+    flags = {}
+    for arg in args:
+        m = re.fullmatch(r"(--[a-z0-9-]+)=(.*)", arg)
+        assert m, f"args are --flag=value: {arg!r}"
+        flags[m.group(1)] = m.group(2)
+
+    with open(a.dockerfile) as fh:
+        dockerfile = fh.read()
+    entry = re.search(r'^ENTRYPOINT \[.*"--listen", "[^"]*:(\d+)"\]', dockerfile, re.M)
+    image_port = int(entry.group(1))
+    image_uid = int(re.search(r"useradd .*--uid (\d+)", dockerfile).group(1))
+
+    def selectors():
+        assert len(containers) == 1, "one container"
+        assert subset(dep["spec"]["selector"]["matchLabels"], pod_labels), "Deployment selector"
+        for s in of_kind("Service"):
+            assert s["spec"]["selector"] and subset(s["spec"]["selector"], pod_labels), \
+                f"Service {s['metadata']['name']} selects no pod"
+        pdb = of_kind("PodDisruptionBudget")[0]
+        assert subset(pdb["spec"]["selector"]["matchLabels"], pod_labels), "PDB selector"
+        for t in pod.get("topologySpreadConstraints", []):
+            assert subset(t["labelSelector"]["matchLabels"], pod_labels), "spread selector"
+    check("every selector matches the pod's labels", selectors)
+
+    def ports():
+        named = {p["name"]: p["containerPort"] for p in c["ports"]}
+        assert named.get("grpc") == image_port, f"container port {named} vs the image's {image_port}"
+        for probe in ("readinessProbe", "livenessProbe"):
+            assert c[probe]["grpc"]["port"] == image_port, f"{probe}: {c[probe]}"
+            assert "service" not in c[probe]["grpc"], f"{probe}: the server reports health for \"\""
+        for s in of_kind("Service"):
+            (p,) = s["spec"]["ports"]
+            target = p.get("targetPort", p["port"])
+            assert target == "grpc" or target == image_port, f"{s['metadata']['name']}: targetPort {target}"
+    check(f"gRPC probes and Services reach the image's port {image_port}", ports)
+
+    def services():
+        by_ip = {s["spec"].get("clusterIP"): s for s in of_kind("Service")}
+        assert "None" in by_ip, "a headless Service (clusterIP: None) for client-side balancing"
+        other = [s for ip, s in by_ip.items() if ip != "None"]
+        assert len(other) == 1 and other[0]["spec"].get("type", "ClusterIP") == "ClusterIP", \
+            "a ClusterIP Service for proxies"
+    check("a headless Service and a ClusterIP Service", services)
+
+    def server_flags():
+        out = subprocess.run([a.server, "--help"], capture_output=True, text=True, timeout=30)
+        assert out.returncode == 0, out.stderr
+        known = set(re.findall(r"(--[a-z0-9-]+)", out.stdout))
+        unknown = sorted(set(flags) - known)
+        assert not unknown, f"meshsmoothd has no {unknown}"
+        # Their defaults follow the node, not the pod (docs/deployment.md).
+        for f in ("--workers", "--threads-per-job", "--max-buffered-bytes", "--grace-seconds"):
+            assert f in flags, f"{f} not set"
+        assert int(flags["--workers"]) * max(1, int(flags["--threads-per-job"])) <= \
+            quantity(c["resources"]["limits"]["cpu"]), "more threads than CPUs"
+    check("every server flag exists and the node-sized defaults are set", server_flags)
+
+    def grace():
+        pre = c.get("lifecycle", {}).get("preStop", {}).get("exec", {}).get("command", [])
+        pre_seconds = float(pre[1]) if pre[:1] == ["sleep"] else 0.0
+        need = pre_seconds + float(flags["--grace-seconds"]) + 1
+        got = pod["terminationGracePeriodSeconds"]
+        assert got >= need, f"terminationGracePeriodSeconds {got} < preStop {pre_seconds} + grace + 1"
+    check("termination grace covers preStop + --grace-seconds + 1 s", grace)
+
+    def memory():
+        r = c["resources"]
+        assert r["requests"] == r["limits"], "requests equal limits (Guaranteed)"
+        limit = quantity(r["limits"]["memory"])
+        need = (IDLE_BYTES + int(flags["--workers"]) * PEAK_BYTES_PER_VERTEX * int(flags["--max-vertices"])
+                + int(flags["--max-buffered-bytes"]))
+        assert limit >= need, f"memory limit {limit / 2**20:.0f} MiB < {need / 2**20:.0f} MiB needed"
+        assert limit <= 1.5 * need, f"memory limit {limit / 2**20:.0f} MiB is far above {need / 2**20:.0f} MiB"
+        assert int(flags["--max-upload-bytes"]) <= int(flags["--max-buffered-bytes"]), \
+            "an upload of --max-upload-bytes must fit in --max-buffered-bytes"
+    check(f"memory limit fits --workers jobs of --max-vertices at {PEAK_BYTES_PER_VERTEX} B/vertex", memory)
+
+    def security():
+        sc = pod["securityContext"]
+        assert sc["runAsNonRoot"] is True and sc["runAsUser"] == image_uid, sc
+        assert c["securityContext"]["allowPrivilegeEscalation"] is False
+        assert c["securityContext"]["readOnlyRootFilesystem"] is True
+    check(f"runs as the image's uid {image_uid}, not root", security)
+
+    def disruption():
+        pdb = of_kind("PodDisruptionBudget")[0]["spec"]
+        replicas = dep["spec"]["replicas"]
+        if "maxUnavailable" in pdb:
+            assert 1 <= pdb["maxUnavailable"] < replicas, pdb
+        else:
+            assert 1 <= pdb["minAvailable"] < replicas, pdb
+        assert dep["spec"]["strategy"]["rollingUpdate"]["maxUnavailable"] == 0, "rollout keeps all replicas"
+    check("a drain evicts one replica at a time and leaves the others serving", disruption)
+
+    kubectl = shutil.which("kubectl")
+    if kubectl:
+        def kustomize():
+            out = subprocess.run([kubectl, "kustomize", a.deploy], capture_output=True, text=True, timeout=120)
+            assert out.returncode == 0, out.stderr
+            rendered = [d for d in yaml.safe_load_all(out.stdout) if d]
+            assert len(rendered) == len(objs) - 1, f"{len(rendered)} objects rendered"
+            ns = of_kind("Namespace")[0]["metadata"]["name"]
+            assert all(d["metadata"].get("namespace") == ns for d in rendered if d["kind"] != "Namespace")
+        check("kubectl kustomize renders every object in the namespace", kustomize)
+    else:
+        print("skip: kubectl kustomize (no kubectl on PATH)")
+
+    print(f"{passed} passed, {failed} failed")
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
