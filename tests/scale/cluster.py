@@ -1,6 +1,6 @@
 """Processes for tests and benchmarks of many replicas: meshsmoothd replicas on loopback and
 nginx in front of them, configured from deploy/nginx/meshsmooth.conf. Standard library only.
-Used by bench/replicas.py."""
+Used by tests/scale/scale_test.py and bench/replicas.py."""
 
 import os
 import re
