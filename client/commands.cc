@@ -43,7 +43,7 @@ int Fail(const std::string& what, const absl::Status& s) {
 v1::JobSpec SpecFrom(const SmoothOptions& o) {
   v1::JobSpec spec;
   spec.set_job_id(o.job_id);
-  spec.set_flow(o.flow);
+  if (o.flow != "auto") spec.set_flow(o.flow);  // none named: the server chooses
   spec.set_iterations(o.iterations);
   spec.set_step(o.step);
   spec.set_weights(o.weights == "u1" ? v1::UMBRELLA_WEIGHTS_INVERSE_DISTANCE : v1::UMBRELLA_WEIGHTS_UNIFORM);

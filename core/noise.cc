@@ -26,6 +26,10 @@ constexpr int kMinFitPoints = 14;
 constexpr double kMinRelativePivot = 1e-9;
 // 1 / Phi^-1(3/4): the median of |x| for x ~ N(0, sigma^2) is sigma / 1.4826.
 constexpr double kMadToSigma = 1.4826;
+// The deviation is the root mean square of the residuals within this many robust scales;
+// E[x^2 1{|x| <= 3}] for x ~ N(0, 1) is 1 - 2 Phi(-3) - 6 phi(3) = 0.97071.
+constexpr double kTrimSigmas = 3.0;
+constexpr double kTrimmedSecondMoment = 0.97071;
 // Marks a vertex whose fit was tried but not well posed.
 constexpr double kUnusable = -1.0;
 // At most about this many vertices are fitted (every k-th vertex of a larger mesh): the median
@@ -160,6 +164,13 @@ NoiseEstimate EstimateNoise(const Mesh& mesh, const Topology& topo, double h, in
   estimate.reliable = true;
   estimate.sigma_h = kMadToSigma * residual[mid];
   estimate.sigma = estimate.sigma_h * h;
+  // The deviation itself, from the residuals within kTrimSigmas of the robust scale (creases and
+  // corners lie further out): their mean square over every residual, corrected for the
+  // Gaussian's share of it inside the cut.
+  const double cut = kTrimSigmas * estimate.sigma_h;
+  double sum = 0.0;
+  for (double r : residual) sum += r <= cut ? r * r : 0.0;
+  estimate.deviation_h = std::sqrt(sum / static_cast<double>(residual.size()) / kTrimmedSecondMoment);
   return estimate;
 }
 

@@ -25,6 +25,11 @@ namespace meshsmooth {
 struct NoiseEstimate {
   double sigma = 0.0;   // in the mesh's units
   double sigma_h = 0.0;  // relative to the mean edge length h
+  // The root mean square of the offsets, from the residuals within three robust scales of
+  // zero: sigma_h for Gaussian noise, larger for noise whose distribution is more peaked (noise
+  // in random directions, whose normal part is a Gaussian times a uniform cosine), where the
+  // median reads low. What an estimate of a squared error needs (core/flows/auto_stop.h).
+  double deviation_h = 0.0;
   int64_t vertices_used = 0;   // interior vertices with a well-posed fit
   int64_t vertices_tried = 0;  // interior vertices fitted (every k-th one of a large mesh)
   // False when too few fits were well posed for the median to mean anything (fewer than 25,

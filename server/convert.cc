@@ -91,6 +91,9 @@ absl::StatusOr<JobParams> FromProto(const v1::JobSpec& spec, int max_iterations)
   }
   p.boundary = spec.boundary() == v1::BOUNDARY_MODE_CURVE ? BoundaryMode::kCurve : BoundaryMode::kFixed;
   p.tolerance = spec.tolerance();
+  // A job that names neither a flow, an iteration count nor a step leaves the flow to the
+  // estimated error (FlowParams::choose_flow).
+  p.choose_flow = spec.flow().empty() && spec.iterations() == 0 && spec.step() == 0.0;
   if (absl::Status s = ValidateFlowParams(p, 0); !s.ok()) return s;
 
   if (spec.output().quantization_bits() > static_cast<uint32_t>(kMaxQuantizationBits)) {
@@ -160,10 +163,10 @@ void ToProto(const ParameterInfo& p, v1::ParameterInfo* out) {
 
 void ToProto(const JobParams& params, const FlowResult& result, v1::EffectiveParameters* out) {
   const FlowParams& p = params.flow;
-  out->set_flow(std::string(FlowOf(p.flow).name));
+  out->set_flow(std::string(FlowOf(result.flow).name));
   out->set_iterations_requested(static_cast<uint32_t>(p.iterations));
   out->set_iterations_run(static_cast<uint32_t>(result.iterations_run));
-  out->set_step(p.step.value_or(FlowOf(p.flow).default_step));
+  out->set_step(p.step.value_or(FlowOf(result.flow).default_step));
   out->set_effective_step(result.effective_step);
   out->set_taubin_mu(result.effective_mu);
   out->set_mean_edge_length(result.mean_edge_length);

@@ -14,17 +14,60 @@ AutoStop::AutoStop(const Mesh& mesh, const Topology& topo, const uint8_t* role, 
     : topo_(topo), role_(role), h_(h), threads_(threads), start_(mesh.positions) {
   const NoiseEstimate noise = EstimateNoise(mesh, topo, h, threads);
   estimated_ = noise.reliable;
+  const double floor2 = kEstimatorFloorH * kEstimatorFloorH;
   report_.noise_sigma_h = noise.sigma_h;
-  report_.noise_to_remove_h =
-      std::sqrt(std::max(0.0, noise.sigma_h * noise.sigma_h - kEstimatorFloorH * kEstimatorFloorH));
-  target_ = kDiscrepancy * report_.noise_to_remove_h * h;
+  report_.noise_to_remove_h = std::sqrt(std::max(0.0, noise.sigma_h * noise.sigma_h - floor2));
+  // Not less the floor: SURE weighs the fidelity to the input against the noise, and a floor
+  // taken off small noise (0.06 h) makes it stop after an iteration or two.
+  sigma_ = kRiskSigmaMargin * noise.deviation_h * h;
   const int32_t n = topo.num_vertices();
   stride_ = std::max<int32_t>(1, (n + kMaxMeasured - 1) / kMaxMeasured);
+  normal_.assign(n, Vec3{});
   for (int32_t v = 0; v < n; ++v) {
-    counted_ += v % stride_ == 0 && role[v] == kFree && topo.kind[v] == VertexKind::kInterior;
     closed_ &= topo.kind[v] == VertexKind::kInterior || topo.kind[v] == VertexKind::kIsolated;
+    if (role[v] != kFree || topo.kind[v] != VertexKind::kInterior) continue;
+    const Vec3 normal = RingNormal(topo, start_.data(), v);
+    const double len = Norm(normal);
+    if (!(len > 0.0) || !std::isfinite(len)) continue;
+    normal_[v] = normal * (1.0 / len);
+    counted_ += v % stride_ == 0;
   }
   if (closed_) start_volume_ = Volume(start_.data());
+}
+
+std::vector<Vec3> AutoStop::ProbeStart() const {
+  std::vector<Vec3> probe = start_;
+  const double eps = kProbeStep * sigma_;
+  for (size_t v = 0; v < probe.size(); ++v) probe[v] += normal_[v] * (eps * Sign(static_cast<int32_t>(v)));
+  return probe;
+}
+
+double AutoStop::Sign(int32_t v) {
+  // splitmix64's finaliser: consecutive vertices get independent signs.
+  uint64_t z = static_cast<uint64_t>(v) + 0x9E3779B97F4A7C15ull;
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  return ((z ^ (z >> 31)) & 1) != 0 ? 1.0 : -1.0;
+}
+
+double AutoStop::Risk(const Vec3* pos, const Vec3* probe) const {
+  const int32_t n = topo_.num_vertices();
+  const double eps = kProbeStep * sigma_;
+  const double weight = 2.0 * sigma_ * sigma_ / eps;
+  std::vector<double> block_sum((n + kBlock - 1) / kBlock, 0.0);
+  ForBlocks(n, threads_, [&](int32_t b, int32_t begin, int32_t end) {
+    double sum = 0.0;
+    for (int32_t v = begin; v < end; ++v) {
+      if (v % stride_ != 0 || normal_[v] == Vec3{}) continue;
+      const double d = Dot(pos[v] - start_[v], normal_[v]);
+      const double slope = Dot(probe[v] - pos[v], normal_[v]) * Sign(v);
+      sum += d * d + weight * slope;
+    }
+    block_sum[b] = sum;
+  });
+  double total = 0.0;
+  for (double s : block_sum) total += s;  // block order: the same sum for any thread count
+  return counted_ > 0 ? total / static_cast<double>(counted_) : 0.0;
 }
 
 double AutoStop::Volume(const Vec3* pos) const {
@@ -145,13 +188,21 @@ double AutoStop::RmsNormalDisplacement(const Vec3* pos) const {
   return counted_ > 0 ? std::sqrt(total / static_cast<double>(counted_)) : 0.0;
 }
 
-std::optional<StopReason> AutoStop::After(const Vec3* pos) {
-  const double d = RmsNormalDisplacement(pos);
-  report_.displacement_h = d / h_;
-  const double gained = d - last_;
-  last_ = d;
-  if (d >= target_) return StopReason::kNoiseRemoved;
-  if (gained < kConvergedShare * target_) return StopReason::kConverged;
+std::optional<StopReason> AutoStop::After(int it, const Vec3* pos, const Vec3* probe) {
+  const double risk = Risk(pos, probe);
+  risks_.push_back(risk);
+  improved_ = best_it_ == 0 || risk < best_risk_;
+  if (improved_) {
+    best_risk_ = risk;
+    best_it_ = it;
+    report_.displacement_h = RmsNormalDisplacement(pos) / h_;
+    report_.risk_h2 = (risk - sigma_ * sigma_) / (h_ * h_);
+  }
+  const int stretch = std::max(kPatience, it / 2);
+  if (it - best_it_ >= std::max(kPatience, best_it_ / 2)) return StopReason::kNoiseRemoved;
+  if (it > stretch && risks_[it - 1 - stretch] - best_risk_ < kConvergedShare * sigma_ * sigma_) {
+    return StopReason::kConverged;
+  }
   return std::nullopt;
 }
 

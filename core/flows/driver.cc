@@ -263,6 +263,7 @@ absl::StatusOr<FlowResult> RunIterations(Mesh& mesh, const Topology& topo, const
   const absl::StatusOr<double> diagonal = CheckInput(mesh, topo, h);
   if (!diagonal.ok()) return diagonal.status();
   FlowResult result;
+  result.flow = p.flow;
   FlowRun run(topo, p, h, *diagonal);
   run.SetUp(mesh, result);
 
@@ -285,6 +286,20 @@ absl::StatusOr<FlowResult> RunIterations(Mesh& mesh, const Topology& topo, const
   const int32_t n = mesh.num_vertices();
   std::vector<Vec3> cur = std::move(mesh.positions), next(n), mid;
   if (run.passes() > 1) mid.resize(n);
+  // Automatic stopping runs the flow a second time, beside the first, on a probe copy of the
+  // input (auto_stop.h), and keeps the best iteration so far in `best`.
+  Mesh probe_mesh;
+  std::optional<FlowRun> probe;
+  std::vector<Vec3> probe_next, probe_mid, best;
+  if (auto_stop) {
+    probe_mesh.positions = auto_stop->ProbeStart();
+    probe_mesh.triangles = mesh.triangles;
+    probe.emplace(topo, p, h, *diagonal);
+    FlowResult unused;
+    probe->SetUp(probe_mesh, unused);
+    probe_next.resize(n);
+    if (probe->passes() > 1) probe_mid.resize(n);
+  }
   const auto t0 = std::chrono::steady_clock::now();
   for (int it = 1; it <= last_iteration; ++it) {
     if (control.cancel != nullptr && control.cancel->load(std::memory_order_relaxed)) {
@@ -303,7 +318,12 @@ absl::StatusOr<FlowResult> RunIterations(Mesh& mesh, const Topology& topo, const
     result.last = progress;
     if (control.on_progress) control.on_progress(progress);
     if (auto_stop) {
-      const std::optional<StopReason> stop = auto_stop->After(cur.data());
+      std::vector<Vec3>& probe_cur = probe_mesh.positions;
+      std::vector<Vec3>* probe_out = &probe_next;
+      probe->Iterate(it, probe_cur, probe_next, probe_mid, probe_out);
+      probe_cur.swap(*probe_out);
+      const std::optional<StopReason> stop = auto_stop->After(it, cur.data(), probe_cur.data());
+      if (auto_stop->improved()) best.assign(cur.begin(), cur.end());
       result.auto_stop = auto_stop->report();
       if (stop) {
         result.stop_reason = *stop;
@@ -321,6 +341,10 @@ absl::StatusOr<FlowResult> RunIterations(Mesh& mesh, const Topology& topo, const
     }
   }
   if (auto_stop) {
+    if (auto_stop->best_iteration() > 0 && auto_stop->best_iteration() < result.iterations_run) {
+      cur.swap(best);
+      result.iterations_run = auto_stop->best_iteration();
+    }
     auto_stop->RepairFolds(cur.data());
     auto_stop->KeepVolume(cur.data());
   }

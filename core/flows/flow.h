@@ -90,6 +90,10 @@ struct FlowParams {
   // The most iterations automatic stopping may run (1 .. kMaxAutoIterations; a server sets
   // its own limit here).
   int max_auto_iterations = kMaxAutoIterations;
+  // With automatic stopping: run every flow of kChoiceFlows instead of `flow` and keep the one
+  // whose estimated error is least (auto_stop.h; FlowResult::flow says which). On meshes of
+  // more than kMaxChoiceVertices vertices only `flow` runs.
+  bool choose_flow = false;
   // The paper's lambda: dimensionless for the umbrella flows, relative to h^2 for the
   // curvature flows. Unset = the flow's default (DefaultStep); set, it must be > 0.
   std::optional<double> step;
@@ -160,9 +164,13 @@ struct AutoStopReport {
   double noise_sigma_h = 0.0;     // EstimateNoise() of the input, in h
   double noise_to_remove_h = 0.0;  // the part of it taken for noise (see driver.cc), in h
   double displacement_h = 0.0;    // RMS normal displacement from the input when it stopped, in h
+  // The run's estimated mean squared error to the noise-free surface, a vertex, less the
+  // noise's variance (auto_stop.h): comparable between flows run on the same input, in h^2.
+  double risk_h2 = 0.0;
 };
 
 struct FlowResult {
+  FlowId flow = kDefaultFlow;  // the flow that ran (FlowParams::choose_flow picks one)
   int iterations_run = 0;
   StopReason stop_reason = StopReason::kIterations;
   double effective_step = 0.0;  // lambda actually used (mesh units for the curvature flows)

@@ -37,6 +37,12 @@ enum class FlowId : uint8_t {
 // The flow of a job that names none: the benchmark's best on scans at its automatic stop
 // (docs/quality.md, "How the defaults were chosen").
 inline constexpr FlowId kDefaultFlow = FlowId::kBilaplacian;
+// The flows a job that names none chooses from by their estimated error (FlowParams::choose_flow):
+// bilaplacian is the best on scans, bilateral_normal on CAD parts and smooth shapes.
+inline constexpr FlowId kChoiceFlows[] = {FlowId::kBilaplacian, FlowId::kBilateralNormal};
+// Above this many vertices the choice is skipped: the bilateral_normal candidate and its probe
+// cost about ten times the bilaplacian run (docs/quality.md).
+inline constexpr int32_t kMaxChoiceVertices = 200000;
 
 // What a flow's step and speed are measured in, and which machinery the driver gives it.
 enum class FlowKind : uint8_t {

@@ -1,7 +1,11 @@
 // Smooth(): validates the parameters, picks the order the mesh runs in (core/flows/reorder.h)
 // and hands the iterations to the driver (core/flows/driver.h).
+#include <chrono>
 #include <cmath>
 #include <limits>
+#include <optional>
+#include <utility>
+#include <vector>
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
@@ -90,6 +94,60 @@ absl::StatusOr<FlowResult> Smooth(Mesh& mesh, const FlowParams& p, const RunCont
   return Smooth(mesh, topo, p, control);
 }
 
+namespace {
+
+absl::StatusOr<FlowResult> SmoothWith(Mesh& mesh, const Topology& topo, const FlowParams& p,
+                                      const RunControl& control, double h);
+
+// FlowParams::choose_flow: every candidate runs on a copy of the input with automatic stopping;
+// the one with the least estimated error gives the result. The first candidate's estimate
+// decides whether there is anything to do at all.
+absl::StatusOr<FlowResult> SmoothChoosing(Mesh& mesh, const Topology& topo, const FlowParams& p,
+                                          const RunControl& control, double h) {
+  std::optional<FlowResult> best;
+  std::vector<Vec3> best_positions;
+  // Progress counts the iterations of every candidate so far; the time budget is the whole
+  // choice's.
+  int done = 0;
+  RunControl each = control;
+  if (control.on_progress) {
+    each.on_progress = [&done, &control](const Progress& progress) {
+      Progress total = progress;
+      total.iteration += done;
+      control.on_progress(total);
+    };
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  for (FlowId flow : kChoiceFlows) {
+    if (control.time_budget_seconds > 0.0) {
+      each.time_budget_seconds = std::max(
+          1e-9, control.time_budget_seconds - std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    }
+    Mesh copy = mesh;
+    FlowParams q = p;
+    q.flow = flow;
+    q.choose_flow = false;
+    absl::StatusOr<FlowResult> r = SmoothWith(copy, topo, q, each, h);
+    if (r.ok()) done += r->last.iteration;
+    if (!r.ok()) {
+      // A candidate that diverges is not chosen; cancellation and the like end the job.
+      if (r.status().code() == absl::StatusCode::kFailedPrecondition) continue;
+      return r.status();
+    }
+    const bool idle = r->iterations_run == 0;
+    if (!best || (r->auto_stop && best->auto_stop && r->auto_stop->risk_h2 < best->auto_stop->risk_h2)) {
+      best = *std::move(r);
+      best_positions = std::move(copy.positions);
+    }
+    if (idle) break;  // no noise to remove, or no estimate: the same for every candidate
+  }
+  if (!best) return absl::FailedPreconditionError("every candidate flow diverged");
+  mesh.positions = std::move(best_positions);
+  return *std::move(best);
+}
+
+}  // namespace
+
 // Large meshes whose order scatters neighbours run on a Morton-ordered copy (reorder.h); h is
 // taken in the caller's order, so it is the same value whatever the order the run uses.
 absl::StatusOr<FlowResult> Smooth(Mesh& mesh, const Topology& topo, const FlowParams& p, const RunControl& control) {
@@ -99,6 +157,17 @@ absl::StatusOr<FlowResult> Smooth(Mesh& mesh, const Topology& topo, const FlowPa
     return absl::InvalidArgumentError("the topology was built for another mesh");
   }
   const double h = MeanEdgeLength(mesh, topo);
+  if (p.choose_flow && p.iterations == kAutoIterations && n <= kMaxChoiceVertices) {
+    return SmoothChoosing(mesh, topo, p, control, h);
+  }
+  return SmoothWith(mesh, topo, p, control, h);
+}
+
+namespace {
+
+absl::StatusOr<FlowResult> SmoothWith(Mesh& mesh, const Topology& topo, const FlowParams& p,
+                                      const RunControl& control, double h) {
+  const int32_t n = mesh.num_vertices();
   // The normal-filtering flows work on the faces, which the reordered copy does not carry.
   const bool reorder = FlowOf(p.flow).kind == FlowKind::kNormalFilter ? false
                        : p.reorder == ReorderMode::kAlways
@@ -116,6 +185,8 @@ absl::StatusOr<FlowResult> Smooth(Mesh& mesh, const Topology& topo, const FlowPa
   RestoreOrder(local, mesh, threads);
   return result;
 }
+
+}  // namespace
 
 std::vector<Vec3> MeanCurvatureNormals(const Mesh& mesh, const Topology& topo) {
   flows::StepContext ctx;

@@ -199,8 +199,9 @@ def main():
         names = [f["name"] for f in json.loads(r.stdout)["flows"]]
         r = run([cli, "smooth", "--help"])
         assert r.returncode == 0, r.returncode
-        assert "{" + ",".join(names) + "}" in r.stdout, r.stdout
-        assert " | ".join(names) in r.stdout, r.stdout
+        # "auto" (the default: the server chooses) comes first.
+        assert "{auto," + ",".join(names) + "}=auto" in r.stdout, r.stdout
+        assert "auto | " + " | ".join(names) in r.stdout, r.stdout
         for name in names:
             out = os.path.join(tmp, f"flow_{name}.ply")
             r = run([cli, "smooth", "builtin:sphere", "-o", out, "--flow", name, "--iterations", "1", "--json"])
