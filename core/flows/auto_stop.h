@@ -90,6 +90,12 @@ class AutoStop {
   // stop now, if any. improved() tells whether `pos` is the best iteration so far.
   std::optional<StopReason> After(int it, const Vec3* pos, const Vec3* probe);
   bool improved() const { return improved_; }
+  // The report for positions `pos` reached without After() (a count chosen beforehand).
+  AutoStopReport Measure(const Vec3* pos) const {
+    AutoStopReport r = report_;
+    r.displacement_h = RmsNormalDisplacement(pos) / h_;
+    return r;
+  }
   int best_iteration() const { return best_it_; }
 
   // Moves the free interior vertices of folded edges of `pos` half-way to their ring's centroid

@@ -281,8 +281,11 @@ absl::StatusOr<FlowResult> RunIterations(Mesh& mesh, const Topology& topo, const
       return result;
     }
     last_iteration = std::min(p.max_auto_iterations, kMaxAutoIterations);
+    if (p.sampled_iterations > 0) last_iteration = std::min(last_iteration, p.sampled_iterations);
     result.stop_reason = StopReason::kIterations;
   }
+  // A count chosen on a sample of the mesh (Smooth()) runs as it is: no probe, no estimate.
+  const bool estimate_risk = auto_stop && p.sampled_iterations == 0;
   const int32_t n = mesh.num_vertices();
   std::vector<Vec3> cur = std::move(mesh.positions), next(n), mid;
   if (run.passes() > 1) mid.resize(n);
@@ -291,7 +294,7 @@ absl::StatusOr<FlowResult> RunIterations(Mesh& mesh, const Topology& topo, const
   Mesh probe_mesh;
   std::optional<FlowRun> probe;
   std::vector<Vec3> probe_next, probe_mid, best;
-  if (auto_stop) {
+  if (estimate_risk) {
     probe_mesh.positions = auto_stop->ProbeStart();
     probe_mesh.triangles = mesh.triangles;
     probe.emplace(topo, p, h, *diagonal);
@@ -317,7 +320,7 @@ absl::StatusOr<FlowResult> RunIterations(Mesh& mesh, const Topology& topo, const
     result.iterations_run = it;
     result.last = progress;
     if (control.on_progress) control.on_progress(progress);
-    if (auto_stop) {
+    if (estimate_risk) {
       std::vector<Vec3>& probe_cur = probe_mesh.positions;
       std::vector<Vec3>* probe_out = &probe_next;
       probe->Iterate(it, probe_cur, probe_next, probe_mid, probe_out);
@@ -340,11 +343,12 @@ absl::StatusOr<FlowResult> RunIterations(Mesh& mesh, const Topology& topo, const
       break;
     }
   }
+  if (estimate_risk && auto_stop->best_iteration() > 0 && auto_stop->best_iteration() < result.iterations_run) {
+    cur.swap(best);
+    result.iterations_run = auto_stop->best_iteration();
+  }
   if (auto_stop) {
-    if (auto_stop->best_iteration() > 0 && auto_stop->best_iteration() < result.iterations_run) {
-      cur.swap(best);
-      result.iterations_run = auto_stop->best_iteration();
-    }
+    if (!estimate_risk) result.auto_stop = auto_stop->Measure(cur.data());
     auto_stop->RepairFolds(cur.data());
     auto_stop->KeepVolume(cur.data());
   }

@@ -92,8 +92,12 @@ struct FlowParams {
   int max_auto_iterations = kMaxAutoIterations;
   // With automatic stopping: run every flow of kChoiceFlows instead of `flow` and keep the one
   // whose estimated error is least (auto_stop.h; FlowResult::flow says which). On meshes of
-  // more than kMaxChoiceVertices vertices only `flow` runs.
+  // more than kMaxChoiceVertices vertices the choice (and automatic stopping's count) is made
+  // on patches of the mesh (flow_table.h).
   bool choose_flow = false;
+  // Set by Smooth() for a large mesh: automatic stopping runs exactly this many iterations,
+  // chosen on its patches, then repairs folds and keeps the volume as usual.
+  int sampled_iterations = 0;
   // The paper's lambda: dimensionless for the umbrella flows, relative to h^2 for the
   // curvature flows. Unset = the flow's default (DefaultStep); set, it must be > 0.
   std::optional<double> step;

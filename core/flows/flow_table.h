@@ -40,9 +40,11 @@ inline constexpr FlowId kDefaultFlow = FlowId::kBilaplacian;
 // The flows a job that names none chooses from by their estimated error (FlowParams::choose_flow):
 // bilaplacian is the best on scans, bilateral_normal on CAD parts and smooth shapes.
 inline constexpr FlowId kChoiceFlows[] = {FlowId::kBilaplacian, FlowId::kBilateralNormal};
-// Above this many vertices the choice is skipped: the bilateral_normal candidate and its probe
-// cost about ten times the bilaplacian run (docs/quality.md).
-inline constexpr int32_t kMaxChoiceVertices = 200000;
+// Above this many vertices automatic stopping chooses the flow and the count on patches of the
+// mesh, kSampleVertices vertices in all, and runs the whole mesh once, at that count: the
+// candidates and their probes would cost several times the run itself (docs/quality.md).
+inline constexpr int32_t kMaxChoiceVertices = 100000;
+inline constexpr int32_t kSampleVertices = 20000;
 
 // What a flow's step and speed are measured in, and which machinery the driver gives it.
 enum class FlowKind : uint8_t {

@@ -146,6 +146,70 @@ absl::StatusOr<FlowResult> SmoothChoosing(Mesh& mesh, const Topology& topo, cons
   return *std::move(best);
 }
 
+// Up to kSampleVertices vertices of `mesh` in patches grown breadth-first from seeds spread
+// over the vertex order, and the faces among them: a sample of the surface on which automatic
+// stopping chooses for the whole mesh. The patches' rims are boundaries (fixed in the runs).
+Mesh SamplePatches(const Mesh& mesh, const Topology& topo) {
+  constexpr int kPatches = 8;
+  const int32_t n = topo.num_vertices();
+  std::vector<int32_t> index(n, -1);  // vertex -> sample vertex
+  Mesh sample;
+  std::vector<int32_t> queue;
+  for (int i = 0; i < kPatches; ++i) {
+    const auto budget = static_cast<size_t>(kSampleVertices) * (i + 1) / kPatches;
+    const int32_t seed = static_cast<int32_t>(static_cast<int64_t>(n) * i / kPatches);
+    if (index[seed] >= 0 || topo.kind[seed] == VertexKind::kIsolated) continue;
+    queue.assign(1, seed);
+    index[seed] = static_cast<int32_t>(sample.positions.size());
+    sample.positions.push_back(mesh.positions[seed]);
+    for (size_t head = 0; head < queue.size() && sample.positions.size() < budget; ++head) {
+      const int32_t v = queue[head];
+      for (int32_t k = topo.ring_offsets[v]; k < topo.ring_offsets[v + 1] && sample.positions.size() < budget; ++k) {
+        const int32_t w = topo.ring[k];
+        if (index[w] >= 0) continue;
+        index[w] = static_cast<int32_t>(sample.positions.size());
+        sample.positions.push_back(mesh.positions[w]);
+        queue.push_back(w);
+      }
+    }
+  }
+  for (int32_t f : topo.faces) {
+    const Triangle& t = mesh.triangles[f];
+    if (index[t[0]] >= 0 && index[t[1]] >= 0 && index[t[2]] >= 0) {
+      sample.triangles.push_back({index[t[0]], index[t[1]], index[t[2]]});
+    }
+  }
+  return sample;
+}
+
+// Automatic stopping on a large mesh: flow (if it is to be chosen) and count from its patches,
+// then one run of the whole mesh at that count.
+absl::StatusOr<FlowResult> SmoothSampled(Mesh& mesh, const Topology& topo, const FlowParams& p,
+                                         const RunControl& control, double h) {
+  Mesh sample = SamplePatches(mesh, topo);
+  const Topology sample_topo = BuildTopology(sample);
+  RunControl quiet = control;
+  quiet.on_progress = nullptr;
+  FlowParams q = p;
+  q.locked.clear();  // the sample's vertices are not the mesh's
+  absl::StatusOr<FlowResult> chosen =
+      q.choose_flow ? SmoothChoosing(sample, sample_topo, q, quiet, MeanEdgeLength(sample, sample_topo))
+                    : SmoothWith(sample, sample_topo, q, quiet, MeanEdgeLength(sample, sample_topo));
+  if (!chosen.ok()) return chosen.status();
+  FlowParams whole = p;
+  whole.flow = chosen->flow;
+  whole.choose_flow = false;
+  // An idle sample (no noise, or no estimate) leaves the decision to the whole mesh's own
+  // estimate and stopping (nothing to do on a clean mesh: as cheap as the sample).
+  whole.sampled_iterations = chosen->iterations_run;
+  absl::StatusOr<FlowResult> result = SmoothWith(mesh, topo, whole, control, h);
+  if (result.ok() && result->iterations_run > 0) {
+    result->stop_reason = chosen->stop_reason;
+    if (result->auto_stop && chosen->auto_stop) result->auto_stop->risk_h2 = chosen->auto_stop->risk_h2;
+  }
+  return result;
+}
+
 }  // namespace
 
 // Large meshes whose order scatters neighbours run on a Morton-ordered copy (reorder.h); h is
@@ -157,9 +221,10 @@ absl::StatusOr<FlowResult> Smooth(Mesh& mesh, const Topology& topo, const FlowPa
     return absl::InvalidArgumentError("the topology was built for another mesh");
   }
   const double h = MeanEdgeLength(mesh, topo);
-  if (p.choose_flow && p.iterations == kAutoIterations && n <= kMaxChoiceVertices) {
-    return SmoothChoosing(mesh, topo, p, control, h);
+  if (p.iterations == kAutoIterations && p.sampled_iterations == 0 && n > kMaxChoiceVertices) {
+    return SmoothSampled(mesh, topo, p, control, h);
   }
+  if (p.choose_flow && p.iterations == kAutoIterations) return SmoothChoosing(mesh, topo, p, control, h);
   return SmoothWith(mesh, topo, p, control, h);
 }
 
@@ -173,7 +238,9 @@ absl::StatusOr<FlowResult> SmoothWith(Mesh& mesh, const Topology& topo, const Fl
                        : p.reorder == ReorderMode::kAlways
                            ? ReorderableSize(n)
                            : p.reorder == ReorderMode::kAuto &&
-                               MortonOrderPaysOff(topo, p.iterations == kAutoIterations ? kTypicalAutoIterations : p.iterations);
+                               MortonOrderPaysOff(topo, p.iterations != kAutoIterations ? p.iterations
+                                                     : p.sampled_iterations > 0 ? p.sampled_iterations
+                                                                                : kTypicalAutoIterations);
   if (!reorder) return flows::RunIterations(mesh, topo, p, control, h);
 
   const int threads = flows::ThreadsFor(n, p);
