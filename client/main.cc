@@ -1,6 +1,6 @@
 // meshsmooth: the command-line client.
 //
-//   meshsmooth smooth IN -o OUT [--flow bilaplacian] [--iterations auto|N] [--step S] [flow options]
+//   meshsmooth smooth IN -o OUT [--flow auto|NAME] [--iterations auto|N] [--step S] [flow options]
 //                               [--server TARGET] [--retries N] [--job-id ID]
 //   meshsmooth flows [--server TARGET]
 //   meshsmooth info IN
@@ -85,7 +85,8 @@ void AddSmoothOptions(CLI::App* smooth, SmoothOptions& so) {
                      absl::StrCat(absl::StrJoin(flow_choices, " | "),
                                   ". auto (with --iterations auto and no --step): run bilaplacian and "
                                   "bilateral_normal and keep the result with the smaller estimated error "
-                                  "(meshes up to 200,000 vertices; larger ones run bilaplacian)"))
+                                  "(meshes above 100,000 vertices choose on patches of themselves); "
+                                  "otherwise bilaplacian"))
       ->capture_default_str()
       ->check(CLI::IsMember(flow_choices));
   smooth->add_option("--iterations", so.iterations,

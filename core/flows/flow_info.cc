@@ -34,8 +34,10 @@ std::vector<ParameterInfo> CommonParameters(int max_iterations) {
   const FlowParams d;
   return {
       {"iterations",
-       "number of iterations; 0 = automatic: estimate the input's noise and stop once the vertices have moved that "
-       "far along their normals (a clean mesh comes back unchanged; closed meshes keep their volume)",
+       "number of iterations; 0 = automatic: estimate the input's noise and return the iteration whose estimated "
+       "distance to the noise-free surface (SURE) is least (a clean mesh comes back unchanged; closed meshes keep "
+       "their volume); with no flow named and no step, bilaplacian and bilateral_normal both run and the smaller "
+       "estimated error wins",
        static_cast<double>(d.iterations), 0, static_cast<double>(max_iterations), false, false, {}},
       {"adaptive.mode", "eq. (14): none, constant T, or T(P) = mean |H| over the 1-ring or the 1+2-rings", 0, 0, 0,
        false, false, {"ADAPTIVE_MODE_NONE", "ADAPTIVE_MODE_CONSTANT", "ADAPTIVE_MODE_RING1", "ADAPTIVE_MODE_RING2"}},
