@@ -615,25 +615,37 @@ near 1/sqrt(2N)), and each of its seeds adds several minutes to the run.
   in the summary tables against the sigma of the case) and 0.00–0.04 h on the clean meshes,
   where the cubic fit cannot follow coarse, strongly curved regions; that much is removed in
   quadrature, and below 0.02 h the job does nothing: every clean input comes back unchanged
-  (the sigma = 0 table). The run stops once the RMS normal displacement reaches the estimate
-  (the discrepancy principle, factor 1). Tried: factor 0.85 (set in auto_stop.h, same command
-  with `--meshes fandisk,bunny-small,max-planck,camelhead,turbine,sphere,two-rate-torus
-  --sigmas 0.1,0.2,0.3 --random-sigmas 0.1,0.3 --seeds 1 --flows none --job 'flow:
-  "bilaplacian"'`): better on bunny-small (1.01× the best oracle's RMS instead of 1.16–1.36×),
-  worse on camelhead (1.26–1.80× instead of 0.99–1.57×); mean ratio to the best oracle over those
-  35 cases 1.99 against 1.78 for factor 1: dropped.
-- **Flow: `bilaplacian`.** At its best count it is the best flow, or within 1.1× of it, on
-  every scan (the oracle rows), it keeps the volume best of the umbrella flows, and an iteration
-  costs a fraction of `bilateral_normal`'s. `bilateral_normal` is the better flow on the CAD
-  parts (fandisk, turbine) and the smooth synthetic shapes at its best count, but its
-  displacement does not track the noise it removes: with automatic stopping it ends far from its
-  best count (fandisk sigma = 0.2: 126 iterations, RMS 0.106 h against 0.052 h at 20; `--quick
-  --flows none --job 'flow: "bilateral_normal"'`), and at factors 0.6 / 0.75 / 0.9 instead of 1
-  its mean RMS over the best oracle's is 2.61 / 2.16 / 1.82 (fandisk, bunny-small, turbine,
-  camelhead, sphere at sigma 0.1 and 0.3, one seed): not the default until it has a stopping
-  rule of its own. `median` (the former default,
-  20 iterations, step 0.1 h^2) moved clean meshes by 0.15–0.38 h and lost up to 16% of the
-  volume: dropped.
+  (the sigma = 0 table). Otherwise the run returns the iteration with the least estimated mean
+  squared distance to the noise-free surface: Stein's unbiased risk estimate, its divergence
+  from a probe copy of the input moved by ±0.05 sigma along the normals and run beside the job
+  (Monte-Carlo SURE, Ramani, Blu, Unser 2008), sigma the root mean square of the fit residuals
+  within three robust scales, taken 10% high. The same figure tells flows apart, so it needs no
+  constant per flow. Over the 35 noisy cases of `--meshes
+  fandisk,bunny-small,max-planck,camelhead,turbine,sphere,two-rate-torus --sigmas 0,0.1,0.2,0.3
+  --random-sigmas 0.1,0.3 --seeds 1 --flows none --no-paper` the default job's RMS distance is
+  0.84–1.65× the best oracle row's of the three-seed run, mean 1.11 (the discrepancy principle
+  it replaces, stopping once the vertices had moved as far as the noise: 1.00–3.95×, mean 1.70).
+  Tried: the discrepancy principle at factors 0.85 and 1 (bilaplacian; mean 1.99 / 1.78 over
+  those cases) and 0.6 / 0.75 / 0.9 for bilateral_normal (2.61 / 2.16 / 1.82: its displacement
+  does not track the noise it removes); SURE with sigma not taken high (`kRiskSigmaMargin` 1 in
+  auto_stop.h): the robust scale reads noise in random directions low, and the torus at random
+  sigma = 0.2 stops bilateral_normal at 4 iterations, 1.7× its best count's distance (20
+  iterations with the margin); SURE on the robust scale less the floor: random sigma = 0.2 stops
+  after 1–3 iterations on the sphere, the torus, camelhead and turbine; the root mean square less
+  the floor: random sigma = 0.1 stops after one iteration on four meshes: all dropped.
+- **Flow: chosen per mesh** between `bilaplacian` and `bilateral_normal` by that estimate (a
+  JobSpec that names no flow, no count and no step; `--flow auto`, the CLI's default). At their
+  best counts `bilaplacian` is the best flow, or within 1.1× of it, on every scan, and
+  `bilateral_normal` on the CAD parts (fandisk, turbine; within 1.02× of the best with creases
+  kept) and the smooth synthetic shapes; each is up to 2× (bilaplacian on CAD) or 1.3×
+  (bilateral on scans) off where the other wins. The estimate picks the better one in most
+  cases; the misses cost 1.1–1.65× (sphere and torus at sigma = 0.3 pick bilaplacian).
+  Meshes above 100,000 vertices choose flow and count on eight breadth-first patches of 20,000
+  vertices in all and run once: the two candidates with their probes would cost several times
+  the run (the noisy dragon's default job: 45 iterations, 1.4 s through the service, against
+  3.5 s with the probe on the whole mesh; `meshsmooth_bench --default-job-only`). `median` (the
+  former default, 20 iterations, step 0.1 h^2) moved clean meshes by 0.15–0.38 h and lost up to
+  16% of the volume: dropped.
 - **Volume.** On a closed mesh the automatic job moves the free vertices along their normals
   by the common distance that gives back the input's enclosed volume (auto_stop.h): turbine at
   sigma = 0.2, 8 iterations, -4.56% without it, -0.65% with it (the noisy input itself is -0.65%
