@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # The main job: builds if needed, starts meshsmoothd on a free local port, smooths the
-# built-in default input (a noisy icosphere) through it with the meshsmooth client, shows the
+# built-in default input (a noisy icosphere) through it with the meshsmooth client (the default
+# job: no parameters), shows the
 # job summary, and stops the server. The result is written to build/demo/.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -17,8 +18,7 @@ for _ in $(seq 100); do
 done
 address=$(sed -n 's/^meshsmoothd listening on //p' build/demo/meshsmoothd.out)
 echo "meshsmoothd is listening on $address"
-echo "\$ meshsmooth smooth builtin:noisy-sphere -o build/demo/noisy-sphere-smoothed.ply --flow median --iterations 20 --server $address"
-build/client/meshsmooth smooth builtin:noisy-sphere -o build/demo/noisy-sphere-smoothed.ply \
-  --flow median --iterations 20 --server "$address"
+echo "\$ meshsmooth smooth builtin:noisy-sphere -o build/demo/noisy-sphere-smoothed.ply --server $address"
+build/client/meshsmooth smooth builtin:noisy-sphere -o build/demo/noisy-sphere-smoothed.ply --server "$address"
 echo "server log:"
 cat "$log"
