@@ -4,7 +4,7 @@ round-robin) and through nginx (deploy/nginx/meshsmooth.conf), measured by meshs
 Prints Markdown: one row per setup, then nginx's cost per job against a direct call.
 
   bench/replicas.py [--build build] [--clients 8] [--jobs 300] [--seq-jobs 200] [--rounds 3]
-                    [--job "--input builtin:noisy-sphere"] ...
+                    [--job "--input builtin:noisy-sphere --flow bilaplacian --iterations 40"] ...
 
 Each setup runs --seq-jobs jobs from one client (latency with nothing queued: nginx's cost per
 job is the difference of the mean latencies) and --jobs jobs from --clients clients (throughput),
@@ -48,12 +48,12 @@ def main():
     p.add_argument("--jobs", type=int, default=300)
     p.add_argument("--seq-jobs", type=int, default=200)
     p.add_argument("--rounds", type=int, default=3)
-    p.add_argument("--job", action="append", help="meshsmooth_load job options (default: the default job "
+    p.add_argument("--job", action="append", help="meshsmooth_load job options (default: 40 iterations of bilaplacian "
                    "on builtin:noisy-sphere)")
     args = p.parse_args()
     server = os.path.join(args.build, "server", "meshsmoothd")
     loader = os.path.join(args.build, "bench", "meshsmooth_load")
-    jobs = args.job or ["--input builtin:noisy-sphere"]
+    jobs = args.job or ["--input builtin:noisy-sphere --flow bilaplacian --iterations 40"]
 
     for job in jobs:
         job_args = shlex.split(job)
@@ -81,6 +81,11 @@ def main():
                               f"| {m['p99_ms']:.2f} | {m['mean_ms']:.2f} |", flush=True)
                     if clients == 1:
                         overhead[n] = [x["mean_ms"] - d["mean_ms"] for d, x in zip(runs["direct"], runs["nginx"])]
+            except RuntimeError:
+                if nginx:  # why the proxy failed, before its directory goes
+                    with open(os.path.join(nginx.dir, "error.log")) as f:
+                        sys.stderr.write("".join(f.readlines()[-20:]))
+                raise
             finally:
                 if nginx:
                     nginx.stop()
