@@ -19,11 +19,16 @@ struct ServerOptions {
   // An upload that receives no message for this long ends with DEADLINE_EXCEEDED, freeing its
   // call slot; <= 0: never. A 1 MiB chunk at 20 KiB/s still arrives within the default.
   double upload_idle_seconds = 60.0;
+  // A job still waiting for a worker this long after its upload ends with RESOURCE_EXHAUSTED,
+  // so that a client or balancer sends it to a replica with room; <= 0: it waits its turn.
+  double max_queue_wait_seconds = 0.0;
   // Bytes held at once by uploads in flight and jobs waiting for a worker (their buffers'
   // capacity); an upload that would go beyond it gets RESOURCE_EXHAUSTED before keeping its
   // chunk. 0 = a quarter of the machine's memory (DefaultBufferedBytes()).
   int64_t max_buffered_bytes = 0;
-  double grace_seconds = 10.0;             // on shutdown, running jobs get this long to finish
+  // On SIGTERM: running jobs get this long to finish; queued jobs and uploads end at once with
+  // UNAVAILABLE, and the process exits by grace + 1 s whatever is left.
+  double grace_seconds = 10.0;
   std::string tls_cert_file, tls_key_file;  // both or neither
   std::string auth_token;                   // non-empty: calls need "authorization: Bearer <token>"
   bool log_jobs = true;                     // one line per job on stderr

@@ -1,5 +1,6 @@
 #include "server/server.h"
 
+#include <algorithm>
 #include <chrono>
 
 #include "absl/strings/str_cat.h"
@@ -57,9 +58,14 @@ std::shared_ptr<grpc::Channel> Server::InProcessChannel() {
 void Server::Shutdown() {
   if (shut_down_ || server_ == nullptr) return;
   shut_down_ = true;
+  const double grace = std::clamp(options_.grace_seconds, 0.0, 1e6);
   server_->GetHealthCheckService()->SetServingStatus(false);
-  service_->DrainAndStop(options_.grace_seconds);
-  server_->Shutdown(std::chrono::system_clock::now() + std::chrono::seconds(2));
+  service_->DrainAndStop(std::chrono::steady_clock::now() +
+                         std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                             std::chrono::duration<double>(grace)));
+  // Every job has ended by now; what is left are calls finishing their last write and health
+  // watches, which gRPC cancels after this short deadline.
+  server_->Shutdown(std::chrono::system_clock::now() + std::chrono::milliseconds(200));
   server_->Wait();
 }
 

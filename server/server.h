@@ -23,8 +23,9 @@ class Server {
   std::shared_ptr<grpc::Channel> InProcessChannel();
   MeshSmootherService& service() { return *service_; }
 
-  // Graceful shutdown, in order: health NOT_SERVING and new jobs refused; running jobs get
-  // options.grace_seconds to finish; the rest end with UNAVAILABLE; then gRPC stops.
+  // Graceful shutdown, in order: health NOT_SERVING, new calls, uploads and queued jobs end with
+  // UNAVAILABLE; running jobs get options.grace_seconds to finish; the rest end with
+  // UNAVAILABLE; then gRPC stops (within 0.2 s).
   void Shutdown();
 
  private:

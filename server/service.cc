@@ -44,7 +44,7 @@ class SmoothReactor final : public grpc::ServerBidiReactor<v1::SmoothRequest, v1
       return;
     }
     if (service_->draining_.load()) {
-      Abort(grpc::Status(grpc::StatusCode::UNAVAILABLE, "meshsmoothd is shutting down"));
+      Abort(ShuttingDown());
       return;
     }
     if (service_->active_.load() > service_->options_.max_concurrent_streams) {
@@ -60,6 +60,18 @@ class SmoothReactor final : public grpc::ServerBidiReactor<v1::SmoothRequest, v1
   // True while the call still reads its upload and its last message arrived before `cutoff`.
   bool IdleSince(Clock::time_point cutoff) const {
     return uploading_.load() && last_read_.load() < cutoff;
+  }
+
+  // True while the call's job waits in the queue and was queued before `cutoff`.
+  bool QueuedSince(Clock::time_point cutoff) {
+    std::lock_guard<std::mutex> lock(mu_);
+    return job_ != nullptr && !job_->started() && job_->submitted() < cutoff;
+  }
+
+  // True once a worker runs the call's job.
+  bool Running() {
+    std::lock_guard<std::mutex> lock(mu_);
+    return job_ != nullptr && job_->started();
   }
 
   void OnReadDone(bool ok) override {
@@ -186,6 +198,15 @@ class SmoothReactor final : public grpc::ServerBidiReactor<v1::SmoothRequest, v1
     return grpc::Status(grpc::StatusCode::INVALID_ARGUMENT, message);
   }
 
+ public:
+  // For a job that has not started when the server begins to shut down: safe to send again.
+  static grpc::Status ShuttingDown() {
+    return grpc::Status(grpc::StatusCode::UNAVAILABLE,
+                        "meshsmoothd is shutting down; the job did not start: send it to another replica");
+  }
+
+ private:
+
   void OnHalfClose() {
     uploading_.store(false);
     {
@@ -198,6 +219,7 @@ class SmoothReactor final : public grpc::ServerBidiReactor<v1::SmoothRequest, v1
     if (upload_.empty()) {
       return Abort(InvalidArgument("no mesh arrived: send the Draco bytes in mesh_chunk messages after the spec"));
     }
+    if (service_->draining_.load()) return Abort(ShuttingDown());
     const std::string id = !params_->job_id.empty()
                                ? params_->job_id
                                : absl::StrFormat("%x-%d", service_->start_tag_, service_->next_job_.fetch_add(1));
@@ -208,7 +230,7 @@ class SmoothReactor final : public grpc::ServerBidiReactor<v1::SmoothRequest, v1
       job_ = job;
     }
     job->set_submitted(Clock::now());
-    const std::optional<int> position = service_->pool_.TrySubmit([job] { job->Run(); });
+    const std::optional<int> position = service_->pool_.TrySubmit([job] { job->Run(); }, [job] { return job->detached(); });
     if (!position.has_value()) {
       return Abort(grpc::Status(
           grpc::StatusCode::RESOURCE_EXHAUSTED,
@@ -290,7 +312,9 @@ MeshSmootherService::MeshSmootherService(const ServerOptions& options)
       start_tag_(static_cast<uint64_t>(
           std::chrono::duration_cast<std::chrono::seconds>(std::chrono::system_clock::now().time_since_epoch())
               .count())) {
-  if (options.upload_idle_seconds > 0.0) reaper_ = std::thread([this] { ReapIdleUploads(); });
+  if (options.upload_idle_seconds > 0.0 || options.max_queue_wait_seconds > 0.0) {
+    reaper_ = std::thread([this] { Reap(); });
+  }
 }
 
 MeshSmootherService::~MeshSmootherService() {
@@ -298,22 +322,44 @@ MeshSmootherService::~MeshSmootherService() {
   pool_.Stop();
 }
 
-void MeshSmootherService::ReapIdleUploads() {
-  const auto idle = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(
-      std::min(options_.upload_idle_seconds, 1e9)));
-  // Idle uploads end between `idle` and 1.25 x `idle` after their last message.
-  const auto period = std::clamp<Clock::duration>(idle / 4, std::chrono::milliseconds(10), std::chrono::seconds(1));
-  const grpc::Status status(
+namespace {
+
+// `seconds` as a clock duration; 0 for "never" (<= 0), capped where a clock would overflow.
+Clock::duration Limit(double seconds) {
+  if (!(seconds > 0.0)) return Clock::duration::zero();
+  return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(std::min(seconds, 1e9)));
+}
+
+}  // namespace
+
+void MeshSmootherService::Reap() {
+  const Clock::duration idle = Limit(options_.upload_idle_seconds);
+  const Clock::duration queue_wait = Limit(options_.max_queue_wait_seconds);
+  // A call ends between its limit and 1.25 x its limit after it began to wait.
+  Clock::duration shortest = std::chrono::hours(1);
+  if (idle > Clock::duration::zero()) shortest = std::min(shortest, idle);
+  if (queue_wait > Clock::duration::zero()) shortest = std::min(shortest, queue_wait);
+  const auto period = std::clamp<Clock::duration>(shortest / 4, std::chrono::milliseconds(10), std::chrono::seconds(1));
+  const grpc::Status idle_status(
       grpc::StatusCode::DEADLINE_EXCEEDED,
       absl::StrFormat("no message for %g s: this server ends uploads that stop sending (--upload-idle-seconds); "
                       "send the spec, the whole mesh, then half-close",
                       options_.upload_idle_seconds));
+  const grpc::Status queue_status(
+      grpc::StatusCode::RESOURCE_EXHAUSTED,
+      absl::StrFormat("the job waited %g s for a worker without getting one (--max-queue-wait); this replica is "
+                      "saturated: retry later or on another replica",
+                      options_.max_queue_wait_seconds));
   std::unique_lock<std::mutex> lock(mu_);
   while (!reaper_stop_) {
     reaper_cv_.wait_for(lock, period);
-    const Clock::time_point cutoff = Clock::now() - idle;
-    for (SmoothReactor* r : reactors_) {
-      if (r->IdleSince(cutoff)) r->Abort(status);  // a reactor is deleted only after Unregister
+    const Clock::time_point now = Clock::now();
+    for (SmoothReactor* r : reactors_) {  // a reactor is deleted only after Unregister
+      if (idle > Clock::duration::zero() && r->IdleSince(now - idle)) {
+        r->Abort(idle_status);
+      } else if (queue_wait > Clock::duration::zero() && r->QueuedSince(now - queue_wait)) {
+        r->Abort(queue_status);
+      }
     }
   }
 }
@@ -380,19 +426,26 @@ grpc::ServerUnaryReactor* MeshSmootherService::ListFlows(grpc::CallbackServerCon
   return reactor;
 }
 
-void MeshSmootherService::DrainAndStop(double grace_seconds) {
+void MeshSmootherService::DrainAndStop(Clock::time_point deadline) {
   draining_.store(true);
-  const auto deadline = Clock::now() + std::chrono::duration<double>(grace_seconds);
-  while (active_.load() > 0 && Clock::now() < deadline) std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  // Uploads and queued jobs end at once: their clients can send them to another replica now
+  // rather than after the grace.
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    for (SmoothReactor* r : reactors_) {
+      if (!r->Running()) r->Abort(SmoothReactor::ShuttingDown());
+    }
+  }
+  while (active_.load() > 0 && Clock::now() < deadline) std::this_thread::sleep_for(std::chrono::milliseconds(10));
   {
     std::lock_guard<std::mutex> lock(mu_);
     for (SmoothReactor* r : reactors_) {
       r->Abort(grpc::Status(grpc::StatusCode::UNAVAILABLE,
                             absl::StrFormat("meshsmoothd shut down; the job was cancelled after the %g s grace period",
-                                            grace_seconds)));
+                                            options_.grace_seconds)));
     }
   }
-  pool_.Stop();
+  pool_.Stop();  // a cancelled job stops within one iteration
 }
 
 }  // namespace meshsmooth::server

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <atomic>
+#include <chrono>
 #include <condition_variable>
 #include <cstdint>
 #include <memory>
@@ -29,9 +30,9 @@ class MeshSmootherService final : public v1::MeshSmoother::CallbackService {
   grpc::ServerUnaryReactor* ListFlows(grpc::CallbackServerContext* context, const v1::ListFlowsRequest* request,
                                      v1::ListFlowsResponse* response) override;
 
-  // Shutdown, in order: refuse new jobs, wait up to `grace` for running ones, then end the rest
-  // with UNAVAILABLE and stop the workers.
-  void DrainAndStop(double grace_seconds);
+  // Shutdown, in order: refuse new calls, end uploads and queued jobs with UNAVAILABLE, wait
+  // until `deadline` for running jobs, then end the rest with UNAVAILABLE and stop the workers.
+  void DrainAndStop(std::chrono::steady_clock::time_point deadline);
 
   // Jobs waiting for a worker now (for tests).
   int queued_jobs() { return pool_.queued(); }
@@ -43,8 +44,9 @@ class MeshSmootherService final : public v1::MeshSmoother::CallbackService {
   bool Authorized(const grpc::CallbackServerContext* context) const;
   void Register(SmoothReactor* r);
   void Unregister(SmoothReactor* r);
-  // The reaper thread: ends the uploads idle for --upload-idle-seconds, until StopReaper().
-  void ReapIdleUploads();
+  // The reaper thread, until StopReaper(): ends the uploads idle for --upload-idle-seconds and
+  // the jobs queued for longer than --max-queue-wait.
+  void Reap();
   void StopReaper();
 
   const ServerOptions options_;

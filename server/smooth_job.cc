@@ -174,12 +174,13 @@ absl::StatusOr<std::string> SmoothJob::EncodeAndMeasure(DracoMesh& draco, const 
 }
 
 void SmoothJob::Run() {
+  started_.store(true);
   const Clock::time_point start = Clock::now();
   // --max-job-seconds bounds the job's whole time on this worker: every long step polls it.
   const StopToken stop(&cancel_, Deadline(start, options_.max_job_seconds));
   JobReport report;
   report.job_id = id_;
-  report.queue_seconds = Seconds(submitted_, start);
+  report.queue_seconds = Seconds(submitted_.load(), start);
   if (cancel_.load()) {
     report.status = "CANCELLED";
     return Log(report);

@@ -45,7 +45,12 @@ class SmoothJob {
 
   const std::string& id() const { return id_; }
   void set_queue_position(int position) { queue_position_ = position; }
-  void set_submitted(Clock::time_point t) { submitted_ = t; }
+  void set_submitted(Clock::time_point t) { submitted_.store(t); }
+  Clock::time_point submitted() const { return submitted_.load(); }
+  // True once a worker took the job (Run() began).
+  bool started() const { return started_.load(); }
+  // True once Detach() was called: the job will not run, or stops within one iteration.
+  bool detached() const { return cancel_.load(); }
 
   // Runs the whole job; returns when it is done, failed or cancelled.
   void Run();
@@ -92,7 +97,8 @@ class SmoothJob {
   std::string upload_;
   BudgetHold upload_hold_;
   const Clock::time_point received_;
-  Clock::time_point submitted_;
+  std::atomic<Clock::time_point> submitted_;
+  std::atomic<bool> started_{false};
   std::atomic<int> queue_position_{0};
   const ServerOptions& options_;
   std::atomic<bool> cancel_{false};

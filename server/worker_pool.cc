@@ -12,24 +12,30 @@ WorkerPool::WorkerPool(int workers, int queue_depth) : queue_depth_(std::max(0, 
 
 WorkerPool::~WorkerPool() { Stop(); }
 
-std::optional<int> WorkerPool::TrySubmit(std::function<void()> task) {
+int WorkerPool::WaitingLocked() const {
+  return static_cast<int>(
+      std::count_if(queue_.begin(), queue_.end(), [](const Task& t) { return !t.abandoned || !t.abandoned(); }));
+}
+
+std::optional<int> WorkerPool::TrySubmit(std::function<void()> task, std::function<bool()> abandoned) {
   std::lock_guard<std::mutex> lock(mu_);
   if (stopping_) return std::nullopt;
   // Tasks that an idle worker will take at once do not count against the queue depth.
-  const int waiting = static_cast<int>(queue_.size()) - idle_;  // tasks no idle worker will take
+  // Tasks no idle worker will take; abandoned ones cost a worker nothing and hold no place.
+  const int waiting = WaitingLocked() - idle_;
   if (waiting >= queue_depth_) return std::nullopt;
-  queue_.push_back(std::move(task));
+  queue_.push_back({std::move(task), std::move(abandoned)});
   cv_.notify_one();
   return std::max(0, waiting);
 }
 
 int WorkerPool::queued() {
   std::lock_guard<std::mutex> lock(mu_);
-  return static_cast<int>(queue_.size());
+  return WaitingLocked();
 }
 
 void WorkerPool::Stop() {
-  std::deque<std::function<void()>> dropped;
+  std::deque<Task> dropped;
   {
     std::lock_guard<std::mutex> lock(mu_);
     if (stopping_ && threads_.empty()) return;
@@ -46,7 +52,7 @@ void WorkerPool::Stop() {
 
 void WorkerPool::Loop() {
   for (;;) {
-    std::function<void()> task;
+    Task task;
     {
       std::unique_lock<std::mutex> lock(mu_);
       ++idle_;
@@ -56,7 +62,7 @@ void WorkerPool::Loop() {
       task = std::move(queue_.front());
       queue_.pop_front();
     }
-    task();
+    task.run();  // an abandoned task returns at once (and logs that it was)
   }
 }
 

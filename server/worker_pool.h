@@ -20,23 +20,31 @@ class WorkerPool {
   WorkerPool& operator=(const WorkerPool&) = delete;
 
   // Queues `task`; returns the number of tasks waiting ahead of it (0 when a worker is idle),
-  // or nullopt when the queue is full or the pool is stopping.
-  std::optional<int> TrySubmit(std::function<void()> task);
+  // or nullopt when the queue is full or the pool is stopping. Once `abandoned` returns true
+  // (its owner gave the task up while it waited), the task no longer holds a place in the
+  // queue; a worker still runs it, and it must then return at once.
+  std::optional<int> TrySubmit(std::function<void()> task, std::function<bool()> abandoned = nullptr);
 
   // Refuses new tasks, drops the queued ones (their cancellation is the owner's business),
   // and joins the workers after their current task.
   void Stop();
 
-  // Tasks waiting for a worker now.
+  // Tasks waiting for a worker now (abandoned ones not counted).
   int queued();
 
  private:
+  struct Task {
+    std::function<void()> run;
+    std::function<bool()> abandoned;  // may be empty
+  };
   void Loop();
+  // Queued tasks not abandoned; mu_ held.
+  int WaitingLocked() const;
 
   const int queue_depth_;
   std::mutex mu_;
   std::condition_variable cv_;
-  std::deque<std::function<void()>> queue_;
+  std::deque<Task> queue_;
   int idle_ = 0;
   bool stopping_ = false;
   std::vector<std::thread> threads_;

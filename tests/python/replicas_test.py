@@ -19,6 +19,8 @@ import tempfile
 import threading
 import time
 
+import grpc
+
 passed, failed = 0, 0
 
 
@@ -177,16 +179,23 @@ def main():
     saturated = Replica(server, "--workers", "1", "--queue-depth", "0")
     try:
         def retried_until_a_worker_is_free():
-            b = busy(saturated.address, "1500")
+            b = busy(saturated.address, "10000")
             try:
                 time.sleep(0.8)  # the busy job holds the only worker; the queue takes none
-                r = smooth(saturated.address, "--retries", "12", "--job-id", "patient", timeout=120)
-                assert r.returncode == 0, (r.returncode, r.stderr)
-                assert "attempt 1 failed (RESOURCE_EXHAUSTED: the job queue is full" in r.stderr, r.stderr
+                p = subprocess.Popen([cli, "smooth", "builtin:noisy-sphere", "-o", os.path.join(tmp, "patient.ply"),
+                                      "--iterations", "3", "--server", saturated.address, "--retries", "12",
+                                      "--job-id", "patient"],
+                                     stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                first = p.stderr.readline()  # the first refusal; then the worker is freed
+                assert "attempt 1 failed (RESOURCE_EXHAUSTED: the job queue is full" in first, first
+                b.kill()  # a client that goes away frees its worker at once
+                out, err = p.communicate(timeout=120)
+                assert p.returncode == 0, (p.returncode, first + err)
+                time.sleep(0.2)
                 assert saturated.jobs("OK").count("patient") == 1, saturated.jobs()
             finally:
+                b.kill()
                 b.wait(timeout=120)
-            assert b.returncode == 0, b.stderr.read()
         check("a saturated replica: RESOURCE_EXHAUSTED, then success after retries, the job run once",
               retried_until_a_worker_is_free)
 
@@ -217,6 +226,105 @@ def main():
               retries_are_bounded)
     finally:
         saturated.stop()
+
+    def health_statuses(address, into):
+        """Watches grpc.health.v1 (service "") on a thread: (time, status) pairs into `into`;
+        1 SERVING, 2 NOT_SERVING. The messages are encoded by hand: one enum field, number 1."""
+        channel = grpc.insecure_channel(address)
+        watch = channel.unary_stream("/grpc.health.v1.Health/Watch", request_serializer=lambda b: b,
+                                     response_deserializer=lambda b: b)
+
+        def loop():
+            try:
+                for resp in watch(b"", timeout=60):
+                    into.append((time.monotonic(), resp[1] if len(resp) >= 2 and resp[0] == 0x08 else 0))
+            except grpc.RpcError:
+                pass
+        threading.Thread(target=loop, daemon=True).start()
+        return channel
+
+    def sigterm_drains():
+        grace = 6.0
+        rep = Replica(server, "--workers", "2", "--threads-per-job", "1", "--grace-seconds", str(grace))
+        statuses = []
+        channel = health_statuses(rep.address, statuses)
+        try:
+            for _ in range(100):
+                if statuses:
+                    break
+                time.sleep(0.05)
+            assert statuses and statuses[-1][1] == 1, f"health before SIGTERM: {statuses}"
+
+            def job(flow, iterations, job_id):
+                return subprocess.Popen([cli, "smooth", "builtin:noisy-sphere-large", "-o", os.path.join(tmp, job_id + ".ply"),
+                                         "--flow", flow, "--iterations", iterations, "--server", rep.address,
+                                         "--retries", "0", "--job-id", job_id, "--quiet"],
+                                        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+            # The short job is sized to ~2.5 s on this machine as it is now: 1,000 iterations timed.
+            t = time.monotonic()
+            calib = job("taubin", "1000", "calibration")
+            calib.wait(timeout=120)
+            assert calib.returncode == 0, calib.stderr.read()
+            short_iterations = max(200, min(10000, int(1000 * 2.5 / max(time.monotonic() - t, 1e-3))))
+            long_job = job("median", "10000", "long")    # ~20 s: outlives the grace
+            short_job = job("taubin", str(short_iterations), "short")   # finishes within it
+            time.sleep(0.5)
+            queued_job = job("median", "10000", "queued")  # both workers are busy
+            time.sleep(0.3)
+            assert short_job.poll() is None, "the short job ended before SIGTERM: make it longer"
+            t0 = time.monotonic()
+            rep.proc.send_signal(signal.SIGTERM)
+            r = smooth(rep.address, "--retries", "0", "--job-id", "after")
+            new_seconds = time.monotonic() - t0
+            assert r.returncode == 3 and "UNAVAILABLE" in r.stderr and "shutting down" in r.stderr, (r.returncode, r.stderr)
+            queued_job.wait(timeout=30)
+            queued_seconds = time.monotonic() - t0
+            short_job.wait(timeout=30)
+            long_job.wait(timeout=30)
+            rc = rep.proc.wait(timeout=30)
+            exit_seconds = time.monotonic() - t0
+            not_serving = [t - t0 for t, st in statuses if st == 2]
+            print(f"  SIGTERM with --grace-seconds {grace:g} (short job {short_iterations} iterations): NOT_SERVING after "
+                  f"{not_serving[0] * 1000 if not_serving else float('nan'):.0f} ms, a new job refused after "
+                  f"{new_seconds:.2f} s, the queued job after {queued_seconds:.2f} s, exit {rc} after "
+                  f"{exit_seconds:.2f} s", flush=True)
+            assert not_serving and not_serving[0] <= 0.1, f"health after SIGTERM: {statuses}"
+            q_err = queued_job.stderr.read()
+            assert queued_job.returncode == 3 and "UNAVAILABLE" in q_err and "did not start" in q_err, q_err
+            assert queued_seconds < 1.5, queued_seconds
+            assert short_job.returncode == 0, short_job.stderr.read()
+            l_err = long_job.stderr.read()
+            assert long_job.returncode == 3 and "UNAVAILABLE" in l_err and "grace" in l_err, l_err
+            assert rc == 0, rc
+            assert grace - 0.1 <= exit_seconds <= grace + 1.0, exit_seconds
+            time.sleep(0.2)
+            assert rep.jobs("OK") == ["calibration", "short"], rep.jobs()
+        finally:
+            channel.close()
+            rep.stop()
+    check("SIGTERM: health NOT_SERVING within 100 ms, new and queued jobs UNAVAILABLE at once, a running job "
+          "finishes within the grace, the rest UNAVAILABLE, exit within grace + 1 s", sigterm_drains)
+
+    def max_queue_wait():
+        rep = Replica(server, "--workers", "1", "--threads-per-job", "1", "--max-queue-wait", "0.5")
+        try:
+            b = busy(rep.address, "10000")
+            try:
+                time.sleep(0.8)
+                t0 = time.monotonic()
+                r = smooth(rep.address, "--retries", "0", "--job-id", "impatient")
+                waited = time.monotonic() - t0
+                print(f"  --max-queue-wait 0.5: refused after {waited:.2f} s", flush=True)
+                assert r.returncode == 1, (r.returncode, r.stderr)
+                assert "RESOURCE_EXHAUSTED" in r.stderr and "--max-queue-wait" in r.stderr, r.stderr
+                assert 0.5 <= waited < 2.5, waited
+            finally:
+                b.kill()
+                b.wait()
+        finally:
+            rep.stop()
+    check("--max-queue-wait: a job that finds no worker in time gets RESOURCE_EXHAUSTED naming the flag",
+          max_queue_wait)
 
     print(f"{passed} passed, {failed} failed")
     return 1 if failed else 0

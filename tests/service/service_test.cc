@@ -286,6 +286,70 @@ TEST(ServiceTest, GracefulShutdownLetsRunningJobsFinishThenCancels) {
   EXPECT_NE(s.message().find("shut down"), std::string::npos) << s;
 }
 
+// SIGTERM's order: a queued job ends at once with UNAVAILABLE (its client may send it to another
+// replica), the running one keeps the grace, then ends; Shutdown returns soon after the grace.
+TEST(ServiceTest, ShutdownEndsQueuedJobsAtOnceAndRunningOnesAfterTheGrace) {
+  ServerOptions o;
+  o.workers = 1;
+  o.grace_seconds = 1.0;
+  auto server = StartServer(o);
+  LongJob long_job;
+  auto stub = v1::MeshSmoother::NewStub(server->InProcessChannel());
+  grpc::ClientContext a, b;
+  auto running = long_job.Start(*stub, a);
+  std::atomic<double> queued_ended{-1.0};
+  const auto t0_guess = std::chrono::steady_clock::now();
+  std::chrono::steady_clock::time_point t0;
+  auto queued = std::async(std::launch::async, [&] {
+    auto out = CallSmooth(*stub, b, long_job.spec, long_job.draco);
+    queued_ended.store(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_guess).count());
+    return out;
+  });
+  for (int i = 0; i < 600 && server->service().queued_jobs() < 1; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  ASSERT_EQ(server->service().queued_jobs(), 1);
+  t0 = std::chrono::steady_clock::now();
+  const double t0_offset = std::chrono::duration<double>(t0 - t0_guess).count();
+  server->Shutdown();
+  const double shutdown_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const absl::Status q = queued.get().status();
+  std::printf("shutdown took %.3f s (grace 1 s); the queued job ended %.3f s after it began\n", shutdown_seconds,
+              queued_ended.load() - t0_offset);
+  EXPECT_GE(shutdown_seconds, 0.95);
+  EXPECT_LT(shutdown_seconds, 2.0);
+  EXPECT_EQ(q.code(), absl::StatusCode::kUnavailable) << q;
+  EXPECT_NE(q.message().find("did not start"), std::string::npos) << q;
+  EXPECT_LT(queued_ended.load() - t0_offset, 0.5);
+  const absl::Status r = running.get().status();
+  EXPECT_EQ(r.code(), absl::StatusCode::kUnavailable) << r;
+  EXPECT_NE(r.message().find("grace"), std::string::npos) << r;
+}
+
+// --max-queue-wait: a job that finds no worker in time is refused with RESOURCE_EXHAUSTED (the
+// CLI retries it, elsewhere where it can) instead of waiting behind a long job.
+TEST(ServiceTest, JobsWaitingLongerThanMaxQueueWaitAreRefused) {
+  ServerOptions o;
+  o.workers = 1;
+  o.max_queue_wait_seconds = 0.3;
+  auto server = StartServer(o);
+  LongJob long_job;
+  auto stub = v1::MeshSmoother::NewStub(server->InProcessChannel());
+  grpc::ClientContext a;
+  auto running = long_job.Start(*stub, a);
+  const auto t0 = std::chrono::steady_clock::now();
+  const absl::Status w = Call(server->InProcessChannel(), Spec("laplacian", 1), *EncodeDraco(Icosphere(2))).status();
+  const double waited = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  std::printf("refused after %.3f s (--max-queue-wait 0.3 s)\n", waited);
+  EXPECT_EQ(w.code(), absl::StatusCode::kResourceExhausted) << w;
+  EXPECT_NE(w.message().find("--max-queue-wait"), std::string::npos) << w;
+  EXPECT_GE(waited, 0.3);
+  EXPECT_LT(waited, 1.5);
+  EXPECT_EQ(server->service().queued_jobs(), 0);  // the pool only holds a cancelled task, if any
+  a.TryCancel();
+  EXPECT_EQ(running.get().status().code(), absl::StatusCode::kCancelled);
+}
+
 // Draco's own bitstreams (0.9-2.2, Edgebreaker and sequential, attributes, non-manifold)
 // through the service: attributes intact, no crack at seams; point clouds refused.
 TEST(ServiceTest, DracosOwnFilesKeepAttributesAndSeams) {
