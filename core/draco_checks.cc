@@ -51,13 +51,14 @@ absl::Status CheckDracoOptions(const DracoOptions& options) {
   return absl::OkStatus();
 }
 
-absl::Status CheckDeclaredEdgebreakerSizes(std::string_view bytes, int64_t max_vertices) {
+absl::StatusOr<std::optional<DeclaredSizes>> CheckDeclaredEdgebreakerSizes(std::string_view bytes,
+                                                                            int64_t max_vertices) {
   draco::DecoderBuffer buffer;
   buffer.Init(bytes.data(), bytes.size());
   draco::DracoHeader header;
-  if (!draco::PointCloudDecoder::DecodeHeader(&buffer, &header).ok()) return absl::OkStatus();
+  if (!draco::PointCloudDecoder::DecodeHeader(&buffer, &header).ok()) return std::nullopt;
   if (header.encoder_type != draco::TRIANGULAR_MESH || header.encoder_method != draco::MESH_EDGEBREAKER_ENCODING) {
-    return absl::OkStatus();
+    return std::nullopt;
   }
   // The layout PointCloudDecoder::Decode and MeshEdgebreakerDecoderImpl::DecodeConnectivity
   // read: metadata (from 1.3, when flagged), the traversal's type, then the counts, raw
@@ -66,19 +67,19 @@ absl::Status CheckDeclaredEdgebreakerSizes(std::string_view bytes, int64_t max_v
   buffer.set_bitstream_version(version);
   if (version >= DRACO_BITSTREAM_VERSION(1, 3) && (header.flags & METADATA_FLAG_MASK)) {
     draco::GeometryMetadata metadata;
-    if (!draco::MetadataDecoder().DecodeGeometryMetadata(&buffer, &metadata)) return absl::OkStatus();
+    if (!draco::MetadataDecoder().DecodeGeometryMetadata(&buffer, &metadata)) return std::nullopt;
   }
   uint8_t traversal = 0;
-  if (!buffer.Decode(&traversal)) return absl::OkStatus();
+  if (!buffer.Decode(&traversal)) return std::nullopt;
   auto count = [&](uint32_t& out) {
     return version < DRACO_BITSTREAM_VERSION(2, 0) ? buffer.Decode(&out) : draco::DecodeVarint(&out, &buffer);
   };
   uint32_t new_vertices = 0, vertices = 0, faces = 0, symbols = 0, split_symbols = 0;
   uint8_t attribute_data = 0;
-  if (version < DRACO_BITSTREAM_VERSION(2, 2) && !count(new_vertices)) return absl::OkStatus();
+  if (version < DRACO_BITSTREAM_VERSION(2, 2) && !count(new_vertices)) return std::nullopt;
   if (!count(vertices) || !count(faces) || !buffer.Decode(&attribute_data) || !count(symbols) ||
       !count(split_symbols)) {
-    return absl::OkStatus();
+    return std::nullopt;
   }
   // Draco refuses more split symbols than symbols; counted anyway, the bound stays an upper one.
   const int64_t declared_vertices = int64_t{vertices} + new_vertices + split_symbols;
@@ -96,7 +97,7 @@ absl::Status CheckDeclaredEdgebreakerSizes(std::string_view bytes, int64_t max_v
         "corrupt Draco mesh: ", bytes.size(), " bytes declare ", faces, " faces and ", declared_vertices,
         " vertices (Edgebreaker); at most ", plausible, " of each fit in that many bytes"));
   }
-  return absl::OkStatus();
+  return DeclaredSizes{faces, declared_vertices};
 }
 
 absl::Status CheckQuantizedExtent(const draco::PointAttribute& positions) {

@@ -3,10 +3,12 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string_view>
 #include <vector>
 
 #include "absl/status/status.h"
+#include "absl/status/statusor.h"
 #include "core/draco_codec.h"
 #include "core/vec3.h"
 #include "draco/mesh/mesh.h"
@@ -48,8 +50,24 @@ absl::Status CheckNumericValues(const draco::PointAttribute& a, std::string_view
 // counts are beyond what the file's size can encode (about 1,000 faces a byte; the densest real
 // encoding holds under 70). OK for the sequential method, whose counts
 // Draco bounds by the data's size, and for bytes too short to hold the counts (the decoder
-// refuses those).
-absl::Status CheckDeclaredEdgebreakerSizes(std::string_view bytes, int64_t max_vertices);
+// refuses those). On success, the counts declared (Edgebreaker), or nullopt.
+struct DeclaredSizes {
+  int64_t faces = 0;
+  int64_t vertices = 0;
+};
+absl::StatusOr<std::optional<DeclaredSizes>> CheckDeclaredEdgebreakerSizes(std::string_view bytes,
+                                                                            int64_t max_vertices);
+
+// The largest block of memory Draco's decoder may allocate for one input: more, and the data is
+// refused as corrupt (core/allocation_limit.h says why). Edgebreaker data declares its faces and
+// vertices before any table is sized: kDracoDecodeFloorBytes plus kDracoDecodeBytesPerElement
+// per face and vertex, room for attributes of 255 components of 8 bytes on every corner. Other
+// data (sequential: Draco bounds its counts by the bytes): kDracoDecodeBytesPerByte per byte.
+// docs/reliability.md ("Draco's decoding, bounded") has the largest blocks valid files need.
+inline constexpr int64_t kDracoDecodeFloorBytes = int64_t{8} << 20;
+inline constexpr int64_t kDracoDecodeBytesPerElement = int64_t{8} << 10;
+inline constexpr int64_t kDracoDecodeBytesPerByte = int64_t{64} << 10;
+int64_t LargestDracoDecodeBlock(size_t bytes, const std::optional<DeclaredSizes>& declared);
 
 // Edgebreaker leaves out faces with a repeated point and the points no other face uses: marks
 // the points some face of three distinct points uses (every face index < num_points).

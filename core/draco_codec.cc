@@ -13,6 +13,7 @@
 #include "draco/compression/encode.h"
 #include "draco/mesh/mesh.h"
 #include "draco/metadata/geometry_metadata.h"
+#include "core/allocation_limit.h"
 #include "core/draco_checks.h"
 #include "core/weld.h"
 
@@ -56,6 +57,13 @@ absl::StatusOr<std::string> EncodeDraco(const Mesh& mesh, const DracoOptions& op
   return EncodeWithOptions(dm, options);
 }
 
+int64_t LargestDracoDecodeBlock(size_t bytes, const std::optional<DeclaredSizes>& declared) {
+  const int64_t elements = declared.has_value() ? declared->faces + declared->vertices
+                                                : static_cast<int64_t>(std::min<size_t>(bytes, size_t{1} << 40));
+  return kDracoDecodeFloorBytes + (declared.has_value() ? kDracoDecodeBytesPerElement : kDracoDecodeBytesPerByte) *
+                                      std::min<int64_t>(elements, int64_t{1} << 40);
+}
+
 namespace {
 
 // Decodes a Draco triangle mesh with clear errors; the sizes it declares are checked before
@@ -75,18 +83,30 @@ absl::StatusOr<std::unique_ptr<draco::Mesh>> DecodeToDraco(std::string_view byte
   if (type.value() != draco::TRIANGULAR_MESH) {
     return absl::InvalidArgumentError("the Draco data holds no triangle mesh (invalid geometry type)");
   }
-  if (absl::Status s = CheckDeclaredEdgebreakerSizes(bytes, max_vertices); !s.ok()) return s;
+  absl::StatusOr<std::optional<DeclaredSizes>> declared = CheckDeclaredEdgebreakerSizes(bytes, max_vertices);
+  if (!declared.ok()) return declared.status();
   std::unique_ptr<draco::Mesh> dm;
+  const int64_t largest = LargestDracoDecodeBlock(bytes.size(), *declared);
   try {
     buffer.Init(bytes.data(), bytes.size());
     draco::Decoder decoder;
-    auto decoded = decoder.DecodeMeshFromBuffer(&buffer);
+    draco::StatusOr<std::unique_ptr<draco::Mesh>> decoded = [&] {
+      ScopedAllocationLimit limit(largest);
+      return decoder.DecodeMeshFromBuffer(&buffer);
+    }();
     if (!decoded.ok()) {
       return absl::InvalidArgumentError(
           // Draco itself cannot decode a mesh without faces, so "empty" is named here too.
           absl::StrCat("corrupt or empty Draco mesh: ", decoded.status().error_msg_string()));
     }
     dm = std::move(decoded).value();
+  } catch (const AllocationLimitExceeded&) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        "corrupt Draco mesh: its decoding asked for a block of memory above ", largest,
+        " bytes, more than a valid encoding of ",
+        declared->has_value() ? absl::StrCat((*declared)->faces, " faces and ", (*declared)->vertices, " vertices")
+                              : absl::StrCat(bytes.size(), " bytes"),
+        " needs"));
   } catch (const std::exception& e) {  // e.g. bad_alloc for absurd counts in corrupt data
     return absl::InvalidArgumentError(absl::StrCat("corrupt Draco mesh: ", e.what()));
   }

@@ -46,6 +46,41 @@ inline std::string RawDraco(const Mesh& m, int positions = 1) {
   return std::string(buf.data(), buf.size());
 }
 
+// Draco bytes of `m` with a texture coordinate per vertex (from its direction), written by
+// Draco's Edgebreaker encoder at speed 0 (draco_encoder -cl 10), which predicts texture
+// coordinates with its portable texture-coordinate scheme (orientation bits after the
+// positions' data).
+inline std::string TexturedEdgebreakerDraco(const Mesh& m) {
+  draco::Mesh dm;
+  const int32_t n = m.num_vertices();
+  dm.set_num_points(n);
+  draco::GeometryAttribute pos, uv;
+  pos.Init(draco::GeometryAttribute::POSITION, nullptr, 3, draco::DT_FLOAT32, false, 3 * sizeof(float), 0);
+  uv.Init(draco::GeometryAttribute::TEX_COORD, nullptr, 2, draco::DT_FLOAT32, false, 2 * sizeof(float), 0);
+  const int pos_id = dm.AddAttribute(pos, /*identity_mapping=*/true, n);
+  const int uv_id = dm.AddAttribute(uv, /*identity_mapping=*/true, n);
+  for (int32_t i = 0; i < n; ++i) {
+    const Vec3& p = m.positions[i];
+    const float xyz[3] = {static_cast<float>(p.x), static_cast<float>(p.y), static_cast<float>(p.z)};
+    const float st[2] = {static_cast<float>(0.5 + std::atan2(p.y, p.x) / (2 * std::numbers::pi)),
+                         static_cast<float>(0.5 + 0.5 * p.z)};
+    dm.attribute(pos_id)->SetAttributeValue(draco::AttributeValueIndex(i), xyz);
+    dm.attribute(uv_id)->SetAttributeValue(draco::AttributeValueIndex(i), st);
+  }
+  for (const Triangle& t : m.triangles) {
+    dm.AddFace({draco::PointIndex(static_cast<uint32_t>(t[0])), draco::PointIndex(static_cast<uint32_t>(t[1])),
+                draco::PointIndex(static_cast<uint32_t>(t[2]))});
+  }
+  draco::Encoder encoder;
+  encoder.SetEncodingMethod(draco::MESH_EDGEBREAKER_ENCODING);
+  encoder.SetSpeedOptions(0, 0);
+  encoder.SetAttributeQuantization(draco::GeometryAttribute::POSITION, 11);
+  encoder.SetAttributeQuantization(draco::GeometryAttribute::TEX_COORD, 10);
+  draco::EncoderBuffer buf;
+  EXPECT_TRUE(encoder.EncodeMeshToBuffer(dm, &buf).ok());
+  return std::string(buf.data(), buf.size());
+}
+
 // Draco bytes of a point cloud of three points: Draco decodes it, but it has no faces.
 inline std::string DracoPointCloud() {
   draco::PointCloud pc;

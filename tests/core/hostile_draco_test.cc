@@ -4,6 +4,7 @@
 // RESOURCE_EXHAUSTED) before anything indexes, allocates or encodes with it, and every encoding
 // that is accepted decodes to the welded input's vertices.
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <memory>
 #include <set>
@@ -288,6 +289,37 @@ std::set<std::tuple<double, double, double>> VertexSet(const std::string& bytes)
 // Every encoding of an awkward but valid mesh (seams, duplicate faces, a non-manifold edge, a
 // face with a repeated index beside the vertex's other faces) decodes with Draco; lossless,
 // its points are exactly the welded input's vertices, and sequential keeps every point.
+// Draco reads the count of its texture-coordinate predictor's orientation bits as any int32 and
+// decodes that many (2^31: a 256 MB table and 5 s of CPU) before it sees the data has run out.
+// Each 4-byte window of a textured Edgebreaker file is set to 2^31 - 1 in turn: where that is
+// the count, the decode must be refused at once, as a block no valid encoding of that many faces
+// needs (it used to succeed after seconds), and no window may make it succeed with a mesh of
+// another size.
+TEST(HostileDracoTest, CountsTheDeclaredFacesCannotNeedAreRefusedBeforeTheirWork) {
+  using testing::TexturedEdgebreakerDraco;
+  const Mesh sphere = Icosphere(1);
+  const std::string good = TexturedEdgebreakerDraco(sphere);
+  absl::StatusOr<Mesh> decoded = DecodeDraco(good);
+  ASSERT_TRUE(decoded.ok()) << decoded.status();
+  int refused_blocks = 0;
+  for (size_t i = 0; i + 4 <= good.size(); ++i) {
+    std::string bad = good;
+    const uint32_t count = 0x7fffffff;
+    std::memcpy(bad.data() + i, &count, 4);
+    absl::StatusOr<Mesh> got = DecodeDraco(bad);
+    if (got.ok()) {
+      EXPECT_EQ(got->triangles.size(), sphere.triangles.size()) << "window " << i;
+    } else if (got.status().message().find("asked for a block of memory above") != std::string::npos) {
+      ++refused_blocks;
+      EXPECT_EQ(got.status().code(), absl::StatusCode::kInvalidArgument) << got.status();
+      EXPECT_NE(got.status().message().find("80 faces"), std::string::npos) << got.status();
+    }
+  }
+  std::printf("%zu windows of a %zu-byte file, %d refused for a block above the limit\n", good.size() - 3,
+              good.size(), refused_blocks);
+  EXPECT_GE(refused_blocks, 1);
+}
+
 TEST(HostileDracoTest, EveryAcceptedEncodingKeepsTheWeldedVertices) {
   Mesh m = Icosphere(2);
   for (Vec3& p : m.positions) p = RoundToFloat(p);
