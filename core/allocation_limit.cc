@@ -24,11 +24,22 @@ ScopedAllocationLimit::~ScopedAllocationLimit() { largest_block = saved_; }
 
 }  // namespace meshsmooth
 
-// The replaceable global allocation functions ([new.delete]); the standard library's nothrow
-// forms call these, and its aligned forms use aligned_alloc and free, consistently.
+// The replaceable global allocation functions ([new.delete]), plain and nothrow: a sanitizer's
+// runtime replaces them all, so a nothrow new left to it would be paired with our delete. The
+// aligned forms stay the library's (its aligned new and aligned delete pair with each other).
 void* operator new(std::size_t n) { return meshsmooth::Allocate(n); }
 void* operator new[](std::size_t n) { return meshsmooth::Allocate(n); }
+void* operator new(std::size_t n, const std::nothrow_t&) noexcept {
+  try {
+    return meshsmooth::Allocate(n);
+  } catch (const std::bad_alloc&) {
+    return nullptr;
+  }
+}
+void* operator new[](std::size_t n, const std::nothrow_t& tag) noexcept { return operator new(n, tag); }
 void operator delete(void* p) noexcept { std::free(p); }
 void operator delete[](void* p) noexcept { std::free(p); }
 void operator delete(void* p, std::size_t) noexcept { std::free(p); }
 void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
+void operator delete(void* p, const std::nothrow_t&) noexcept { std::free(p); }
+void operator delete[](void* p, const std::nothrow_t&) noexcept { std::free(p); }
