@@ -671,7 +671,9 @@ constexpr char kUsage[] =
     "  --shared DIR     the folder holding data/meshes (default: ../shared beside the source tree)\n"
     "  --no-paper       skip the fixed-iteration tables of the paper's setting\n"
     "  --quick          fandisk, bunny-small and the sphere, sigma 0 and 0.2 (random: 0.2), one seed,\n"
-    "                   no paper tables\n";
+    "                   no paper tables\n"
+    "  --write-noisy MESH SIGMA SEED OUT  only write the benchmark's input for MESH with Gaussian noise\n"
+    "                   of SIGMA h along the normals and SEED (as the tables use it) to OUT, and exit\n";
 
 }  // namespace
 }  // namespace meshsmooth::bench
@@ -725,6 +727,20 @@ int main(int argc, char** argv) {
       opt.paper_iterations = std::atoi(next().c_str());
     } else if (a == "--no-paper") {
       opt.paper = false;
+    } else if (a == "--write-noisy") {
+      const std::string name = next(), sigma = next(), seed = next(), out = next();
+      absl::StatusOr<Subject> subject = LoadSubject(name, opt.shared / "data" / "meshes");
+      if (!subject.ok()) {
+        std::fprintf(stderr, "meshsmooth_quality: %s\n", subject.status().ToString().c_str());
+        return 1;
+      }
+      const Mesh noisy = MakeNoisy(subject->truth->mesh(), Case{Noise::kNormal, std::atof(sigma.c_str())},
+                                   std::strtoull(seed.c_str(), nullptr, 10));
+      if (absl::Status s = WriteMesh(out, noisy); !s.ok()) {
+        std::fprintf(stderr, "meshsmooth_quality: %s\n", s.ToString().c_str());
+        return 1;
+      }
+      return 0;
     } else if (a == "--quick") {
       opt.meshes = {"fandisk", "bunny-small", "sphere"};
       opt.sigmas = {0.0, 0.2};
