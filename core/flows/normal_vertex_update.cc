@@ -48,7 +48,7 @@ void NormalFilterKernel::FitFaces(const Vec3* pos) {
     const Vec3 cross = FaceCross(pos, t);
     offset_[f] = Dot(normal_[f], Centroid(pos, t));
     state_[f] = StateOf(area_[f], cross, normal_[f]);
-    cosine_[f] = CosineTo(cross, normal_[f]);
+    cosine_[f] = state_[f] == kOpposes ? CosineTo(cross, normal_[f]) : 1.0;  // read for folded faces only
   });
 }
 
@@ -115,12 +115,14 @@ void NormalFilterKernel::GuardOrientation(const Vec3* cur, int32_t n, int thread
   next_state_.resize(nf);
   next_cosine_.resize(nf);
   turned_.resize(nf);
+  // A face's cosine is read only while it is folded: now (state_) or in the next pass
+  // (next_state_); the square root is skipped for the others.
   auto fit = [&](int32_t f) {
     const Triangle& t = graph_.faces[f];
     next_offset_[f] = Dot(normal_[f], Centroid(target, t));
     const Vec3 cross = FaceCross(target, t);
     next_state_[f] = StateOf(area_[f], cross, normal_[f]);
-    next_cosine_[f] = CosineTo(cross, normal_[f]);
+    next_cosine_[f] = next_state_[f] == kOpposes || state_[f] == kOpposes ? CosineTo(cross, normal_[f]) : 1.0;
   };
   auto turns = [&](int32_t f) {
     if (state_[f] == kNoNormal) return false;
