@@ -1,19 +1,35 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages meshsmooth needs (only when one is missing), then configures
-# and builds one CMake preset. Usage: scripts/setup.sh [dev|asan|fuzz]   (default: dev)
+# and builds one CMake preset.
+# Usage: scripts/setup.sh [dev|asan|fuzz|image] [--packages-only]   (default: dev)
 # fuzz also installs clang, libFuzzer and LLVM's OpenMP runtime (clang's -fopenmp needs it).
+# image is what docker/Dockerfile builds: only the packages that build the two binaries (no test
+# or benchmark tools), preset dev with tests and benchmarks off, only meshsmoothd and meshsmooth.
+# --packages-only installs the packages and stops (the Dockerfile does that in a layer of its own,
+# which a rebuild after a source change reuses).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 preset="${1:-dev}"
+packages_only=false
+case "${2:-}" in
+  "") ;;
+  --packages-only) packages_only=true ;;
+  *) echo "usage: scripts/setup.sh [dev|asan|fuzz|image] [--packages-only]" >&2; exit 2 ;;
+esac
 
+# What builds meshsmoothd and meshsmooth; the rest is for the tests, benchmarks and fuzzers.
 packages=(
   build-essential cmake ninja-build pkgconf
-  libgrpc++-dev libgrpc-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler grpc-proto
-  libdraco-dev draco libopenmesh-dev libabsl-dev libgtest-dev libgmock-dev
-  libcli11-dev libeigen3-dev libbenchmark-dev libpng-dev
-  python3-grpcio python3-protobuf python3-numpy python3-scipy python3-yaml openssl
-  nginx
+  libgrpc++-dev libgrpc-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler
+  libdraco-dev libabsl-dev libcli11-dev libeigen3-dev libpng-dev
 )
+if [ "$preset" != image ]; then
+  packages+=(
+    grpc-proto draco libopenmesh-dev libgtest-dev libgmock-dev libbenchmark-dev
+    python3-grpcio python3-protobuf python3-numpy python3-scipy python3-yaml openssl
+    nginx
+  )
+fi
 if [ "$preset" = fuzz ]; then packages+=(clang libfuzzer-14-dev libomp-dev); fi
 missing=()
 for p in "${packages[@]}"; do
@@ -35,6 +51,15 @@ if [ ${#missing[@]} -gt 0 ]; then
   DEBIAN_FRONTEND=noninteractive "${sudo_cmd[@]}" apt-get install -y -qq "${missing[@]}" >/dev/null
 fi
 
+$packages_only && exit 0
+
+if [ "$preset" = image ]; then
+  # build/ as preset dev, configured here only when new (as in the image's clean source tree).
+  [ -f build/CMakeCache.txt ] || \
+    cmake --preset dev -DMESHSMOOTH_BUILD_TESTS=OFF -DMESHSMOOTH_BUILD_BENCH=OFF >/dev/null
+  cmake --build --preset dev --target meshsmoothd meshsmooth
+  exit 0
+fi
 build_dir=build
 [ "$preset" = dev ] || build_dir="build-$preset"
 # Configure once; later builds re-run CMake by themselves when a CMakeLists.txt changes.
