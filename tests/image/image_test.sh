@@ -88,10 +88,17 @@ cleanup() {
 }
 trap cleanup EXIT
 
-# Every process below PID (its children, theirs, ...).
+# Every process below PID (its children, theirs, ...), from /proc (procps need not be there).
+children() {
+  local s
+  for s in /proc/[0-9]*/stat; do
+    # Field 4 of stat is the parent; field 2, the name in parentheses, may hold spaces.
+    awk -v parent="$1" '{ sub(/^.*\) /, ""); if ($2 == parent) { split(FILENAME, f, "/"); print f[3] } }' "$s" 2>/dev/null
+  done
+}
 descendants() {
   local p
-  for p in $(ps -o pid= --ppid "$1"); do echo "$p"; descendants "$p"; done
+  for p in $(children "$1"); do echo "$p"; descendants "$p"; done
 }
 
 # The first archive URI apt uses here for SUITE (one-line .list files and deb822 .sources),
@@ -248,7 +255,7 @@ daemon_pid=""
 for p in $(descendants "$server_pid"); do
   [[ "$(readlink "/proc/$p/exe" 2>/dev/null)" != */usr/local/bin/meshsmoothd ]] || daemon_pid=$p
 done
-[ -n "$daemon_pid" ] && [ "$(ps -o uid= -p "$daemon_pid" | tr -d ' ')" = "$uid" ] \
+[ -n "$daemon_pid" ] && [ "$(awk '/^Uid:/ { print $2 }' "/proc/$daemon_pid/status")" = "$uid" ] \
   && ok "the server process $daemon_pid runs as uid $uid" \
   || fail "no meshsmoothd process of uid $uid below buildah run (pid $server_pid)"
 
