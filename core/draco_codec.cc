@@ -58,10 +58,12 @@ absl::StatusOr<std::string> EncodeDraco(const Mesh& mesh, const DracoOptions& op
 }
 
 int64_t LargestDracoDecodeBlock(size_t bytes, const std::optional<DeclaredSizes>& declared) {
-  const int64_t elements = declared.has_value() ? declared->faces + declared->vertices
-                                                : static_cast<int64_t>(std::min<size_t>(bytes, size_t{1} << 40));
-  return kDracoDecodeFloorBytes + (declared.has_value() ? kDracoDecodeBytesPerElement : kDracoDecodeBytesPerByte) *
-                                      std::min<int64_t>(elements, int64_t{1} << 40);
+  // Counts are below 2^34 (uint32 sums) and sizes below 2^40 in practice: no product overflows.
+  if (declared.has_value()) {
+    return kDracoDecodeFloorBytes + kDracoDecodeBytesPerElement * (declared->faces + declared->vertices);
+  }
+  return kDracoDecodeFloorBytes +
+         kDracoDecodeBytesPerByte * static_cast<int64_t>(std::min<size_t>(bytes, size_t{1} << 40));
 }
 
 namespace {

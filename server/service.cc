@@ -62,6 +62,12 @@ class SmoothReactor final : public grpc::ServerBidiReactor<v1::SmoothRequest, v1
     return uploading_.load() && last_read_.load() < cutoff;
   }
 
+  // For a job that has not started when the server begins to shut down: safe to send again.
+  static grpc::Status ShuttingDown() {
+    return grpc::Status(grpc::StatusCode::UNAVAILABLE,
+                        "meshsmoothd is shutting down; the job did not start: send it to another replica");
+  }
+
   // True while the call's job waits in the queue and was queued before `cutoff`.
   bool QueuedSince(Clock::time_point cutoff) {
     std::lock_guard<std::mutex> lock(mu_);
@@ -198,15 +204,6 @@ class SmoothReactor final : public grpc::ServerBidiReactor<v1::SmoothRequest, v1
     return grpc::Status(grpc::StatusCode::INVALID_ARGUMENT, message);
   }
 
- public:
-  // For a job that has not started when the server begins to shut down: safe to send again.
-  static grpc::Status ShuttingDown() {
-    return grpc::Status(grpc::StatusCode::UNAVAILABLE,
-                        "meshsmoothd is shutting down; the job did not start: send it to another replica");
-  }
-
- private:
-
   void OnHalfClose() {
     uploading_.store(false);
     {
@@ -230,7 +227,8 @@ class SmoothReactor final : public grpc::ServerBidiReactor<v1::SmoothRequest, v1
       job_ = job;
     }
     job->set_submitted(Clock::now());
-    const std::optional<int> position = service_->pool_.TrySubmit([job] { job->Run(); }, [job] { return job->detached(); });
+    const std::optional<int> position =
+        service_->pool_.TrySubmit([job] { job->Run(); }, [job] { return job->detached(); });
     if (!position.has_value()) {
       return Abort(grpc::Status(
           grpc::StatusCode::RESOURCE_EXHAUSTED,

@@ -286,9 +286,6 @@ std::set<std::tuple<double, double, double>> VertexSet(const std::string& bytes)
   return out;
 }
 
-// Every encoding of an awkward but valid mesh (seams, duplicate faces, a non-manifold edge, a
-// face with a repeated index beside the vertex's other faces) decodes with Draco; lossless,
-// its points are exactly the welded input's vertices, and sequential keeps every point.
 // Draco reads the count of its texture-coordinate predictor's orientation bits as any int32 and
 // decodes that many (2^31: a 256 MB table and 5 s of CPU) before it sees the data has run out.
 // Each 4-byte window of a textured Edgebreaker file is set to 2^31 - 1 in turn: where that is
@@ -320,6 +317,9 @@ TEST(HostileDracoTest, CountsTheDeclaredFacesCannotNeedAreRefusedBeforeTheirWork
   EXPECT_GE(refused_blocks, 1);
 }
 
+// Every encoding of an awkward but valid mesh (seams, duplicate faces, a non-manifold edge, a
+// face with a repeated index beside the vertex's other faces) decodes with Draco; lossless,
+// its points are exactly the welded input's vertices, and sequential keeps every point.
 TEST(HostileDracoTest, EveryAcceptedEncodingKeepsTheWeldedVertices) {
   Mesh m = Icosphere(2);
   for (Vec3& p : m.positions) p = RoundToFloat(p);

@@ -289,18 +289,25 @@ timeout 300 "$cli" smooth builtin:noisy-sphere -o "$tmp/sphere-ref.ply" --quiet 
 timeout 300 "$cli" smooth "$tmp/field.obj" -o "$tmp/field-ref.ply" --quiet \
   || die "reference job: meshsmooth smooth field.obj (in-process) failed"
 
+# check_result LABEL RESULT REFERENCE VERTICES: the same bytes as the in-process reference,
+# and `meshsmooth info` reads VERTICES vertices back.
+check_result() {
+  local label=$1 result=$2 reference=$3 want=$4 n
+  [ "$(digest "$result")" = "$(digest "$reference")" ] \
+    && ok "$label: the same bytes as the host's CLI in-process ($(digest "$reference" | cut -c1-16))" \
+    || fail "$label: the result differs from the host's in-process one"
+  n=$(vertices "$result")
+  [ "$n" = "$want" ] && ok "$label: the result reads back with $want vertices" \
+    || fail "$label: the result reads back with '$n' vertices, not $want"
+}
+
 # The host's CLI through the image's server.
 if timeout 300 "$cli" smooth builtin:noisy-sphere -o "$tmp/sphere-host.ply" --server "127.0.0.1:$port" \
     --job-id image-test-host-cli --timeout 240 --json >"$tmp/sphere-host.json"; then
   ok "host CLI -> image's server: builtin:noisy-sphere smoothed ($(python3 -c \
     'import json,sys; p=json.load(open(sys.argv[1]))["parameters"]; print(p["flow"], p["iterations_run"], "iterations")' \
     "$tmp/sphere-host.json"))"
-  [ "$(digest "$tmp/sphere-host.ply")" = "$(digest "$tmp/sphere-ref.ply")" ] \
-    && ok "host CLI -> image's server: the same bytes as in-process ($(digest "$tmp/sphere-ref.ply" | cut -c1-16))" \
-    || fail "host CLI -> image's server: the result differs from the in-process one"
-  n=$(vertices "$tmp/sphere-host.ply")
-  [ "$n" = 2562 ] && ok "host CLI -> image's server: the result reads back with 2562 vertices" \
-    || fail "host CLI -> image's server: the result reads back with '$n' vertices, not 2562"
+  check_result "host CLI -> image's server" "$tmp/sphere-host.ply" "$tmp/sphere-ref.ply" 2562
 else
   fail "host CLI -> image's server: meshsmooth smooth builtin:noisy-sphere failed"
 fi
@@ -309,12 +316,7 @@ fi
 if run_in "$client_c" meshsmooth smooth /data/field.obj -o /data/field-image.ply \
     --server "127.0.0.1:$port" --job-id image-test-image-cli --timeout 240 --quiet; then
   ok "image's CLI -> image's server: field.obj (1200 vertices) smoothed"
-  [ "$(digest "$tmp/field-image.ply")" = "$(digest "$tmp/field-ref.ply")" ] \
-    && ok "image's CLI -> image's server: the same bytes as the host's CLI in-process" \
-    || fail "image's CLI -> image's server: the result differs from the host's in-process one"
-  n=$(vertices "$tmp/field-image.ply")
-  [ "$n" = 1200 ] && ok "image's CLI -> image's server: the result reads back with 1200 vertices" \
-    || fail "image's CLI -> image's server: the result reads back with '$n' vertices, not 1200"
+  check_result "image's CLI -> image's server" "$tmp/field-image.ply" "$tmp/field-ref.ply" 1200
 else
   fail "image's CLI -> image's server: meshsmooth smooth /data/field.obj failed"
 fi
