@@ -90,10 +90,28 @@ GroundTruth::GroundTruth(Mesh clean, double crease_angle_deg)
       }
     }
   }
+  // Fine detail: the clean area-weighted vertex normals (sums of the measured faces' cross
+  // products) at two corners of the face more than kFineDetailTurnDeg apart.
+  std::vector<Vec3> vertex_normal(n);
+  for (int32_t f = 0; f < faces; ++f) {
+    if (face_class_[f] == kSkipped) continue;
+    for (int32_t v : mesh_.triangles[topo_.faces[f]]) vertex_normal[v] += face_cross_[f];
+  }
+  fine_.assign(faces, 0);
+  for (int32_t f = 0; f < faces; ++f) {
+    if (face_class_[f] == kSkipped) continue;
+    const Triangle& t = mesh_.triangles[topo_.faces[f]];
+    for (int k = 0; k < 3; ++k) {
+      const Vec3& a = vertex_normal[t[k]];
+      const Vec3& b = vertex_normal[t[(k + 1) % 3]];
+      if (AngleDeg(a, b) > kFineDetailTurnDeg) fine_[f] = 1;
+    }
+  }
   for (int32_t f = 0; f < faces; ++f) {
     if (face_class_[f] == kSkipped) continue;
     ++measured_faces_;
     folded_faces_ += folded_[f];
+    fine_detail_faces_ += fine_[f];
     if (is_crease[f]) {
       face_class_[f] = kCrease;
       ++crease_faces_;
@@ -148,13 +166,15 @@ absl::StatusOr<Quality> GroundTruth::Evaluate(const Mesh& result) const {
 
   // Normals: faces with a normal in both meshes.
   double sum = 0.0, crease_sum = 0.0;
-  int64_t count = 0, crease_count = 0, flipped = 0;
+  int64_t count = 0, crease_count = 0, flipped = 0, flipped_fine = 0;
   for (size_t f = 0; f < topo_.faces.size(); ++f) {
     if (face_class_[f] == kSkipped) continue;
     const Vec3 r = FaceCross(result.positions, result.triangles[topo_.faces[f]]);
     if (!(Norm(r) >= zero_cross_)) continue;
     const double angle = AngleDeg(face_cross_[f], r);
-    flipped += !folded_[f] && Dot(face_cross_[f], r) < 0.0;
+    const bool flip = !folded_[f] && Dot(face_cross_[f], r) < 0.0;
+    flipped += flip;
+    flipped_fine += flip && fine_[f];
     sum += angle;
     ++count;
     if (face_class_[f] == kCrease) {
@@ -170,6 +190,7 @@ absl::StatusOr<Quality> GroundTruth::Evaluate(const Mesh& result) const {
   q.edge_length_cv = m.edge_length_cv;
   q.min_angle_deg = m.min_angle_deg;
   q.flipped_faces = flipped;
+  q.flipped_in_fine_detail = flipped_fine;
   return q;
 }
 

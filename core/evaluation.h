@@ -22,6 +22,11 @@ namespace meshsmooth {
 // A face is next to a crease when one of its edges has a dihedral angle (between the two
 // faces' normals) above this many degrees in the clean mesh.
 inline constexpr double kCreaseAngleDeg = 30.0;
+// A face lies in fine detail when the clean surface turns by more than this many degrees within
+// it: the clean area-weighted normals at two of its corners are further apart. That is detail at
+// the scale of the sampling, as large as the turn that noise of 0.1-0.2 h gives a face's normal
+// (the noisy inputs' normal errors in docs/quality.md), which no filter can tell from the noise.
+inline constexpr double kFineDetailTurnDeg = 20.0;
 
 struct Quality {
   // Distance from each vertex a usable face touches to the clean surface, over h.
@@ -37,6 +42,8 @@ struct Quality {
   // points against the clean one (dot product < 0). A face folded in the clean mesh has no
   // trustworthy orientation: a smoothing that unfolds it would count as turning it over.
   int64_t flipped_faces = 0;
+  // Of those, the faces in fine detail (kFineDetailTurnDeg).
+  int64_t flipped_in_fine_detail = 0;
   double edge_length_cv = 0.0;  // ComputeMetrics of the result
   double min_angle_deg = 0.0;
   int64_t non_finite_vertices = 0;  // when > 0 the distances are NaN
@@ -66,6 +73,8 @@ class GroundTruth {
   // Measured faces folded in the clean mesh: across one of their edges the other face's normal
   // points more than 90 degrees away (scans and coarse models hold a few hundred).
   int64_t folded_faces() const { return folded_faces_; }
+  // Measured faces in fine detail (kFineDetailTurnDeg).
+  int64_t fine_detail_faces() const { return fine_detail_faces_; }
   const SurfaceDistance& surface() const { return surface_; }
 
  private:
@@ -76,8 +85,9 @@ class GroundTruth {
   double zero_cross_ = 0.0;  // |cross| below this: a zero-area face (twice the area threshold)
   std::vector<Vec3> face_cross_;  // per topo_.faces entry: cross product of the clean face
   std::vector<uint8_t> face_class_;  // per topo_.faces entry: kSkipped, kPlain or kCrease
-  int64_t measured_faces_ = 0, crease_faces_ = 0, folded_faces_ = 0;
+  int64_t measured_faces_ = 0, crease_faces_ = 0, folded_faces_ = 0, fine_detail_faces_ = 0;
   std::vector<uint8_t> folded_;  // per topo_.faces entry
+  std::vector<uint8_t> fine_;    // per topo_.faces entry: in fine detail
   SurfaceDistance surface_;
 };
 

@@ -226,6 +226,34 @@ TEST(EvaluationTest, FacesFoldedInTheCleanMeshAreNotCountedAsFlipped) {
   EXPECT_EQ(GroundTruth(sphere).folded_faces(), 0);
 }
 
+// Fine detail: the clean surface turns by more than 20 degrees within a face. On an icosphere(3)
+// neighbouring vertex normals are ~4 degrees apart, on the 12-triangle cube's corners 70.5.
+TEST(EvaluationTest, FlipsInFineDetailAreCountedApart) {
+  const Mesh sphere = Icosphere(3);
+  const GroundTruth smooth(sphere);
+  EXPECT_EQ(smooth.fine_detail_faces(), 0);
+  Mesh pulled = sphere;
+  pulled.positions[0] = sphere.positions[0] * -0.5;
+  absl::StatusOr<Quality> q = smooth.Evaluate(pulled);
+  ASSERT_TRUE(q.ok()) << q.status();
+  EXPECT_EQ(q->flipped_faces, 5);
+  EXPECT_EQ(q->flipped_in_fine_detail, 0);
+
+  const Mesh cube = Cube();
+  const GroundTruth sharp(cube);
+  EXPECT_EQ(sharp.fine_detail_faces(), cube.num_triangles());
+  Mesh dented = cube;
+  int32_t corner = 0;
+  for (int32_t v = 0; v < cube.num_vertices(); ++v) {
+    if (SquaredNorm(cube.positions[v]) < SquaredNorm(cube.positions[corner])) corner = v;
+  }
+  dented.positions[corner] = Vec3{1.5, 1.5, 1.5};  // the corner at the origin pushed through the cube
+  q = sharp.Evaluate(dented);
+  ASSERT_TRUE(q.ok()) << q.status();
+  EXPECT_GT(q->flipped_faces, 0);
+  EXPECT_EQ(q->flipped_in_fine_detail, q->flipped_faces);
+}
+
 TEST(EvaluationTest, VolumeOfAScaledCube) {
   const Mesh clean = Cube();
   const GroundTruth truth(clean);
