@@ -115,7 +115,11 @@ int64_t AutoStop::RepairFolds(Vec3* pos) const {
   for (int32_t v = 0; v < n; ++v) {
     if (folded[v]) list.push_back(v);
   }
-  std::vector<Vec3> moved(list.size());
+  // Each vertex's position before the repair: no round takes it further than
+  // kFoldRepairReachH h from there.
+  std::vector<Vec3> origin(list.size()), moved(list.size());
+  for (size_t i = 0; i < list.size(); ++i) origin[i] = pos[list[i]];
+  const double reach = kFoldRepairReachH * h_;
   for (int round = 0; round < kFoldRepairRounds && !list.empty(); ++round) {
     for (size_t i = 0; i < list.size(); ++i) {  // Jacobi: every move reads the round's start
       const int32_t v = list[i];
@@ -124,13 +128,19 @@ int64_t AutoStop::RepairFolds(Vec3* pos) const {
       for (int32_t k = first; k < last; ++k) centroid += pos[topo_.ring[k]];
       centroid *= 1.0 / static_cast<double>(last - first);
       moved[i] = pos[v] + (centroid - pos[v]) * 0.5;
+      const Vec3 total = moved[i] - origin[i];
+      const double length = Norm(total);
+      if (length > reach) moved[i] = origin[i] + total * (reach / length);
     }
     for (size_t i = 0; i < list.size(); ++i) pos[list[i]] = moved[i];
     size_t kept = 0;
-    for (int32_t v : list) {
-      if (Folded(pos, v)) list[kept++] = v;
+    for (size_t i = 0; i < list.size(); ++i) {
+      if (!Folded(pos, list[i])) continue;
+      list[kept] = list[i];
+      origin[kept++] = origin[i];
     }
     list.resize(kept);
+    origin.resize(kept);
     moved.resize(kept);
   }
   return static_cast<int64_t>(list.size());

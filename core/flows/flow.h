@@ -84,8 +84,8 @@ inline constexpr int kMaxAutoIterations = 1000;
 struct FlowParams {
   FlowId flow = kDefaultFlow;
   // 1 .. kMaxIterations, or kAutoIterations: estimate the input's noise (core/noise.h) and
-  // stop once the flow has moved the vertices that far along their normals (the discrepancy
-  // principle; FlowResult says why it stopped).
+  // return the iteration whose estimated error to the noise-free surface is least (Stein's
+  // unbiased risk estimate, auto_stop.h; FlowResult says why the run stopped).
   int iterations = kAutoIterations;
   // The most iterations automatic stopping may run (1 .. kMaxAutoIterations; a server sets
   // its own limit here).
