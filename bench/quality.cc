@@ -586,8 +586,9 @@ seeds (the "Inputs" table gives their number per mesh).
   every ratio (×) is taken against.
 - *default job*: what a user gets without parameters (`meshsmooth smooth IN -o OUT`): a default
   `meshsmooth.v1.JobSpec` through the service's `FromProto` (server/convert.cc), then `Smooth()`:
-  `bilaplacian` with automatic stopping (its iterations, stop reason and noise estimate are in the
-  summary tables; "How the defaults were chosen" below). Unlike the service, the benchmark neither rounds the input to float32 (Draco) nor welds
+  `bilaplacian` or `bilateral_normal`, whichever the estimated error prefers, with automatic
+  stopping (its iterations, stop reason and noise estimate are in the summary tables; "How the
+  defaults were chosen" below). Unlike the service, the benchmark neither rounds the input to float32 (Draco) nor welds
   coincident vertices (only the clean dragon has any).
 - one row per flow of the flow table, with its default parameters (a JobSpec naming only the
   flow), at its best iteration count (the *oracle*): the counts 1, 2, 3, 5, 8, 12, 20, 32, 50,
@@ -650,6 +651,9 @@ near 1/sqrt(2N)), and each of its seeds adds several minutes to the run.
   kept) and the smooth synthetic shapes; each is up to 2× (bilaplacian on CAD) or 1.3×
   (bilateral on scans) off where the other wins. The estimate picks the better one in most
   cases; the misses cost 1.1–1.65× (sphere and torus at sigma = 0.3 pick bilaplacian).
+  Tried: `guided_normal` as a third candidate (same 35 cases, one seed): turbine 0.092 → 0.090 h
+  at sigma = 0.2, 0.123 → 0.122 at 0.3, but fandisk 0.056 → 0.061 and camelhead at random
+  sigma = 0.3 0.050 → 0.060 h with 34 → 116 flipped faces, for a third run per job: dropped.
   Meshes above 100,000 vertices choose flow and count on eight breadth-first patches of 20,000
   vertices in all and run once: the two candidates with their probes would cost several times
   the run (the noisy dragon's default job: 45 iterations, 1.4 s through the service, against
@@ -660,6 +664,30 @@ near 1/sqrt(2N)), and each of its seeds adds several minutes to the run.
   by the common distance that gives back the input's enclosed volume (auto_stop.h): turbine at
   sigma = 0.2, 8 iterations, -4.56% without it, -0.65% with it (the noisy input itself is -0.65%
   from the clean part).
+- **Fold repair, within 0.2 h.** After the run the free vertices of edges whose two faces meet
+  at more than 120° move half-way to their ring's centroid, a few rounds, and no vertex further
+  than 0.2 h in all (`kFoldRepairReachH`, auto_stop.h). Unbounded, the repair flattened the
+  turbine's strips narrower than the noise, whose faces also meet at more than 120° after a run:
+  at sigma = 0.1 / 0.2 / 0.3 RMS 0.061 / 0.092 / 0.123 h and 72 / 141 / 188 flipped faces,
+  against 0.052 / 0.081 / 0.113 h and 41 / 110 / 166 within the bound (0.051 / 0.079 / 0.112 h
+  and 37 / 113 / 185 without any repair). The dragon keeps the repair's gain along the normals
+  (sigma = 0.2: 871 flipped faces, 927 without the repair) and half of it at random sigma = 0.3
+  (2,149; 1,763 unbounded, 2,652 without). Tried: bounds of 0.1 / 0.3 h (dragon at random
+  sigma = 0.3: 2,360 / 2,000 flipped; turbine at sigma = 0.2: 0.080 / 0.082 h); moving only the
+  tangential part of the step (turbine at sigma = 0.2: 185 flipped); repairing only folds with a
+  face under 10% / 25% of its ring's mean (dragon at random sigma = 0.3: 2,490 / 2,225); the
+  fold angle at 90° or 100° instead of 120° (`kFoldAngleDeg`; unbounded repair): camelhead at
+  sigma = 0.1 ends with 10 / 7 flipped faces instead of 5, and at 90° fandisk's normal error goes
+  1.28° → 2.30° (its creases read as folds): all dropped.
+- **What still flips.** Every flow at every count leaves flipped faces on the scans with
+  needles and on the turbine (the tables mesh by mesh: on the dragon at sigma = 0.2 the flows'
+  best counts leave 742 to 3,112). They lie where the noise hides the surface: most in fine
+  detail (the brackets: the dragon's default job at sigma = 0.2 684 of 871, the turbine's 75 of
+  110), the turbine's others on strips about 0.25 h wide between right-angled creases, narrower
+  than the noise. On the dragon 783 of 882 flipped faces (a numpy count on the same noisy copy)
+  touch a boundary vertex, which stays fixed and keeps its noise; moving the boundary vertices
+  along their interior neighbours' mean normal on to those neighbours' mean (three passes, a
+  prototype) left 882: the noise along a rim's tilted normals moves its vertices sideways too.
 - **Boundary: fixed.** Smoothing boundary loops as curves by default was tried: camelhead at
   sigma = 0.2 ends at RMS 0.125 h (max 1.9 h) against 0.055 h with fixed boundaries, the loop
   shrinking inwards over the run: dropped.
