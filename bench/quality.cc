@@ -631,11 +631,12 @@ near 1/sqrt(2N)), and each of its seeds adds several minutes to the run.
   from a probe copy of the input moved by ±0.05 sigma along the normals and run beside the job
   (Monte-Carlo SURE, Ramani, Blu, Unser 2008), sigma the root mean square of the fit residuals
   within three robust scales, taken 10% high. The same figure tells flows apart, so it needs no
-  constant per flow. Over the 35 noisy cases of `--meshes
-  fandisk,bunny-small,max-planck,camelhead,turbine,sphere,two-rate-torus --sigmas 0,0.1,0.2,0.3
-  --random-sigmas 0.1,0.3 --seeds 1 --flows none --no-paper` the default job's RMS distance is
-  0.84–1.65× the best oracle row's of the three-seed run, mean 1.11 (the discrepancy principle
-  it replaces, stopping once the vertices had moved as far as the noise: 1.00–3.95×, mean 1.70).
+  constant per flow. Over the 35 noisy cases of fandisk, bunny-small, max-planck, camelhead,
+  turbine, sphere and two-rate-torus at sigma = 0.1, 0.2, 0.3 and random sigma = 0.1, 0.3 the
+  default job's RMS distance is 0.96–2.08× the best oracle row's in the summary tables, mean
+  1.14, above 1.25× only on the sphere, whose best row is bilateral_normal at 2000 iterations
+  (the discrepancy principle it replaces, stopping once the vertices had moved as far as the
+  noise, measured over the same cases on three seeds: 1.00–3.95×, mean 1.70).
   Tried: the discrepancy principle at factors 0.85 and 1 (bilaplacian; mean 1.99 / 1.78 over
   those cases) and 0.6 / 0.75 / 0.9 for bilateral_normal (2.61 / 2.16 / 1.82: its displacement
   does not track the noise it removes); SURE with sigma not taken high (`kRiskSigmaMargin` 1 in
