@@ -24,8 +24,9 @@ namespace meshsmooth {
 inline constexpr double kCreaseAngleDeg = 30.0;
 // A face lies in fine detail when the clean surface turns by more than this many degrees within
 // it: the clean area-weighted normals at two of its corners are further apart. That is detail at
-// the scale of the sampling, as large as the turn that noise of 0.1-0.2 h gives a face's normal
-// (the noisy inputs' normal errors in docs/quality.md), which no filter can tell from the noise.
+// the scale of the sampling (sharp creases included), where the surface turns within a face as
+// much as noise of 0.1-0.2 h turns a face's normal (the noisy inputs' normal errors in
+// docs/quality.md). The quality benchmark counts the flipped faces there apart.
 inline constexpr double kFineDetailTurnDeg = 20.0;
 
 struct Quality {
