@@ -136,6 +136,20 @@ ReorderedMesh ReorderByMorton(const Mesh& mesh, const Topology& topo, const std:
     int32_t out = t.ring_offsets[i];
     for (int32_t k = topo.ring_offsets[old]; k < topo.ring_offsets[old + 1]; ++k) t.ring[out++] = rank[topo.ring[k]];
   }
+  // The faces, renumbered, in their order (the normal-filtering flows order them by their
+  // centroids, whatever the vertex numbering); a corner out of range stays as it was (such a
+  // face is not in topo.faces).
+  const auto faces = static_cast<int64_t>(mesh.triangles.size());
+  r.mesh.triangles.resize(mesh.triangles.size());
+#pragma omp parallel for schedule(static) num_threads(threads)
+  for (int64_t f = 0; f < faces; ++f) {
+    Triangle t2 = mesh.triangles[f];
+    for (int32_t& v : t2) {
+      if (v >= 0 && v < n) v = rank[v];
+    }
+    r.mesh.triangles[f] = t2;
+  }
+  t.faces = topo.faces;
   return r;
 }
 

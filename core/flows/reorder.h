@@ -1,8 +1,8 @@
 // Running a large mesh in an order that keeps each vertex's neighbours near it in memory:
 // Smooth() copies the mesh and its topology into Morton order when that pays off
 // (FlowParams::reorder), runs there and copies the positions back, so indices stay stable.
-// Each ring keeps its order, so every vertex sums the same terms in the same order:
-// reordering changes no position.
+// Each ring keeps its order and the faces keep theirs, so every vertex sums the same terms in
+// the same order: reordering changes no position.
 #pragma once
 
 #include <cstdint>
@@ -31,8 +31,8 @@ bool ReorderableSize(int32_t n);
 // A mesh, its topology and its lock mask copied into an order (new -> old).
 struct ReorderedMesh {
   std::vector<int32_t> order;  // new -> old
-  Mesh mesh;                   // positions only
-  Topology topo;               // kind and rings, renumbered
+  Mesh mesh;                   // positions and triangles, renumbered
+  Topology topo;               // kind, rings and usable faces, renumbered
   std::vector<uint8_t> locked;  // empty when the caller's was
 };
 

@@ -1,5 +1,6 @@
 // Smooth(): validates the parameters, picks the order the mesh runs in (core/flows/reorder.h)
 // and hands the iterations to the driver (core/flows/driver.h).
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -233,14 +234,18 @@ namespace {
 absl::StatusOr<FlowResult> SmoothWith(Mesh& mesh, const Topology& topo, const FlowParams& p,
                                       const RunControl& control, double h) {
   const int32_t n = mesh.num_vertices();
-  // The normal-filtering flows work on the faces, which the reordered copy does not carry.
-  const bool reorder = FlowOf(p.flow).kind == FlowKind::kNormalFilter ? false
-                       : p.reorder == ReorderMode::kAlways
+  // An iteration of a normal-filtering flow passes over the mesh once per filter and once per
+  // vertex update; MortonOrderPaysOff counts passes of an umbrella flow.
+  const NormalFilterParams& nf = p.normal_filter;
+  const int passes = FlowOf(p.flow).kind == FlowKind::kNormalFilter ? nf.normal_iterations + nf.vertex_iterations : 1;
+  const int iterations = p.iterations != kAutoIterations ? p.iterations
+                         : p.sampled_iterations > 0      ? p.sampled_iterations
+                                                         : kTypicalAutoIterations;
+  const bool reorder = p.reorder == ReorderMode::kAlways
                            ? ReorderableSize(n)
                            : p.reorder == ReorderMode::kAuto &&
-                               MortonOrderPaysOff(topo, p.iterations != kAutoIterations ? p.iterations
-                                                     : p.sampled_iterations > 0 ? p.sampled_iterations
-                                                                                : kTypicalAutoIterations);
+                               MortonOrderPaysOff(topo, static_cast<int>(std::min<int64_t>(
+                                                            static_cast<int64_t>(iterations) * passes, kMaxIterations)));
   if (!reorder) return flows::RunIterations(mesh, topo, p, control, h);
 
   const int threads = flows::ThreadsFor(n, p);
