@@ -242,8 +242,11 @@ void NormalFilterRows(const Mesh& mesh, const Topology& topo, const double u0_ms
     base.flow = FlowId::kBilateralNormal;
     base.threads = k == 0 ? 1 : std::min(2, hw);
     base.iterations = kIterations;
-    // In the layout a job of 20 iterations (6 passes each) runs in, whatever the count here.
-    base.reorder = MortonOrderPaysOff(topo, 20 * 6) ? ReorderMode::kAlways : ReorderMode::kNever;
+    // In the layout a job of 20 iterations runs in (Smooth() weighs a normal-filtering iteration
+    // as its passes), whatever the count here.
+    const NormalFilterParams& nf = base.normal_filter;
+    base.reorder = MortonOrderPaysOff(topo, 20 * (nf.normal_iterations + nf.vertex_iterations)) ? ReorderMode::kAlways
+                                                                                                : ReorderMode::kNever;
     FlowParams one = base;  // one filter pass and one vertex pass per iteration
     one.normal_filter.normal_iterations = one.normal_filter.vertex_iterations = 1;
     FlowParams two_filters = one, two_updates = one, single = base;

@@ -26,6 +26,23 @@ inline Mesh NoisyTorus(int32_t* dense = nullptr, double noise = 0.3, uint64_t se
   return m;
 }
 
+// An icosphere(3) whose every fifth face f is split into a needle along its first edge and two
+// fat triangles by a point a hundredth of the face's height from that edge: the needle stays
+// face f, (t0, t1, new point); normal noise folds many needles over, as on raw scans.
+inline Mesh SphereWithNeedles() {
+  Mesh m = Icosphere(3);
+  const size_t faces = m.triangles.size();
+  for (size_t f = 0; f < faces; f += 5) {
+    const Triangle t = m.triangles[f];
+    const auto p = m.num_vertices();
+    m.positions.push_back(m.positions[t[0]] * 0.495 + m.positions[t[1]] * 0.495 + m.positions[t[2]] * 0.01);
+    m.triangles[f] = {t[0], t[1], p};  // the needle along edge t0 t1
+    m.triangles.push_back({t[1], t[2], p});
+    m.triangles.push_back({t[2], t[0], p});
+  }
+  return m;
+}
+
 // Edge-length CV of the edges inside each sampling-rate part of the two-rate torus (vertices
 // [0, dense) and [dense, n)): the regularity within a part, not the designed difference
 // between the parts, which no smoothing flow should erase.

@@ -1,6 +1,5 @@
 // Smooth(): validates the parameters, picks the order the mesh runs in (core/flows/reorder.h)
 // and hands the iterations to the driver (core/flows/driver.h).
-#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -244,8 +243,7 @@ absl::StatusOr<FlowResult> SmoothWith(Mesh& mesh, const Topology& topo, const Fl
   const bool reorder = p.reorder == ReorderMode::kAlways
                            ? ReorderableSize(n)
                            : p.reorder == ReorderMode::kAuto &&
-                               MortonOrderPaysOff(topo, static_cast<int>(std::min<int64_t>(
-                                                            static_cast<int64_t>(iterations) * passes, kMaxIterations)));
+                               MortonOrderPaysOff(topo, iterations * passes);  // validated: below 2^25
   if (!reorder) return flows::RunIterations(mesh, topo, p, control, h);
 
   const int threads = flows::ThreadsFor(n, p);

@@ -18,6 +18,7 @@
 #include "core/shapes.h"
 #include "core/topology.h"
 #include "gtest/gtest.h"
+#include "tests/flow_fixtures.h"
 #include "tests/test_data.h"
 
 namespace meshsmooth {
@@ -121,59 +122,61 @@ TEST(AutoStopTest, DefaultJobNeverFailsOnNeedles) {
   }
 }
 
-int FlippedFaces(const std::vector<Vec3>& pos, const Mesh& clean) {
-  int flipped = 0;
-  for (const Triangle& t : clean.triangles) {
-    const Vec3 now = Cross(pos[t[1]] - pos[t[0]], pos[t[2]] - pos[t[0]]);
-    const Vec3 was = Cross(clean.positions[t[1]] - clean.positions[t[0]], clean.positions[t[2]] - clean.positions[t[0]]);
-    flipped += Dot(now, was) < 0.0;
-  }
-  return flipped;
+// A mesh of the shared folder with Gaussian noise of sigma h along its normals (seed 1), through
+// Smooth() with `p`: the run, and the result's quality before and after against the clean mesh.
+struct NoisyRun {
+  FlowResult result;
+  Quality before, after;
+};
+void RunOnNoisySharedMesh(const char* file, double sigma, const FlowParams& p, NoisyRun* out) {
+  absl::StatusOr<Mesh> clean = ReadMesh(testing::SharedData("meshes").append(file).string());
+  ASSERT_TRUE(clean.ok()) << clean.status();
+  const GroundTruth truth(*clean);
+  Mesh m = *clean;
+  AddNormalNoise(m, sigma, 1);
+  const absl::StatusOr<Quality> before = truth.Evaluate(m);
+  absl::StatusOr<FlowResult> r = Smooth(m, p);
+  ASSERT_TRUE(r.ok()) << r.status();
+  const absl::StatusOr<Quality> after = truth.Evaluate(m);
+  ASSERT_TRUE(before.ok() && after.ok());
+  *out = {*std::move(r), *before, *after};
 }
 
-// The fold repair on needles: an icosphere whose every fifth face is split by a point a
-// hundredth of the face's height from one edge, each such point then mirrored across that edge
-// (its needle folded over). The repair unfolds every one, and moves no vertex further than
-// kFoldRepairReachH h.
+// The fold repair on the needles of SphereWithNeedles, each apex mirrored across its needle's
+// base edge (the needle folded over): the repair unfolds every one and moves no vertex further
+// than kFoldRepairReachH h.
 TEST(AutoStopTest, FoldRepairUnfoldsNeedlesWithinItsReach) {
-  Mesh clean = Icosphere(3);
-  struct Needle {
-    int32_t apex, a, b;
-  };
-  std::vector<Needle> needles;
-  const size_t faces = clean.triangles.size();
-  for (size_t f = 0; f < faces; f += 5) {
-    const Triangle t = clean.triangles[f];
-    const int32_t p = clean.num_vertices();
-    clean.positions.push_back(clean.positions[t[0]] * 0.495 + clean.positions[t[1]] * 0.495 + clean.positions[t[2]] * 0.01);
-    clean.triangles[f] = {t[0], t[1], p};
-    clean.triangles.push_back({t[1], t[2], p});
-    clean.triangles.push_back({t[2], t[0], p});
-    needles.push_back({p, t[0], t[1]});
-  }
-  const Topology topo = BuildTopology(clean);
+  const Mesh clean = testing::SphereWithNeedles();
+  const GroundTruth truth(clean);
+  const Topology& topo = truth.topology();
   const double h = MeanEdgeLength(clean, topo);
   std::vector<uint8_t> role(clean.num_vertices(), flows::kFree);
   Mesh noisy = clean;
   AddNormalNoise(noisy, 0.1, 1);
   const flows::AutoStop stop(noisy, topo, role.data(), h, 1);
 
-  std::vector<Vec3> pos = clean.positions;
-  for (const Needle& n : needles) {
-    const Vec3 a = clean.positions[n.a], b = clean.positions[n.b], p = clean.positions[n.apex];
+  Mesh folded = clean;  // each needle's apex as far across its base edge as it was before it
+  const size_t sphere_faces = Icosphere(3).triangles.size();  // the needles are faces 0, 5, 10, ...
+  int needles = 0;
+  for (size_t f = 0; f < sphere_faces; f += 5, ++needles) {
+    const Triangle& t = clean.triangles[f];
+    const Vec3 a = clean.positions[t[0]], b = clean.positions[t[1]], p = clean.positions[t[2]];
     const Vec3 foot = a + (b - a) * (Dot(p - a, b - a) / SquaredNorm(b - a));
-    pos[n.apex] = foot * 2.0 - p;  // as far across the edge as it was before it
+    folded.positions[t[2]] = foot * 2.0 - p;
   }
-  const std::vector<Vec3> folded = pos;
-  const int before = FlippedFaces(folded, clean);
-  const int64_t left = stop.RepairFolds(pos.data());
+  Mesh repaired = folded;
+  const int64_t left = stop.RepairFolds(repaired.positions.data());
   double longest = 0.0;
-  for (size_t v = 0; v < pos.size(); ++v) longest = std::max(longest, Norm(pos[v] - folded[v]));
-  std::printf("%zu needles folded: %d flipped faces, after the repair %d (%lld folded vertices left); longest move "
-              "%.3f h\n",
-              needles.size(), before, FlippedFaces(pos, clean), static_cast<long long>(left), longest / h);
-  EXPECT_GE(before, static_cast<int>(needles.size()));
-  EXPECT_EQ(FlippedFaces(pos, clean), 0);
+  for (int32_t v = 0; v < clean.num_vertices(); ++v) {
+    longest = std::max(longest, Norm(repaired.positions[v] - folded.positions[v]));
+  }
+  const int64_t before = truth.Evaluate(folded)->flipped_faces, after = truth.Evaluate(repaired)->flipped_faces;
+  std::printf("%d needles folded: %lld flipped faces, after the repair %lld (%lld folded vertices left); longest "
+              "move %.3f h\n",
+              needles, static_cast<long long>(before), static_cast<long long>(after), static_cast<long long>(left),
+              longest / h);
+  EXPECT_GE(before, needles);
+  EXPECT_EQ(after, 0);
   EXPECT_EQ(left, 0);
   EXPECT_LE(longest, flows::kFoldRepairReachH * h * (1.0 + 1e-12));
 }
@@ -184,22 +187,16 @@ TEST(AutoStopTest, FoldRepairUnfoldsNeedlesWithinItsReach) {
 // faces, against 0.052 h and 41 within kFoldRepairReachH).
 TEST(AutoStopTest, FoldRepairLeavesThinFeaturesOfACadPart) {
   MESHSMOOTH_REQUIRE_SHARED("meshes");
-  absl::StatusOr<Mesh> clean = ReadMesh(testing::SharedData("meshes").append("turbine.obj").string());
-  ASSERT_TRUE(clean.ok()) << clean.status();
-  const GroundTruth truth(*clean);
-  Mesh m = *clean;
-  AddNormalNoise(m, 0.1, 1);
   FlowParams p;
   p.choose_flow = true;  // the default job
-  absl::StatusOr<FlowResult> r = Smooth(m, p);
-  ASSERT_TRUE(r.ok()) << r.status();
-  const absl::StatusOr<Quality> after = truth.Evaluate(m);
-  ASSERT_TRUE(after.ok());
+  NoisyRun run;
+  ASSERT_NO_FATAL_FAILURE(RunOnNoisySharedMesh("turbine.obj", 0.1, p, &run));
+  const Quality& after = run.after;
   std::printf("turbine sigma 0.1: %s, %d iterations, RMS %.4f h, %lld flipped faces (%lld in fine detail)\n",
-              std::string(FlowOf(r->flow).name).c_str(), r->iterations_run, after->rms_distance,
-              static_cast<long long>(after->flipped_faces), static_cast<long long>(after->flipped_in_fine_detail));
-  EXPECT_LT(after->rms_distance, 0.056);
-  EXPECT_LT(after->flipped_faces, 50);
+              std::string(FlowOf(run.result.flow).name).c_str(), run.result.iterations_run, after.rms_distance,
+              static_cast<long long>(after.flipped_faces), static_cast<long long>(after.flipped_in_fine_detail));
+  EXPECT_LT(after.rms_distance, 0.056);
+  EXPECT_LT(after.flipped_faces, 50);
 }
 
 TEST(AutoStopTest, ExplicitIterationsRunExactly) {
@@ -220,7 +217,6 @@ TEST(AutoStopTest, NoisyFandiskComesBackCloser) {
   MESHSMOOTH_REQUIRE_SHARED("meshes");
   absl::StatusOr<Mesh> clean = ReadMesh(testing::SharedData("meshes").append("fandisk.obj").string());
   ASSERT_TRUE(clean.ok()) << clean.status();
-  const GroundTruth truth(*clean);
   {
     Mesh m = *clean;
     absl::StatusOr<FlowResult> r = Smooth(m, FlowParams{});
@@ -228,20 +224,16 @@ TEST(AutoStopTest, NoisyFandiskComesBackCloser) {
     EXPECT_EQ(r->iterations_run, 0) << "the clean part has no noise to remove";
     EXPECT_EQ(m.positions, clean->positions);
   }
-  Mesh m = *clean;
-  AddNormalNoise(m, 0.2, 1);
-  const absl::StatusOr<Quality> before = truth.Evaluate(m);
-  absl::StatusOr<FlowResult> r = Smooth(m, FlowParams{});
-  ASSERT_TRUE(r.ok()) << r.status();
-  const absl::StatusOr<Quality> after = truth.Evaluate(m);
-  ASSERT_TRUE(before.ok() && after.ok());
+  NoisyRun run;
+  ASSERT_NO_FATAL_FAILURE(RunOnNoisySharedMesh("fandisk.obj", 0.2, FlowParams{}, &run));
+  const Quality &before = run.before, &after = run.after;
   std::printf("fandisk sigma 0.2: %d iterations, RMS %.4f -> %.4f h, normal %.2f -> %.2f deg, volume %.2f%%\n",
-              r->iterations_run, before->rms_distance, after->rms_distance, before->normal_error_deg,
-              after->normal_error_deg, after->volume_change_percent);
-  EXPECT_LT(after->rms_distance, 0.6 * before->rms_distance);
-  EXPECT_LT(after->normal_error_deg, 0.6 * before->normal_error_deg);
-  EXPECT_NEAR(after->volume_change_percent, 0.0, 1.0);
-  EXPECT_EQ(after->flipped_faces, 0);
+              run.result.iterations_run, before.rms_distance, after.rms_distance, before.normal_error_deg,
+              after.normal_error_deg, after.volume_change_percent);
+  EXPECT_LT(after.rms_distance, 0.6 * before.rms_distance);
+  EXPECT_LT(after.normal_error_deg, 0.6 * before.normal_error_deg);
+  EXPECT_NEAR(after.volume_change_percent, 0.0, 1.0);
+  EXPECT_EQ(after.flipped_faces, 0);
 }
 
 // A job that names no flow (choose_flow) on the CAD part: the estimated error picks
@@ -250,24 +242,19 @@ TEST(AutoStopTest, NoisyFandiskComesBackCloser) {
 // where the bilaplacian flow at its own best count leaves 22 degrees.
 TEST(AutoStopTest, ChosenFlowKeepsTheCreasesOfANoisyCadPart) {
   MESHSMOOTH_REQUIRE_SHARED("meshes");
-  absl::StatusOr<Mesh> clean = ReadMesh(testing::SharedData("meshes").append("fandisk.obj").string());
-  ASSERT_TRUE(clean.ok()) << clean.status();
-  const GroundTruth truth(*clean);
-  Mesh m = *clean;
-  AddNormalNoise(m, 0.2, 1);
   FlowParams p;
   p.choose_flow = true;
-  absl::StatusOr<FlowResult> r = Smooth(m, p);
-  ASSERT_TRUE(r.ok()) << r.status();
-  const absl::StatusOr<Quality> after = truth.Evaluate(m);
-  ASSERT_TRUE(after.ok());
+  NoisyRun run;
+  ASSERT_NO_FATAL_FAILURE(RunOnNoisySharedMesh("fandisk.obj", 0.2, p, &run));
+  const FlowResult& r = run.result;
+  const Quality& after = run.after;
   std::printf("fandisk sigma 0.2, flow chosen: %s, %d iterations (%s), RMS %.4f h, crease normal %.2f deg\n",
-              std::string(FlowOf(r->flow).name).c_str(), r->iterations_run,
-              std::string(StopReasonName(r->stop_reason)).c_str(), after->rms_distance, after->crease_normal_error_deg);
-  EXPECT_EQ(r->flow, FlowId::kBilateralNormal);
-  EXPECT_LT(after->rms_distance, 1.25 * 0.0523);
-  EXPECT_LT(after->crease_normal_error_deg, 5.0);
-  EXPECT_EQ(after->flipped_faces, 0);
+              std::string(FlowOf(r.flow).name).c_str(), r.iterations_run,
+              std::string(StopReasonName(r.stop_reason)).c_str(), after.rms_distance, after.crease_normal_error_deg);
+  EXPECT_EQ(r.flow, FlowId::kBilateralNormal);
+  EXPECT_LT(after.rms_distance, 1.25 * 0.0523);
+  EXPECT_LT(after.crease_normal_error_deg, 5.0);
+  EXPECT_EQ(after.flipped_faces, 0);
 }
 
 // Above kMaxChoiceVertices the flow and the count are chosen on patches of the mesh and the

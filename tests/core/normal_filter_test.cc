@@ -169,27 +169,10 @@ TEST(NormalFilterTest, FandiskKeepsItsCreases) {
   }
 }
 
-// An icosphere whose every fifth face is split into two needles and a fat triangle by a point
-// a hundredth of the face's height from one edge: normal noise folds many needles over, as on
-// raw scans.
-Mesh SphereWithNeedles() {
-  Mesh m = Icosphere(3);
-  const size_t faces = m.triangles.size();
-  for (size_t f = 0; f < faces; f += 5) {
-    const Triangle t = m.triangles[f];
-    const auto p = m.num_vertices();
-    m.positions.push_back(m.positions[t[0]] * 0.495 + m.positions[t[1]] * 0.495 + m.positions[t[2]] * 0.01);
-    m.triangles[f] = {t[0], t[1], p};  // the needle along edge t0 t1
-    m.triangles.push_back({t[1], t[2], p});
-    m.triangles.push_back({t[2], t[0], p});
-  }
-  return m;
-}
-
 // The vertex update never folds a face over, and it unfolds the needles that the noise folded:
 // no face of the result points against the clean mesh's.
 TEST(NormalFilterTest, NeedlesComeBackUnfolded) {
-  const Mesh clean = SphereWithNeedles();
+  const Mesh clean = testing::SphereWithNeedles();
   for (uint64_t seed : {1, 2, 3}) {
     const Mesh noisy = WithNormalNoise(clean, 0.2, seed);
     const int noisy_flips = FlippedFaces(noisy, clean);
