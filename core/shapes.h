@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 
 #include "core/mesh.h"
 
@@ -44,6 +45,21 @@ int CylinderRings(double radius, double height, int around);
 // equilateral triangles in the xy plane. Vertex (row i, column j) has index i * columns + j.
 // Open: one boundary loop. Normals point to +z.
 Mesh CosineHeightField(double amplitude, int periods, int rows_per_period, int columns);
+
+// Marching tetrahedra, as iso-surface extraction leaves a mesh (valence 3 to 12+, slivers,
+// needles, vertices a linear interpolation off the surface): the zero set of `f` (negative
+// inside) on the grid lo + step (i, j, k) that covers the box [lo, hi], each cube cut into the
+// six tetrahedra around its main diagonal, one vertex per crossed grid edge (shared between
+// tetrahedra; a node where f is 0 counts as outside), one or two triangles per crossed
+// tetrahedron, faces outward. Closed where the surface stays inside the box.
+Mesh MarchingTetrahedra(const std::function<double(const Vec3&)>& f, const Vec3& lo, const Vec3& hi, double step);
+
+// Icosphere(level) with `holes` round holes cut out, as a scan with many gaps: hole centres
+// drawn uniformly on the sphere (seeded), apart by at least three times the largest radius,
+// radii between 0.5 and 1.5 times `radius` (radians), each hole the faces with a corner
+// within its radius of its centre; vertices no face uses are dropped. Edge-manifold, each
+// hole one boundary loop.
+Mesh HoleySphere(int level, int holes, double radius, uint64_t seed);
 
 // Adds to every coordinate of every vertex an independent uniform value in
 // [-fraction * h, fraction * h], with h the mesh's mean edge length (the paper's "uniform
