@@ -47,10 +47,12 @@ using Clock = std::chrono::steady_clock;
 double Seconds(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
 
 // The real meshes that serve as ground truth (docs/quality.md says why these and not the
-// beetle), then the synthetic shapes.
+// beetle), then the synthetic shapes: the paper's, iso-surface output and a sphere with many
+// holes (LoadSubject).
 const std::vector<std::string> kDefaultMeshes = {"fandisk",  "bunny-small",    "max-planck",      "camelhead",
                                                  "turbine",  "nefertiti",      "stanford-bunny",  "stanford-dragon",
-                                                 "sphere",   "two-rate-torus"};
+                                                 "sphere",   "two-rate-torus", "mt-torus",        "mt-cylinder",
+                                                 "holey-sphere"};
 // Iteration counts the oracle tries, about x1.6 apart.
 const std::vector<int> kOracleCounts = {1, 2, 3, 5, 8, 12, 20, 32, 50, 80, 125, 200, 320, 500, 800, 1250, 2000};
 // Meshes from this many vertices get `large_seeds` seeds (unless it is 0).
@@ -129,6 +131,26 @@ absl::StatusOr<Subject> LoadSubject(const std::string& name, const std::filesyst
   } else if (name == "two-rate-torus") {
     clean = TwoRateTorus(32);
     s.what = "the paper's Fig. 4 torus, two sampling rates";
+  } else if (name == "mt-torus") {
+    // A tilted torus (R = 1, r = 0.4) through marching tetrahedra: iso-surface output.
+    clean = MarchingTetrahedra(
+        [](const Vec3& p) {
+          const Vec3 q{p.x, 0.8 * p.y - 0.6 * p.z, 0.6 * p.y + 0.8 * p.z};
+          const double ring = std::hypot(q.x, q.y) - 1.0;
+          return std::hypot(ring, q.z) - 0.4;
+        },
+        Vec3{-1.5, -1.5, -1.5}, Vec3{1.5, 1.5, 1.5}, 0.045);
+    s.what = "torus R 1, r 0.4, marching tetrahedra, step 0.045";
+  } else if (name == "mt-cylinder") {
+    // A capped cylinder (radius 0.6, height 1.6) through marching tetrahedra: a machined part
+    // as iso-surface output, its rims cut into jagged chamfers.
+    clean = MarchingTetrahedra(
+        [](const Vec3& p) { return std::max(std::hypot(p.x, p.y) - 0.6, std::abs(p.z) - 0.8); },
+        Vec3{-0.9, -0.9, -1.1}, Vec3{0.9, 0.9, 1.1}, 0.037);
+    s.what = "capped cylinder, marching tetrahedra, step 0.037";
+  } else if (name == "holey-sphere") {
+    clean = HoleySphere(5, 60, 0.07, 7);
+    s.what = "icosphere level 5, 60 round holes";
   } else {
     std::filesystem::path path = meshes / (name + ".obj");
     if (!std::filesystem::exists(path)) path = meshes / (name + ".ply");
@@ -615,7 +637,12 @@ non-manifold vertices stay fixed in every flow, so it measures nothing about den
 others are manifold with consistent orientation. The Stanford bunny has 1,113 unreferenced
 vertices (no noise, not measured) and five holes; the dragon is a raw scan (151 components, 407
 holes, 367 zero-area faces, whose normal error is not measured). Then the synthetic icosphere
-(level 4) and the paper's two-rate torus. The dragon gets one seed: over 437k vertices another
+(level 4) and the paper's two-rate torus, and three shapes of kinds the real meshes lack (core/shapes.h,
+bench/quality.cc `LoadSubject`): iso-surface output, a tilted torus (`mt-torus`) and a capped
+cylinder (`mt-cylinder`, a machined part with sharp rims) through marching tetrahedra, with
+valences from 3 up, needles and slivers (smallest angles under 0.1°); and an icosphere of
+level 5 with 60 round holes (`holey-sphere`): 11% of its vertices on a rim, 42% within two rings of a
+rim. The dragon gets one seed: over 437k vertices another
 seed moves its figures by about 0.1% (the relative standard error of an RMS over N samples is
 near 1/sqrt(2N)), and each of its seeds adds several minutes to the run.
 
@@ -698,7 +725,8 @@ constexpr char kUsage[] =
     "usage: meshsmooth_quality [--meshes a,b,...] [--sigmas 0,0.1,0.2,0.3] [--random-sigmas 0.1,0.2,0.3]\n"
     "                          [--seeds 3] [--large-seeds 1] [--flows a,b,...] [--job SPEC]... [--oracle-job SPEC]...\n"
     "                          [--shared DIR] [--paper-iterations 20] [--no-paper] [--quick]\n"
-    "  --meshes         real meshes by file name without extension, and `sphere`, `two-rate-torus`\n"
+    "  --meshes         real meshes by file name without extension, and `sphere`, `two-rate-torus`,\n"
+    "                   `mt-torus`, `mt-cylinder`, `holey-sphere`\n"
     "  --sigmas         Gaussian noise along the normals, in mean edge lengths h (0 = the clean mesh)\n"
     "  --random-sigmas  Gaussian noise in random directions (\"\": none)\n"
     "  --seeds          noisy copies per mesh and sigma; --large-seeds for meshes of 200k+ vertices\n"

@@ -122,6 +122,42 @@ TEST(AutoStopTest, DefaultJobNeverFailsOnNeedles) {
   }
 }
 
+// The default job on kinds of input the shared meshes lack: iso-surface output (a torus
+// through marching tetrahedra: valence 3 and up, needles, slivers) and a sphere with many
+// holes (their rims fixed, with their noise). At sigma = 0.2 the result is nearer the clean
+// surface than the input by the factor the quality benchmark holds every mesh to (0.6), in
+// distance and in normals, its volume kept, nothing non-finite.
+TEST(AutoStopTest, DefaultJobGeneralisesToIsoSurfacesAndHoleyMeshes) {
+  std::vector<std::pair<std::string, Mesh>> meshes;
+  meshes.emplace_back("marching-tetrahedra torus",
+                      MarchingTetrahedra([](const Vec3& p) { return std::hypot(std::hypot(p.x, p.y) - 1.0, p.z) - 0.4; },
+                                         Vec3{-1.5, -1.5, -0.5}, Vec3{1.5, 1.5, 0.5}, 0.08));
+  meshes.emplace_back("sphere with 60 holes", HoleySphere(5, 60, 0.07, 7));
+  for (const auto& [name, clean] : meshes) {
+    const GroundTruth truth(clean);
+    Mesh m = clean;
+    AddNormalNoise(m, 0.2, 2);
+    const absl::StatusOr<Quality> before = truth.Evaluate(m);
+    FlowParams p;
+    p.choose_flow = true;  // the default job
+    absl::StatusOr<FlowResult> r = Smooth(m, p);
+    ASSERT_TRUE(r.ok()) << name << ": " << r.status();
+    const absl::StatusOr<Quality> after = truth.Evaluate(m);
+    ASSERT_TRUE(before.ok() && after.ok());
+    for (const Vec3& q : m.positions) ASSERT_TRUE(IsFinite(q)) << name;
+    std::printf("%s (%d vertices): %s, %d iterations; RMS %.4f -> %.4f h, normal %.2f -> %.2f deg, %lld flipped\n",
+                name.c_str(), clean.num_vertices(), std::string(FlowOf(r->flow).name).c_str(), r->iterations_run,
+                before->rms_distance, after->rms_distance, before->normal_error_deg, after->normal_error_deg,
+                static_cast<long long>(after->flipped_faces));
+    EXPECT_GT(r->iterations_run, 0) << name;
+    EXPECT_LT(after->rms_distance, 0.6 * before->rms_distance) << name;
+    EXPECT_LT(after->normal_error_deg, 0.6 * before->normal_error_deg) << name;
+    if (truth.closed()) {
+      EXPECT_LT(std::abs(after->volume_change_percent), 1.0) << name;
+    }
+  }
+}
+
 // A mesh of the shared folder with Gaussian noise of sigma h along its normals (seed 1), through
 // Smooth() with `p`: the run, and the result's quality before and after against the clean mesh.
 struct NoisyRun {
