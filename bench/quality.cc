@@ -682,6 +682,17 @@ near 1/sqrt(2N)), and each of its seeds adds several minutes to the run.
   Tried: `guided_normal` as a third candidate (same 35 cases, one seed): turbine 0.092 → 0.090 h
   at sigma = 0.2, 0.123 → 0.122 at 0.3, but fandisk 0.056 → 0.061 and camelhead at random
   sigma = 0.3 0.050 → 0.060 h with 34 → 116 flipped faces, for a third run per job: dropped.
+  Tried on the iso-surface meshes, where the estimate picks `bilateral_normal` in cases that
+  `bilaplacian` does better (the marching-tetrahedra torus at sigma = 0.1: 0.0274 h and 8
+  flipped faces against 0.0240 h and none, edge CV 0.56 against 0.25): keeping
+  bilaplacian unless bilateral_normal's estimate is lower by 0.05 sigma^2 (over 60 cases: the
+  torus 45 → 37 flipped faces, nefertiti 22 → 10, but the sphere up to 1.26× and the two-rate
+  torus up to 1.23× worse); the estimate's offsets taken along normals averaged over the 1-ring,
+  so that tangential moves on an irregular mesh count less (two-rate torus at sigma = 0.2 0.059
+  → 0.046 h, but nefertiti at sigma = 0.1 0.047 → 0.052 h with 1 → 11 flipped faces): dropped.
+  The tangential moves are the likely cause: the estimate measures offsets along the noisy
+  input's normals, which tilt on slivers, so bilaplacian's regularising moves read partly as
+  error.
   Meshes above 100,000 vertices choose flow and count on eight breadth-first patches of 20,000
   vertices in all and run once: the two candidates with their probes would cost several times
   the run (the noisy dragon's default job: 45 iterations, 1.4 s through the service, against
@@ -716,6 +727,12 @@ near 1/sqrt(2N)), and each of its seeds adds several minutes to the run.
   touch a boundary vertex, which stays fixed and keeps its noise; moving the boundary vertices
   along their interior neighbours' mean normal on to those neighbours' mean (three passes, a
   prototype) left 882: the noise along a rim's tilted normals moves its vertices sideways too.
+  On the iso-surface meshes the flips sit on the extraction's slivers, which
+  `bilateral_normal` keeps (smallest angle 0.02° after a run) while `bilaplacian` evens them out
+  and flips none. Tried: tangential relaxation in bilateral_normal's vertex update (0.3 of the
+  umbrella on vertices whose filtered normals agree within 10°), on an earlier extraction of the
+  torus: edge CV 0.57 → 0.28, but 6 → 10 flipped faces at sigma = 0.1, 53 → 75 at random
+  sigma = 0.3, and automatic stopping ended earlier (sigma = 0.3: 0.048 → 0.062 h): dropped.
 - **Boundary: fixed.** Smoothing boundary loops as curves by default was tried: camelhead at
   sigma = 0.2 ends at RMS 0.125 h (max 1.9 h) against 0.055 h with fixed boundaries, the loop
   shrinking inwards over the run: dropped.
