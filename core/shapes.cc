@@ -3,8 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
-#include <unordered_map>
 #include <numbers>
+#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -340,21 +340,22 @@ Mesh MarchingTetrahedra(const std::function<double(const Vec3&)>& f, const Vec3&
 Mesh HoleySphere(int level, int holes, double radius, uint64_t seed) {
   const Mesh sphere = Icosphere(level);
   SplitMix64 rng(seed);
+  // Distances are chords (no trigonometry: libm's last bit may differ between machines).
   std::vector<Vec3> centre;
-  std::vector<double> cos_radius;
-  const double apart = std::cos(std::min(std::numbers::pi, 3.0 * 1.5 * radius));
+  std::vector<double> radius_sq;
+  const double apart_sq = (3.0 * 1.5 * radius) * (3.0 * 1.5 * radius);
   for (int tries = 0; static_cast<int>(centre.size()) < holes && tries < 100 * holes; ++tries) {
     const Vec3 c = rng.NextDirection();
     const double r = radius * (1.0 + 0.5 * rng.NextSigned());
     bool free = true;
-    for (const Vec3& other : centre) free = free && Dot(c, other) < apart;
+    for (const Vec3& other : centre) free = free && SquaredNorm(c - other) > apart_sq;
     if (!free) continue;
     centre.push_back(c);
-    cos_radius.push_back(std::cos(r));
+    radius_sq.push_back(r * r);
   }
   std::vector<uint8_t> in_hole(sphere.positions.size(), 0);
   for (size_t v = 0; v < sphere.positions.size(); ++v) {
-    for (size_t h = 0; h < centre.size(); ++h) in_hole[v] |= Dot(sphere.positions[v], centre[h]) > cos_radius[h];
+    for (size_t h = 0; h < centre.size(); ++h) in_hole[v] |= SquaredNorm(sphere.positions[v] - centre[h]) < radius_sq[h];
   }
   Mesh m;
   std::vector<int32_t> index(sphere.positions.size(), -1);

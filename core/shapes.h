@@ -55,10 +55,10 @@ Mesh CosineHeightField(double amplitude, int periods, int rows_per_period, int c
 Mesh MarchingTetrahedra(const std::function<double(const Vec3&)>& f, const Vec3& lo, const Vec3& hi, double step);
 
 // Icosphere(level) with `holes` round holes cut out, as a scan with many gaps: hole centres
-// drawn uniformly on the sphere (seeded), apart by at least three times the largest radius,
-// radii between 0.5 and 1.5 times `radius` (radians), each hole the faces with a corner
-// within its radius of its centre; vertices no face uses are dropped. Edge-manifold, each
-// hole one boundary loop.
+// drawn uniformly on the sphere (seeded), apart by more than three times the largest radius,
+// radii between 0.5 and 1.5 times `radius`, each hole the faces with a corner closer than its
+// radius to its centre (distances are chords of the unit sphere); vertices no face uses are
+// dropped. Manifold, each hole one boundary loop.
 Mesh HoleySphere(int level, int holes, double radius, uint64_t seed);
 
 // Adds to every coordinate of every vertex an independent uniform value in
