@@ -223,7 +223,8 @@ struct NamedMesh {
 // The normal-filtering flow's parts on `mesh`, beside laplacian U0 (ms per U0 iteration with 1
 // and 2 threads): one filter pass and one vertex pass (differences of runs that do one more per
 // iteration), one round with the default parameters and the set-up (face graph and, on a
-// scattered large mesh, the Morton-ordered copy), each the median of `runs`. docs/normal-filtering.md ("Speed") explains the rows.
+// scattered large mesh, the Morton-ordered copy), each the median of `runs`.
+// docs/normal-filtering.md ("Speed") explains the rows.
 void NormalFilterRows(const Mesh& mesh, const Topology& topo, const double u0_ms[2], int hw, int runs) {
   constexpr int kIterations = 4;
   auto total_ms = [&](const FlowParams& p) {
@@ -242,11 +243,8 @@ void NormalFilterRows(const Mesh& mesh, const Topology& topo, const double u0_ms
     base.flow = FlowId::kBilateralNormal;
     base.threads = k == 0 ? 1 : std::min(2, hw);
     base.iterations = kIterations;
-    // In the layout a job of 20 iterations runs in (Smooth() weighs a normal-filtering iteration
-    // as its passes), whatever the count here.
-    const NormalFilterParams& nf = base.normal_filter;
-    base.reorder = MortonOrderPaysOff(topo, 20 * (nf.normal_iterations + nf.vertex_iterations)) ? ReorderMode::kAlways
-                                                                                                : ReorderMode::kNever;
+    // In the layout a job of 20 iterations runs in, whatever the count here.
+    base.reorder = MortonOrderPaysOff(topo, 20 * PassesPerIteration(base)) ? ReorderMode::kAlways : ReorderMode::kNever;
     FlowParams one = base;  // one filter pass and one vertex pass per iteration
     one.normal_filter.normal_iterations = one.normal_filter.vertex_iterations = 1;
     FlowParams two_filters = one, two_updates = one, single = base;

@@ -112,4 +112,9 @@ const std::vector<std::string>& FlowNames() {
 
 double DefaultStep(FlowId flow) { return FlowOf(flow).default_step; }
 
+int PassesPerIteration(const FlowParams& p) {
+  if (FlowOf(p.flow).kind != FlowKind::kNormalFilter) return 1;
+  return p.normal_filter.normal_iterations + p.normal_filter.vertex_iterations;
+}
+
 }  // namespace meshsmooth

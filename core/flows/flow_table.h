@@ -94,4 +94,9 @@ const std::vector<std::string>& FlowNames();
 // The default step of a flow (dimensionless or relative to h^2, see FlowKind).
 double DefaultStep(FlowId flow);
 
+// How many passes over the mesh one iteration of `p` makes: 1 for an umbrella or curvature
+// flow, the filter passes plus the vertex passes for a normal-filtering one (what
+// MortonOrderPaysOff weighs).
+int PassesPerIteration(const FlowParams& p);
+
 }  // namespace meshsmooth

@@ -233,17 +233,13 @@ namespace {
 absl::StatusOr<FlowResult> SmoothWith(Mesh& mesh, const Topology& topo, const FlowParams& p,
                                       const RunControl& control, double h) {
   const int32_t n = mesh.num_vertices();
-  // An iteration of a normal-filtering flow passes over the mesh once per filter and once per
-  // vertex update; MortonOrderPaysOff counts passes of an umbrella flow.
-  const NormalFilterParams& nf = p.normal_filter;
-  const int passes = FlowOf(p.flow).kind == FlowKind::kNormalFilter ? nf.normal_iterations + nf.vertex_iterations : 1;
   const int iterations = p.iterations != kAutoIterations ? p.iterations
                          : p.sampled_iterations > 0      ? p.sampled_iterations
                                                          : kTypicalAutoIterations;
   const bool reorder = p.reorder == ReorderMode::kAlways
                            ? ReorderableSize(n)
                            : p.reorder == ReorderMode::kAuto &&
-                               MortonOrderPaysOff(topo, iterations * passes);  // validated: below 2^25
+                               MortonOrderPaysOff(topo, iterations * PassesPerIteration(p));  // validated: below 2^25
   if (!reorder) return flows::RunIterations(mesh, topo, p, control, h);
 
   const int threads = flows::ThreadsFor(n, p);
