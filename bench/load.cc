@@ -23,8 +23,8 @@
 
 #include "client/inputs.h"
 #include "client/smooth_client.h"
-#include "core/draco_codec.h"
-#include "core/huge_pages.h"
+#include "core/io/draco_codec.h"
+#include "base/huge_pages.h"
 #include "core/vec3.h"
 #include "grpcpp/grpcpp.h"
 

@@ -3,7 +3,7 @@
 // noise along its vertex normals (sigma = 0, 0.1, 0.2, 0.3 of its mean edge length h, several
 // seeds) and in random directions; then the default job (a default JobSpec through the
 // service's FromProto), every flow of the flow table at its best iteration count ("oracle"),
-// and any job given on the command line run on it, and core/evaluation.h measures each result
+// and any job given on the command line run on it, and core/measure/evaluation.h measures each result
 // against the clean mesh. Markdown to stdout; docs/quality.md is its output:
 //   nice -n 10 build/bench/meshsmooth_quality > docs/quality.md
 // `--help` lists the options; `--quick` runs a subset in well under a minute.
@@ -29,12 +29,14 @@
 #include "absl/strings/str_join.h"
 #include "absl/strings/str_replace.h"
 #include "absl/strings/str_split.h"
-#include "core/evaluation.h"
+#include "core/measure/evaluation.h"
 #include "core/flows/flow.h"
-#include "core/huge_pages.h"
+#include "base/huge_pages.h"
 #include "core/io/mesh_io.h"
-#include "core/metrics.h"
-#include "core/shapes.h"
+#include "core/measure/metrics.h"
+#include "core/shapes/parametric.h"
+#include "core/shapes/marching_tetrahedra.h"
+#include "core/shapes/added_noise.h"
 #include "core/topology.h"
 #include "google/protobuf/text_format.h"
 #include "server/convert.h"
@@ -339,7 +341,7 @@ std::string Iterations(const Row& row, bool smoothed) {
   return lo == hi ? absl::StrCat(lo) : absl::StrCat(lo, "–", hi);
 }
 
-// Flipped faces, and in brackets how many of them lie in fine detail (core/evaluation.h).
+// Flipped faces, and in brackets how many of them lie in fine detail (core/measure/evaluation.h).
 std::string Flipped(const Quality& q) {
   return q.flipped_faces > 0 ? absl::StrCat(q.flipped_faces, " (", q.flipped_in_fine_detail, ")") : "0";
 }
@@ -579,11 +581,11 @@ constexpr char kHowToRead[] = R"(
 **Protocol.** Each clean mesh gets Gaussian noise along its area-weighted vertex normals with a
 standard deviation of sigma x h (h: the clean mesh's mean edge length), one noisy copy per seed,
 and Gaussian noise of the same size in random directions (`AddNormalNoise`,
-`AddRandomDirectionNoise` in core/shapes.h: seeded, the same bytes on every machine). sigma = 0
+`AddRandomDirectionNoise` in core/shapes/added_noise.h: seeded, the same bytes on every machine). sigma = 0
 is the clean mesh itself: a job should give it back unchanged. Every figure is the mean over the
 seeds (the "Inputs" table gives their number per mesh).
 
-**Measures** (core/evaluation.h), each against the clean mesh:
+**Measures** (core/measure/evaluation.h), each against the clean mesh:
 - *RMS / max dist*: distance from each vertex of the result to the clean *surface* (exact
   point-to-triangle distance over all its triangles), in h. Vertex-to-vertex distance would
   punish the tangential regularisation the paper wants; this does not.
@@ -600,7 +602,7 @@ seeds (the "Inputs" table gives their number per mesh).
   area-weighted normals at two of the face's corners are more than 20 degrees apart, a turn at
   the scale of the sampling as large as the one noise of 0.1-0.2 h gives a face).
 - *edge CV*, *min angle*: the paper's regularity (edge-length coefficient of variation, smallest
-  triangle angle), as core/metrics.h computes them.
+  triangle angle), as core/measure/metrics.h computes them.
 - *time*: wall time of `Smooth()` alone (not the evaluation), on all threads, mean over seeds.
 - *status*: ok, or how many seeds failed and the first error, as the service would report it.
 
@@ -638,7 +640,7 @@ non-manifold vertices stay fixed in every flow, so it measures nothing about den
 others are manifold with consistent orientation. The Stanford bunny has 1,113 unreferenced
 vertices (no noise, not measured) and five holes; the dragon is a raw scan (151 components, 407
 holes, 367 zero-area faces, whose normal error is not measured). Then the synthetic icosphere
-(level 4) and the paper's two-rate torus, and three shapes of kinds the real meshes lack (core/shapes.h,
+(level 4) and the paper's two-rate torus, and three shapes of kinds the real meshes lack (core/shapes/,
 bench/quality.cc `LoadSubject`): iso-surface output, a tilted torus (`mt-torus`) and a capped
 cylinder (`mt-cylinder`, a machined part with sharp rims) through marching tetrahedra, with
 valences from 3 up, needles and slivers (smallest angles under 0.1°); and an icosphere of
@@ -649,7 +651,7 @@ near 1/sqrt(2N)), and each of its seeds adds several minutes to the run.
 
 ## How the defaults were chosen
 
-- **Automatic stopping** (core/noise.h, core/flows/auto_stop.h). The noise estimate reads
+- **Automatic stopping** (core/measure/noise.h, core/flows/auto_stop.h). The noise estimate reads
   Gaussian noise along the normals within a few percent on every mesh (the default job's column
   in the summary tables against the sigma of the case) and 0.00–0.04 h on the clean meshes,
   where the cubic fit cannot follow coarse, strongly curved regions; that much is removed in

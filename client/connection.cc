@@ -13,7 +13,7 @@
 #include "absl/strings/str_join.h"
 #include "absl/strings/str_split.h"
 #include "core/io/file_bytes.h"
-#include "core/shutdown_signals.h"
+#include "base/shutdown_signals.h"
 
 namespace meshsmooth::client {
 namespace {

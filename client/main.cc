@@ -26,11 +26,11 @@
 #include "absl/strings/str_join.h"
 #include "client/commands.h"
 #include "client/inputs.h"
-#include "core/draco_codec.h"
+#include "core/io/draco_codec.h"
 #include "core/flows/flow.h"
 #include "core/flows/flow_info.h"
-#include "core/huge_pages.h"
-#include "core/shutdown_signals.h"
+#include "base/huge_pages.h"
+#include "base/shutdown_signals.h"
 
 namespace meshsmooth::client {
 namespace {

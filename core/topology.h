@@ -17,7 +17,7 @@
 #include <vector>
 
 #include "core/mesh.h"
-#include "core/stop_token.h"
+#include "core/util/stop_token.h"
 
 namespace meshsmooth {
 

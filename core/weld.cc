@@ -8,7 +8,7 @@
 #include <utility>
 
 #include "absl/hash/hash.h"
-#include "core/radix_sort.h"
+#include "core/util/radix_sort.h"
 
 namespace meshsmooth {
 namespace {

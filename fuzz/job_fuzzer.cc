@@ -23,7 +23,7 @@
 #include <string_view>
 #include <vector>
 
-#include "core/draco_codec.h"
+#include "core/io/draco_codec.h"
 #include "core/flows/flow_table.h"
 #include "core/weld.h"
 #include "fuzz/job_input.h"

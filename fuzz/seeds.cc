@@ -18,7 +18,8 @@
 #include "absl/strings/str_cat.h"
 #include "core/io/file_bytes.h"
 #include "core/io/mesh_io.h"
-#include "core/shapes.h"
+#include "core/shapes/parametric.h"
+#include "core/shapes/added_noise.h"
 #include "fuzz/job_input.h"
 
 namespace meshsmooth::fuzz {

@@ -6,11 +6,11 @@
 #include <string>
 
 #include "absl/status/statusor.h"
-#include "core/draco_codec.h"
+#include "core/io/draco_codec.h"
 #include "core/features/ridges.h"
 #include "core/flows/flow.h"
 #include "core/flows/flow_info.h"
-#include "core/metrics.h"
+#include "core/measure/metrics.h"
 #include "core/topology.h"
 #include "meshsmooth/v1/smoothing.pb.h"
 

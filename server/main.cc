@@ -14,9 +14,9 @@
 
 #include "CLI/CLI.hpp"
 #include "absl/strings/str_cat.h"
-#include "core/huge_pages.h"
+#include "base/huge_pages.h"
 #include "core/io/file_bytes.h"
-#include "core/shutdown_signals.h"
+#include "base/shutdown_signals.h"
 #include "server/admission.h"
 #include "server/server.h"
 

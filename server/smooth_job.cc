@@ -7,7 +7,7 @@
 #include "absl/strings/str_format.h"
 #include "core/features/ridges.h"
 #include "core/flows/flow.h"
-#include "core/metrics.h"
+#include "core/measure/metrics.h"
 #include "core/topology.h"
 
 namespace meshsmooth::server {

@@ -11,10 +11,10 @@
 
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
-#include "core/draco_codec.h"
+#include "core/io/draco_codec.h"
 #include "core/flows/flow.h"
 #include "core/mesh.h"
-#include "core/stop_token.h"
+#include "core/util/stop_token.h"
 #include "core/topology.h"
 #include "meshsmooth/v1/smoothing.pb.h"
 #include "server/admission.h"

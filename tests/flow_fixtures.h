@@ -6,8 +6,9 @@
 #include <vector>
 
 #include "core/flows/flow.h"
-#include "core/metrics.h"
-#include "core/shapes.h"
+#include "core/measure/metrics.h"
+#include "core/shapes/parametric.h"
+#include "core/shapes/added_noise.h"
 #include "core/topology.h"
 
 namespace meshsmooth::testing {

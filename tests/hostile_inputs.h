@@ -9,7 +9,7 @@
 #include <string>
 
 #include "core/mesh.h"
-#include "core/shapes.h"
+#include "core/shapes/parametric.h"
 #include "draco/compression/encode.h"
 #include "draco/mesh/mesh.h"
 #include "draco/point_cloud/point_cloud.h"

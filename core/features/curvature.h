@@ -24,7 +24,7 @@
 #include <vector>
 
 #include "core/mesh.h"
-#include "core/stop_token.h"
+#include "core/util/stop_token.h"
 #include "core/topology.h"
 
 namespace meshsmooth {

@@ -8,10 +8,10 @@
 #include <cstdint>
 #include <vector>
 
-#include "core/draco_codec.h"
+#include "core/io/draco_codec.h"
 #include "core/features/curvature.h"
 #include "core/mesh.h"
-#include "core/stop_token.h"
+#include "core/util/stop_token.h"
 #include "core/topology.h"
 
 namespace meshsmooth {

@@ -5,7 +5,7 @@
 #include <numbers>
 
 #include "core/flows/flow_kernel.h"
-#include "core/noise.h"
+#include "core/measure/noise.h"
 #include "core/normals.h"
 
 namespace meshsmooth::flows {

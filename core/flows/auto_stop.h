@@ -2,7 +2,7 @@
 // whose estimated error to the noise-free surface is least. docs/quality.md has the figures that
 // chose the constants.
 //
-// Before the run, EstimateNoise() (core/noise.h) reads the input's noise. Part of that reading is
+// Before the run, EstimateNoise() (core/measure/noise.h) reads the input's noise. Part of that reading is
 // the estimator's own misfit on clean, coarse meshes (up to ~0.04 h on the benchmark's clean
 // scans): it is removed in quadrature. Below kNoNoiseH there is nothing to remove and the run
 // does no iteration: a clean mesh comes back as it went in; so does a mesh on which too few
@@ -137,7 +137,7 @@ class AutoStop {
   double h_;
   int threads_;
   std::vector<Vec3> start_;
-  bool estimated_ = false;  // the noise estimate is reliable (core/noise.h)
+  bool estimated_ = false;  // the noise estimate is reliable (core/measure/noise.h)
   int32_t stride_ = 1;    // every stride_-th vertex is measured
   int64_t counted_ = 0;   // free interior vertices measured
   double cos_fold_ = std::cos(kFoldAngleDeg * std::numbers::pi / 180.0);

@@ -18,7 +18,7 @@
 #include "core/flows/flow_kernel.h"
 #include "core/flows/lane_batches.h"
 #include "core/flows/step_loops.h"
-#include "core/metrics.h"
+#include "core/measure/metrics.h"
 
 namespace meshsmooth::flows {
 namespace {

@@ -83,7 +83,7 @@ inline constexpr int kMaxAutoIterations = 1000;
 
 struct FlowParams {
   FlowId flow = kDefaultFlow;
-  // 1 .. kMaxIterations, or kAutoIterations: estimate the input's noise (core/noise.h) and
+  // 1 .. kMaxIterations, or kAutoIterations: estimate the input's noise (core/measure/noise.h) and
   // return the iteration whose estimated error to the noise-free surface is least (Stein's
   // unbiased risk estimate, auto_stop.h; FlowResult says why the run stopped).
   int iterations = kAutoIterations;

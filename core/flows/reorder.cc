@@ -7,8 +7,8 @@
 #include <cstdlib>
 #include <numeric>
 
-#include "core/metrics.h"
-#include "core/radix_sort.h"
+#include "core/measure/metrics.h"
+#include "core/util/radix_sort.h"
 
 namespace meshsmooth {
 namespace {

@@ -13,7 +13,7 @@
 #include "core/flows/flow.h"
 #include "core/flows/operators.h"
 #include "core/flows/reorder.h"
-#include "core/metrics.h"
+#include "core/measure/metrics.h"
 
 namespace meshsmooth {
 namespace {

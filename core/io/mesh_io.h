@@ -23,7 +23,7 @@
 
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
-#include "core/draco_codec.h"
+#include "core/io/draco_codec.h"
 #include "core/mesh.h"
 
 namespace meshsmooth {

@@ -3,12 +3,13 @@
 #include <atomic>
 #include <chrono>
 
-#include "core/draco_codec.h"
+#include "core/io/draco_codec.h"
 #include "core/features/ridges.h"
 #include "core/flows/flow.h"
-#include "core/metrics.h"
-#include "core/shapes.h"
-#include "core/stop_token.h"
+#include "core/measure/metrics.h"
+#include "core/shapes/parametric.h"
+#include "core/shapes/added_noise.h"
+#include "core/util/stop_token.h"
 #include "core/topology.h"
 #include "gtest/gtest.h"
 #include "tests/hostile_inputs.h"
@@ -43,7 +44,7 @@ TEST(LongWorkTest, HighValenceFanTopologyIsLinearInTheValence) {
 
 // The default job on a closed fan whose two apexes have valence 120,000 and whose rim vertices
 // each see that many second-ring neighbours: the noise estimate gives up on such rings in
-// bounded time (core/noise.cc, kMaxGather) instead of gathering 120,000 points per vertex, and
+// bounded time (core/measure/noise.cc, kMaxGather) instead of gathering 120,000 points per vertex, and
 // with no estimate the job does nothing. The bound is generous.
 TEST(LongWorkTest, DefaultJobOnAHugeClosedFanIsBounded) {
   Mesh fan = testing::ClosedFan(120000);

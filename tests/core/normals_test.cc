@@ -1,6 +1,6 @@
 #include "core/normals.h"
 
-#include "core/shapes.h"
+#include "core/shapes/parametric.h"
 #include "gtest/gtest.h"
 
 namespace meshsmooth {

@@ -8,7 +8,7 @@
 
 #include "core/io/file_bytes.h"
 #include "core/io/mesh_io.h"
-#include "core/shapes.h"
+#include "core/shapes/parametric.h"
 #include "gtest/gtest.h"
 #include "tests/test_data.h"
 

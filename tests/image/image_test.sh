@@ -250,7 +250,7 @@ done
 [ -n "$port" ] || die "the image's meshsmoothd did not print 'meshsmoothd listening on' within 60 s"
 ok "the image's meshsmoothd listens on 127.0.0.1:$port"
 # The server itself, below buildah run and buildah-chroot-exec (its name is "exe": it
-# re-executes itself through /proc/self/exe, core/huge_pages.h).
+# re-executes itself through /proc/self/exe, base/huge_pages.h).
 daemon_pid=""
 for p in $(descendants "$server_pid"); do
   [[ "$(readlink "/proc/$p/exe" 2>/dev/null)" != */usr/local/bin/meshsmoothd ]] || daemon_pid=$p

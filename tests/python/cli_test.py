@@ -337,7 +337,7 @@ def main():
         check(f"smooth through meshsmoothd at {address}", through_server)
 
         def huge_page_tunable():
-            # core/huge_pages.h: the binaries re-execute themselves with glibc's THP tunable when
+            # base/huge_pages.h: the binaries re-execute themselves with glibc's THP tunable when
             # the kernel grants huge pages on request, and not when told otherwise.
             with open(f"/proc/{server.pid}/environ", "rb") as f:
                 env = f.read().split(b"\0")

@@ -12,8 +12,8 @@
 #include <thread>
 #include <vector>
 
-#include "core/draco_codec.h"
-#include "core/shapes.h"
+#include "core/io/draco_codec.h"
+#include "core/shapes/parametric.h"
 #include "gtest/gtest.h"
 #include "server/admission.h"
 #include "tests/hostile_inputs.h"

@@ -15,8 +15,8 @@
 #include <vector>
 
 #include "absl/strings/str_join.h"
-#include "core/draco_codec.h"
-#include "core/shapes.h"
+#include "core/io/draco_codec.h"
+#include "core/shapes/parametric.h"
 #include "gtest/gtest.h"
 #include "tests/hostile_inputs.h"
 #include "tests/service/service_fixtures.h"

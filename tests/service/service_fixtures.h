@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "client/smooth_client.h"
-#include "core/draco_codec.h"
+#include "core/io/draco_codec.h"
 #include "core/vec3.h"
 #include "gtest/gtest.h"
 #include "server/server.h"

@@ -10,7 +10,7 @@
 #include <thread>
 
 #include "client/smooth_client.h"
-#include "core/draco_codec.h"
+#include "core/io/draco_codec.h"
 #include "core/io/file_bytes.h"
 #include "core/features/ridges.h"
 #include "draco/compression/decode.h"

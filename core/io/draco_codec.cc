@@ -1,0 +1,379 @@
+#include "core/io/draco_codec.h"
+
+#include <algorithm>
+#include <cstring>
+#include <exception>
+#include <memory>
+#include <new>
+#include <utility>
+#include <variant>
+
+#include "absl/strings/str_cat.h"
+#include "draco/compression/decode.h"
+#include "draco/compression/encode.h"
+#include "draco/mesh/mesh.h"
+#include "draco/metadata/geometry_metadata.h"
+#include "core/io/allocation_limit.h"
+#include "core/io/draco_checks.h"
+#include "core/weld.h"
+
+namespace meshsmooth {
+namespace {
+
+absl::StatusOr<std::string> EncodeWithOptions(const draco::Mesh& dm, const DracoOptions& options);
+
+}  // namespace
+
+absl::StatusOr<std::string> EncodeDraco(const Mesh& mesh, const DracoOptions& options) {
+  const int32_t n = mesh.num_vertices();
+  if (n == 0 || mesh.triangles.empty()) {
+    return absl::InvalidArgumentError("cannot encode an empty mesh (no vertices or no faces)");
+  }
+  if (absl::Status s = CheckDracoOptions(options); !s.ok()) return s;
+  for (int32_t i = 0; i < n; ++i) {
+    if (absl::Status s = CheckCoordinates(mesh.positions[i], "vertex", i); !s.ok()) return s;
+  }
+  draco::Mesh dm;
+  dm.set_num_points(n);
+  draco::GeometryAttribute ga;
+  ga.Init(draco::GeometryAttribute::POSITION, nullptr, 3, draco::DT_FLOAT32, false, 3 * sizeof(float), 0);
+  const int att_id = dm.AddAttribute(ga, /*identity_mapping=*/true, n);
+  draco::PointAttribute* positions = dm.attribute(att_id);
+  for (int32_t i = 0; i < n; ++i) {
+    const Vec3& p = mesh.positions[i];
+    const float v[3] = {static_cast<float>(p.x), static_cast<float>(p.y), static_cast<float>(p.z)};
+    positions->SetAttributeValue(draco::AttributeValueIndex(i), v);
+  }
+  for (const Triangle& t : mesh.triangles) {
+    // Out-of-range faces cannot be stored (the validation report counts them).
+    if (t[0] < 0 || t[0] >= n || t[1] < 0 || t[1] >= n || t[2] < 0 || t[2] >= n) continue;
+    dm.AddFace({draco::PointIndex(t[0]), draco::PointIndex(t[1]), draco::PointIndex(t[2])});
+  }
+  if (options.method == DracoMethod::kEdgebreaker) {
+    const std::vector<uint8_t> used = PointsEdgebreakerKeeps(dm);
+    const int64_t dropped = std::count(used.begin(), used.end(), 0);
+    if (dropped > 0) return EdgebreakerDropsError(dropped);
+  }
+  return EncodeWithOptions(dm, options);
+}
+
+int64_t LargestDracoDecodeBlock(size_t bytes, const std::optional<DeclaredSizes>& declared) {
+  // Counts are below 2^34 (uint32 sums) and sizes below 2^40 in practice: no product overflows.
+  if (declared.has_value()) {
+    return kDracoDecodeFloorBytes + kDracoDecodeBytesPerElement * (declared->faces + declared->vertices);
+  }
+  return kDracoDecodeFloorBytes +
+         kDracoDecodeBytesPerByte * static_cast<int64_t>(std::min<size_t>(bytes, size_t{1} << 40));
+}
+
+namespace {
+
+// Decodes a Draco triangle mesh with clear errors; the sizes it declares are checked before
+// Draco allocates for them (CheckDeclaredEdgebreakerSizes), its layout after (CheckDracoLayout).
+absl::StatusOr<std::unique_ptr<draco::Mesh>> DecodeToDraco(std::string_view bytes, int64_t max_vertices) {
+  if (bytes.empty()) return absl::InvalidArgumentError("empty Draco data");
+  draco::DecoderBuffer buffer;
+  buffer.Init(bytes.data(), bytes.size());
+  auto type = draco::Decoder::GetEncodedGeometryType(&buffer);
+  if (!type.ok()) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("not a Draco bitstream (corrupt header): ", type.status().error_msg_string()));
+  }
+  if (type.value() == draco::POINT_CLOUD) {
+    return absl::InvalidArgumentError("the Draco data holds a point cloud, not a triangle mesh");
+  }
+  if (type.value() != draco::TRIANGULAR_MESH) {
+    return absl::InvalidArgumentError("the Draco data holds no triangle mesh (invalid geometry type)");
+  }
+  absl::StatusOr<std::optional<DeclaredSizes>> declared = CheckDeclaredEdgebreakerSizes(bytes, max_vertices);
+  if (!declared.ok()) return declared.status();
+  std::unique_ptr<draco::Mesh> dm;
+  const int64_t largest = LargestDracoDecodeBlock(bytes.size(), *declared);
+  try {
+    buffer.Init(bytes.data(), bytes.size());
+    draco::Decoder decoder;
+    draco::StatusOr<std::unique_ptr<draco::Mesh>> decoded = [&] {
+      ScopedAllocationLimit limit(largest);
+      return decoder.DecodeMeshFromBuffer(&buffer);
+    }();
+    if (!decoded.ok()) {
+      return absl::InvalidArgumentError(
+          // Draco itself cannot decode a mesh without faces, so "empty" is named here too.
+          absl::StrCat("corrupt or empty Draco mesh: ", decoded.status().error_msg_string()));
+    }
+    dm = std::move(decoded).value();
+  } catch (const AllocationLimitExceeded&) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        "corrupt Draco mesh: its decoding asked for a block of memory above ", largest,
+        " bytes, more than a valid encoding of ",
+        declared->has_value() ? absl::StrCat((*declared)->faces, " faces and ", (*declared)->vertices, " vertices")
+                              : absl::StrCat(bytes.size(), " bytes"),
+        " needs"));
+  } catch (const std::exception& e) {  // e.g. bad_alloc for absurd counts in corrupt data
+    return absl::InvalidArgumentError(absl::StrCat("corrupt Draco mesh: ", e.what()));
+  }
+  if (dm == nullptr || dm->num_points() == 0 || dm->num_faces() == 0) {
+    return absl::InvalidArgumentError("the Draco mesh is empty (no points or no faces)");
+  }
+  if (absl::Status s = CheckDracoLayout(*dm); !s.ok()) return s;
+  return dm;
+}
+
+// Positions of every point, and faces over points.
+absl::StatusOr<Mesh> PointMesh(const draco::Mesh& dm) {
+  const draco::PointAttribute* pos = dm.GetNamedAttribute(draco::GeometryAttribute::POSITION);
+  Mesh mesh;
+  const uint32_t n = dm.num_points();
+  mesh.positions.resize(n);
+  // Plain float32 xyz (what a lossless encoder writes) is read directly, one copy per point;
+  // ConvertValue's per-value type switch gives the same doubles, slower (docs/performance.md).
+  const bool float_xyz = pos->data_type() == draco::DT_FLOAT32 && pos->num_components() == 3;
+  for (uint32_t i = 0; i < n; ++i) {
+    const draco::AttributeValueIndex avi = pos->mapped_index(draco::PointIndex(i));
+    if (avi.value() >= pos->size()) {
+      return absl::InvalidArgumentError(absl::StrCat("corrupt Draco mesh: no position for point ", i));
+    }
+    if (float_xyz) {
+      float xyz[3];
+      std::memcpy(xyz, pos->GetAddress(avi), sizeof xyz);
+      mesh.positions[i] = {xyz[0], xyz[1], xyz[2]};
+    } else {
+      double xyz[3];
+      if (!pos->ConvertValue<double>(avi, 3, xyz)) {
+        return absl::InvalidArgumentError(absl::StrCat("corrupt Draco mesh: no position for point ", i));
+      }
+      mesh.positions[i] = {xyz[0], xyz[1], xyz[2]};
+    }
+    if (absl::Status s = CheckCoordinates(mesh.positions[i], "point", i); !s.ok()) return s;
+  }
+  mesh.triangles.resize(dm.num_faces());
+  for (uint32_t f = 0; f < dm.num_faces(); ++f) {  // every index < n (CheckDracoLayout)
+    const draco::Mesh::Face& face = dm.face(draco::FaceIndex(f));
+    for (int c = 0; c < 3; ++c) mesh.triangles[f][c] = static_cast<int32_t>(face[c].value());
+  }
+  return mesh;
+}
+
+// The attribute whose metadata entry "name" is `name`, or -1.
+int NamedAttributeId(const draco::Mesh& dm, std::string_view name) {
+  for (int32_t i = 0; i < dm.num_attributes(); ++i) {
+    const draco::AttributeMetadata* md = dm.GetAttributeMetadataByAttributeId(i);
+    std::string value;
+    if (md != nullptr && md->GetEntryString("name", &value) && value == name) return i;
+  }
+  return -1;
+}
+
+absl::StatusOr<std::string> EncodeWithOptions(const draco::Mesh& dm, const DracoOptions& options) {
+  if (absl::Status s = CheckDracoOptions(options); !s.ok()) return s;
+  // Draco's sequential decoder takes more than three points per face for corrupt data and
+  // refuses the bytes: write none rather than a file that nothing can read.
+  if (options.method == DracoMethod::kSequential && dm.num_points() > 3ull * dm.num_faces()) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        "Draco's sequential encoding cannot hold more than 3 points per face: ", dm.num_points(), " points, ",
+        dm.num_faces(), " faces with every index in range (remove the unreferenced vertices)"));
+  }
+  draco::Encoder encoder;
+  encoder.SetSpeedOptions(options.speed, options.speed);
+  encoder.SetEncodingMethod(options.method == DracoMethod::kSequential ? draco::MESH_SEQUENTIAL_ENCODING
+                                                                       : draco::MESH_EDGEBREAKER_ENCODING);
+  if (options.quantization_bits > 0) {
+    const draco::PointAttribute* positions = dm.GetNamedAttribute(draco::GeometryAttribute::POSITION);
+    if (absl::Status s = CheckQuantizedExtent(*positions); !s.ok()) return s;
+    encoder.SetAttributeQuantization(draco::GeometryAttribute::POSITION, options.quantization_bits);
+  }
+  draco::EncoderBuffer out;
+  draco::Status status;
+  try {
+    status = encoder.EncodeMeshToBuffer(dm, &out);
+  } catch (const std::bad_alloc&) {
+    return absl::ResourceExhaustedError("out of memory in Draco's encoder");
+  }
+  if (!status.ok()) {
+    return absl::InvalidArgumentError(absl::StrCat("Draco encoding failed: ", status.error_msg_string()));
+  }
+  return std::string(out.data(), out.size());
+}
+
+}  // namespace
+
+absl::StatusOr<Mesh> DecodeDraco(std::string_view bytes) {
+  absl::StatusOr<std::unique_ptr<draco::Mesh>> dm = DecodeToDraco(bytes, kMaxDracoVertices);
+  if (!dm.ok()) return dm.status();
+  return PointMesh(**dm);
+}
+
+struct DracoMesh::Impl {
+  std::unique_ptr<draco::Mesh> draco;
+  Mesh welded;
+  int64_t num_vertices = 0;  // of welded, also once it has been taken
+  std::vector<int32_t> point_to_vertex;
+  int64_t seam_points = 0;
+  int64_t edgebreaker_drops = 0;  // vertices none of whose points Edgebreaker keeps
+};
+
+DracoMesh::DracoMesh(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+DracoMesh::DracoMesh(DracoMesh&&) noexcept = default;
+DracoMesh& DracoMesh::operator=(DracoMesh&&) noexcept = default;
+DracoMesh::~DracoMesh() = default;
+
+absl::StatusOr<DracoMesh> DracoMesh::Decode(std::string_view bytes, const StopToken& stop, int64_t max_vertices) {
+  // Draco's decoder runs as one call; the token is checked between the steps around it.
+  absl::StatusOr<std::unique_ptr<draco::Mesh>> dm = DecodeToDraco(bytes, max_vertices);
+  if (!dm.ok()) return dm.status();
+  if (absl::Status s = stop.Check(); !s.ok()) return s;
+  absl::StatusOr<Mesh> points = PointMesh(**dm);
+  if (!points.ok()) return points.status();
+  if (absl::Status s = stop.Check(); !s.ok()) return s;
+  auto impl = std::make_unique<Impl>();
+  impl->draco = std::move(dm).value();
+  Welded welded = WeldPoints(points->positions);
+  if (absl::Status s = stop.Check(); !s.ok()) return s;
+  impl->welded.positions = std::move(welded.positions);
+  impl->num_vertices = impl->welded.num_vertices();
+  impl->point_to_vertex = std::move(welded.point_to_vertex);
+  impl->seam_points = welded.merged;
+  impl->welded.triangles = std::move(points->triangles);
+  for (Triangle& t : impl->welded.triangles) {
+    for (int32_t& v : t) v = impl->point_to_vertex[v];
+  }
+  std::vector<uint8_t> kept(impl->num_vertices, 0);
+  const std::vector<uint8_t> used = PointsEdgebreakerKeeps(*impl->draco);
+  for (size_t p = 0; p < used.size(); ++p) kept[impl->point_to_vertex[p]] |= used[p];
+  impl->edgebreaker_drops = std::count(kept.begin(), kept.end(), 0);
+  return DracoMesh(std::move(impl));
+}
+
+absl::Status DracoMesh::CheckEncodable(const DracoOptions& options) const {
+  if (absl::Status s = CheckDracoOptions(options); !s.ok()) return s;
+  if (options.method == DracoMethod::kEdgebreaker && impl_->edgebreaker_drops > 0) {
+    return EdgebreakerDropsError(impl_->edgebreaker_drops);
+  }
+  return absl::OkStatus();
+}
+
+const Mesh& DracoMesh::welded() const { return impl_->welded; }
+Mesh DracoMesh::TakeWelded() { return std::exchange(impl_->welded, Mesh{}); }
+int64_t DracoMesh::num_points() const { return impl_->draco->num_points(); }
+int64_t DracoMesh::seam_points() const { return impl_->seam_points; }
+
+absl::StatusOr<std::vector<float>> DecodeDracoAttribute(std::string_view bytes, std::string_view name) {
+  absl::StatusOr<std::unique_ptr<draco::Mesh>> dm = DecodeToDraco(bytes, kMaxDracoVertices);
+  if (!dm.ok()) return dm.status();
+  if (absl::StatusOr<Mesh> points = PointMesh(**dm); !points.ok()) return points.status();  // the coordinates
+  const int id = NamedAttributeId(**dm, name);
+  if (id < 0) return absl::NotFoundError(absl::StrCat("the Draco mesh has no attribute named '", std::string(name), "'"));
+  const draco::PointAttribute* a = (*dm)->attribute(id);
+  const std::string what = absl::StrCat("attribute '", std::string(name), "'");
+  if (absl::Status s = CheckNumericValues(*a, what); !s.ok()) return s;
+  const uint32_t n = (*dm)->num_points();
+  std::vector<float> values(n);
+  for (uint32_t p = 0; p < n; ++p) {
+    const draco::AttributeValueIndex avi = a->mapped_index(draco::PointIndex(p));
+    if (avi.value() >= a->size() || !a->ConvertValue<float>(avi, 1, &values[p])) {
+      return absl::InvalidArgumentError(absl::StrCat("corrupt Draco mesh: no '", std::string(name), "' value for point ", p));
+    }
+  }
+  return values;
+}
+
+absl::StatusOr<std::string> DracoMesh::Encode(const Mesh& smoothed, const DracoOptions& options,
+                                              const std::vector<GenericAttribute>& extra, const StopToken& stop) {
+  if (static_cast<int64_t>(smoothed.positions.size()) != impl_->num_vertices) {
+    return absl::InvalidArgumentError(absl::StrCat("expected ", impl_->num_vertices,
+                                                   " positions, got ", smoothed.positions.size()));
+  }
+  if (absl::Status s = CheckEncodable(options); !s.ok()) return s;
+  for (size_t v = 0; v < smoothed.positions.size(); ++v) {
+    if (absl::Status s = CheckCoordinates(smoothed.positions[v], "vertex", static_cast<int64_t>(v)); !s.ok()) {
+      return s;
+    }
+  }
+  draco::Mesh& dm = *impl_->draco;
+  const uint32_t n = dm.num_points();
+  for (const GenericAttribute& g : extra) {
+    const size_t count = std::visit([](const auto& v) { return v.size(); }, g.values);
+    if (count != smoothed.positions.size()) {
+      return absl::InvalidArgumentError(absl::StrCat("attribute '", g.name, "' has ", count, " values for ",
+                                                     smoothed.positions.size(), " vertices"));
+    }
+    for (int id = NamedAttributeId(dm, g.name); id >= 0; id = NamedAttributeId(dm, g.name)) dm.DeleteAttribute(id);
+    const bool bytes = std::holds_alternative<std::vector<uint8_t>>(g.values);
+    draco::GeometryAttribute ga;
+    ga.Init(draco::GeometryAttribute::GENERIC, nullptr, 1, bytes ? draco::DT_UINT8 : draco::DT_FLOAT32, false,
+            bytes ? 1 : sizeof(float), 0);
+    // Draco numbers a new attribute's unique id by its index, which after a deletion can be
+    // the id of an attribute still present (or of metadata left behind); the metadata would
+    // then name the wrong attribute. A fresh id above every id in use avoids that.
+    uint32_t fresh_id = 0;
+    for (int32_t i = 0; i < dm.num_attributes(); ++i) fresh_id = std::max(fresh_id, dm.attribute(i)->unique_id() + 1);
+    if (const draco::GeometryMetadata* md = dm.GetMetadata()) {
+      for (const auto& am : md->attribute_metadatas()) {
+        fresh_id = std::max(fresh_id, static_cast<uint32_t>(am->att_unique_id()) + 1);
+      }
+    }
+    const int id = dm.AddAttribute(ga, /*identity_mapping=*/true, n);
+    draco::PointAttribute* a = dm.attribute(id);
+    a->set_unique_id(fresh_id);
+    for (uint32_t p = 0; p < n; ++p) {
+      const int32_t v = impl_->point_to_vertex[p];
+      if (bytes) {
+        a->SetAttributeValue(draco::AttributeValueIndex(p), &std::get<std::vector<uint8_t>>(g.values)[v]);
+      } else {
+        a->SetAttributeValue(draco::AttributeValueIndex(p), &std::get<std::vector<float>>(g.values)[v]);
+      }
+    }
+    auto metadata = std::make_unique<draco::AttributeMetadata>();
+    metadata->AddEntryString("name", g.name);
+    dm.AddAttributeMetadata(id, std::move(metadata));
+  }
+  draco::PointAttribute* pos = dm.attribute(dm.GetNamedAttributeId(draco::GeometryAttribute::POSITION));
+  // A position attribute stored in another type (or with more components) is replaced by a
+  // plain float32 xyz one with the same point mapping.
+  if (pos->data_type() != draco::DT_FLOAT32 || pos->num_components() != 3) {
+    draco::GeometryAttribute ga;
+    ga.Init(draco::GeometryAttribute::POSITION, nullptr, 3, draco::DT_FLOAT32, false, 3 * sizeof(float), 0);
+    auto fresh = std::make_unique<draco::PointAttribute>(ga);
+    fresh->SetIdentityMapping();
+    fresh->Reset(n);
+    const int id = dm.GetNamedAttributeId(draco::GeometryAttribute::POSITION);
+    dm.SetAttribute(id, std::move(fresh));
+    pos = dm.attribute(id);
+  }
+  for (uint32_t p = 0; p < n; ++p) {
+    const Vec3& q = smoothed.positions[impl_->point_to_vertex[p]];
+    const float v[3] = {static_cast<float>(q.x), static_cast<float>(q.y), static_cast<float>(q.z)};
+    pos->SetAttributeValue(pos->mapped_index(draco::PointIndex(p)), v);
+  }
+  const int normal_id = dm.GetNamedAttributeId(draco::GeometryAttribute::NORMAL);
+  if (normal_id >= 0) {
+    draco::PointAttribute* nrm = dm.attribute(normal_id);
+    if (nrm->data_type() == draco::DT_FLOAT32 && nrm->num_components() == 3) {
+      // Sum the area-weighted normals of each point's faces into the point's normal value.
+      std::vector<Vec3> sum(nrm->size());
+      for (uint32_t f = 0; f < dm.num_faces(); ++f) {
+        const draco::Mesh::Face& face = dm.face(draco::FaceIndex(f));
+        if (face[0].value() >= n || face[1].value() >= n || face[2].value() >= n) continue;
+        const Vec3& a = smoothed.positions[impl_->point_to_vertex[face[0].value()]];
+        const Vec3& b = smoothed.positions[impl_->point_to_vertex[face[1].value()]];
+        const Vec3& c = smoothed.positions[impl_->point_to_vertex[face[2].value()]];
+        const Vec3 fn = Cross(b - a, c - a);
+        for (int k = 0; k < 3; ++k) {
+          const uint32_t vi = nrm->mapped_index(face[k]).value();
+          if (vi < sum.size()) sum[vi] += fn;
+        }
+      }
+      for (size_t i = 0; i < sum.size(); ++i) {
+        const double len = Norm(sum[i]);
+        if (!(len > 0.0)) continue;  // keep the old normal where no face defines one
+        const float v[3] = {static_cast<float>(sum[i].x / len), static_cast<float>(sum[i].y / len),
+                            static_cast<float>(sum[i].z / len)};
+        nrm->SetAttributeValue(draco::AttributeValueIndex(static_cast<uint32_t>(i)), v);
+      }
+    }
+  }
+  if (absl::Status s = stop.Check(); !s.ok()) return s;  // Draco's encoder runs as one call
+  return EncodeWithOptions(dm, options);
+}
+
+}  // namespace meshsmooth

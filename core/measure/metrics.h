@@ -1,0 +1,56 @@
+// Shape and mesh-quality numbers shared by the tests, the benchmarks and the job summary.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <string>
+
+#include "absl/status/statusor.h"
+#include "core/mesh.h"
+#include "core/util/stop_token.h"
+#include "core/topology.h"
+
+namespace meshsmooth {
+
+struct MeshMetrics {
+  double area = 0.0;            // sum of the usable faces' areas
+  double signed_volume = 0.0;   // sum of det(a-c, b-c, ...)/6 about the centroid c; > 0 outward
+  double edge_length_mean = 0.0;
+  double edge_length_cv = 0.0;  // standard deviation / mean over the unique edges
+  double min_angle_deg = 0.0;   // smallest triangle angle
+  double mean_angle_deg = 0.0;  // mean of the smallest angle of each face
+  double share_angles_below_10deg = 0.0;  // of all triangle angles
+};
+
+// Metrics of the usable faces and edges of `topo` (built from `mesh`). Once `stop` fires, the
+// blocks of faces and edges left are skipped: a caller that passes a token checks it after.
+MeshMetrics ComputeMetrics(const Mesh& mesh, const Topology& topo, const StopToken& stop = {});
+
+// ComputeMetrics() while `beside` runs on one thread of the same team of max(2, threads)
+// threads (0 = hardware threads): the others start on the metrics' blocks, and the thread that
+// ran `beside` takes blocks too once it returns (a job encodes beside them). The same bits as
+// ComputeMetrics(): the blocks are merged in the same order.
+MeshMetrics ComputeMetricsBeside(const Mesh& mesh, const Topology& topo, const std::function<void()>& beside,
+                                 int threads = 0, const StopToken& stop = {});
+
+struct Displacement {
+  double rms = 0.0;             // RMS of |after_i - before_i| over all vertices
+  double max = 0.0;
+  int64_t flipped_normals = 0;  // usable faces whose normal turned by more than 90 degrees
+};
+
+// Compares two meshes with the same connectivity. InvalidArgument when the vertex counts or
+// triangles differ.
+absl::StatusOr<Displacement> CompareMeshes(const Mesh& before, const Mesh& after);
+
+// Same, for `after` and the positions its vertices had before (its triangles throughout): a
+// job keeps only the input's positions, not a second copy of the triangles. InvalidArgument
+// when the vertex counts differ.
+absl::StatusOr<Displacement> CompareMeshes(const std::vector<Vec3>& before, const Mesh& after);
+
+// Mean edge length of the usable faces' unique edges (0 for a mesh without edges).
+double MeanEdgeLength(const Mesh& mesh, const Topology& topo);
+
+std::string FormatMetrics(const MeshMetrics& m);
+
+}  // namespace meshsmooth

@@ -1,0 +1,47 @@
+// How noisy is a mesh? A robust estimate of the standard deviation of its vertices' offsets
+// from the surface they sample, along the surface normal: what automatic stopping
+// (FlowParams::iterations == 0, docs/quality.md) compares the flow's displacement with.
+//
+// For each interior vertex v, a quadric height field z = a x^2 + b xy + c y^2 + d x + e y + f
+// is fitted by least squares to v's second ring (v left out), in a frame whose z axis is v's
+// area-weighted normal; v's residual is r = -f (v sits at the origin). With independent noise
+// of deviation sigma along the normals, r has variance sigma^2 (1 + g), where g = [(A^T A)^-1]_ff
+// is the fit's own variance at the origin (A: the fit's design matrix), so r / sqrt(1 + g) has
+// deviation sigma. The estimate is 1.4826 x the median of |r| / sqrt(1 + g): the median
+// ignores the minority of vertices on creases and corners, where a quadric cannot follow the
+// surface. On a smooth, clean mesh the residuals are the fit's third-order terms, a small
+// fraction of h; docs/quality.md gives the estimates of the benchmark's clean and noisy meshes.
+// A mesh of more than 50,000 vertices is sampled: every k-th vertex is fitted.
+#pragma once
+
+#include <cstdint>
+
+#include "core/mesh.h"
+#include "core/util/stop_token.h"
+#include "core/topology.h"
+
+namespace meshsmooth {
+
+struct NoiseEstimate {
+  double sigma = 0.0;   // in the mesh's units
+  double sigma_h = 0.0;  // relative to the mean edge length h
+  // The root mean square of the offsets, from the residuals within three robust scales of
+  // zero: sigma_h for Gaussian noise, larger for noise whose distribution is more peaked (noise
+  // in random directions, whose normal part is a Gaussian times a uniform cosine), where the
+  // median reads low. What an estimate of a squared error needs (core/flows/auto_stop.h).
+  double deviation_h = 0.0;
+  int64_t vertices_used = 0;   // interior vertices with a well-posed fit
+  int64_t vertices_tried = 0;  // interior vertices fitted (every k-th one of a large mesh)
+  // False when too few fits were well posed for the median to mean anything (fewer than 25,
+  // or fewer than a quarter of those tried: e.g. a fan whose rim vertices all see one circle);
+  // sigma is then 0.
+  bool reliable = false;
+};
+
+// The estimate for `mesh`; zero and not reliable when too few vertices have a well-posed fit
+// (fewer than 14 second-ring neighbours, or a ring too degenerate for a cubic). `threads`: 0 = all hardware threads. Deterministic for
+// any thread count. Returns early (an estimate of zero) once `stop` fires.
+NoiseEstimate EstimateNoise(const Mesh& mesh, const Topology& topo, double h, int threads = 0,
+                            const StopToken& stop = {});
+
+}  // namespace meshsmooth

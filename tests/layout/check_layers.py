@@ -1,0 +1,72 @@
+#!/usr/bin/env python3
+"""Checks that no #include runs back up the project's layers.
+
+The rooms, lowest first (a file may include its own room and any lower layer, nothing else):
+  core/util                               stop token, radix sort
+  core                                    the mesh model: mesh, vec3, topology, normals, weld
+  core/io, core/measure                   files and the Draco codec; metrics, distances, noise
+  core/shapes, core/features, core/flows, core/render
+  base                                    process-wide plumbing the programs link
+  server                                  the gRPC service
+  client                                  the CLI and its client library
+  bench, fuzz, tests                      tools on top of everything
+
+Exit status 1 and one line per offending include when a file breaks the order.
+"""
+import argparse
+import pathlib
+import re
+import sys
+
+LAYERS = [
+    ["core/util"],
+    ["core"],
+    ["core/io", "core/measure"],
+    ["core/shapes", "core/features", "core/flows", "core/render"],
+    ["base"],
+    ["server"],
+    ["client"],
+    ["bench", "fuzz", "tests"],
+]
+RANK = {room: rank for rank, rooms in enumerate(LAYERS) for room in rooms}
+TOP = {"core", "base", "server", "client", "bench", "fuzz", "tests"}
+INCLUDE = re.compile(r'^\s*#\s*include\s+"([^"]+)"', re.MULTILINE)
+
+
+def room_of(path: str) -> str:
+    parts = path.split("/")
+    if parts[0] == "core" and len(parts) > 2:
+        return "core/" + parts[1]
+    return parts[0]
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--root", default=pathlib.Path(__file__).resolve().parents[2], type=pathlib.Path)
+    args = parser.parse_args()
+    bad = []
+    for top in sorted(TOP):
+        for f in sorted((args.root / top).rglob("*")):
+            if f.suffix not in (".h", ".cc"):
+                continue
+            rel = f.relative_to(args.root).as_posix()
+            own = room_of(rel)
+            if own not in RANK:
+                bad.append(f"{rel}: room {own} is in no layer (tests/layout/check_layers.py)")
+                continue
+            for inc in INCLUDE.findall(f.read_text(errors="replace")):
+                if inc.split("/")[0] not in TOP:
+                    continue  # third-party or generated (meshsmooth/v1/...)
+                other = room_of(inc)
+                if other == own:
+                    continue
+                if other not in RANK or RANK[other] >= RANK[own]:
+                    bad.append(f"{rel}: includes {inc} ({other} is not below {own})")
+    for line in bad:
+        print(line)
+    print(f"check_layers: {len(bad)} include(s) out of order")
+    return 1 if bad else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
