@@ -35,6 +35,7 @@
 #include "client/smooth_client.h"
 #include "core/io/draco_codec.h"
 #include "core/flows/flow.h"
+#include "core/flows/flow_table.h"
 #include "core/flows/reorder.h"
 #include "base/huge_pages.h"
 #include "core/io/file_bytes.h"
@@ -158,7 +159,7 @@ OurTiming TimeOurs(const Mesh& mesh, const Topology& topo, FlowParams p, int ite
     absl::StatusOr<FlowResult> res = Smooth(m, topo, p);
     const double ms = Ms(t0, Clock::now());
     if (!res.ok()) {
-      std::fprintf(stderr, "bench: %s failed: %s\n", std::string(FlowOf(p.flow).name).c_str(), std::string(res.status().message()).c_str());
+      std::fprintf(stderr, "bench: %s failed: %s\n", std::string(FlowName(p.flow.value_or(kDefaultFlow))).c_str(), std::string(res.status().message()).c_str());
       return -1.0;
     }
     return ms;
@@ -670,7 +671,7 @@ int main(int argc, char** argv) {
       const double t1 = one.per_iteration_ms, t2 = two.per_iteration_ms;
       ours_1t[nm.name][v.label] = t1;
       if (v.label == "laplacian U0") u0_ms = u0_ms2[0] = t1, u0_ms2[1] = t2;
-      const double bytes = BytesPerVertex(v.params.flow, valence);
+      const double bytes = BytesPerVertex(v.params.flow.value_or(kDefaultFlow), valence);
       const double gbs = bytes * n / (t2 / 1000.0) / 1e9;
       std::printf("| %s | %.2f | %.2f | %.2fx | %.0f | %.0f | %.0f%% | %.1f |\n", v.label.c_str(), t1, t2, t1 / t2,
                   n / (t2 / 1000.0) / 1e6, bytes, 100.0 * gbs / bw2, one.setup_ms);

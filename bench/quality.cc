@@ -31,6 +31,7 @@
 #include "absl/strings/str_split.h"
 #include "core/measure/evaluation.h"
 #include "core/flows/flow.h"
+#include "core/flows/flow_table.h"
 #include "base/huge_pages.h"
 #include "core/io/mesh_io.h"
 #include "core/measure/metrics.h"

@@ -28,7 +28,7 @@
 #include "client/inputs.h"
 #include "core/io/draco_codec.h"
 #include "core/flows/flow.h"
-#include "core/flows/flow_info.h"
+#include "core/flows/catalogue.h"
 #include "base/huge_pages.h"
 #include "base/shutdown_signals.h"
 

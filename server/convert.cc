@@ -51,7 +51,7 @@ absl::StatusOr<JobParams> FromProto(const v1::JobSpec& spec, int max_iterations)
   JobParams j;
   j.job_id = spec.job_id();
   FlowParams& p = j.flow;
-  if (!spec.flow().empty()) {
+  if (!spec.flow().empty()) {  // empty: the default job's rule (FlowParams::flow)
     absl::StatusOr<FlowId> flow = ParseFlowName(spec.flow());
     if (!flow.ok()) return flow.status();
     p.flow = *flow;
@@ -91,9 +91,6 @@ absl::StatusOr<JobParams> FromProto(const v1::JobSpec& spec, int max_iterations)
   }
   p.boundary = spec.boundary() == v1::BOUNDARY_MODE_CURVE ? BoundaryMode::kCurve : BoundaryMode::kFixed;
   p.tolerance = spec.tolerance();
-  // A job that names neither a flow, an iteration count nor a step leaves the flow to the
-  // estimated error (FlowParams::choose_flow).
-  p.choose_flow = spec.flow().empty() && spec.iterations() == 0 && spec.step() == 0.0;
   if (absl::Status s = ValidateFlowParams(p, 0); !s.ok()) return s;
 
   if (spec.output().quantization_bits() > static_cast<uint32_t>(kMaxQuantizationBits)) {
@@ -163,10 +160,10 @@ void ToProto(const ParameterInfo& p, v1::ParameterInfo* out) {
 
 void ToProto(const JobParams& params, const FlowResult& result, v1::EffectiveParameters* out) {
   const FlowParams& p = params.flow;
-  out->set_flow(std::string(FlowOf(result.flow).name));
+  out->set_flow(std::string(FlowName(result.flow)));
   out->set_iterations_requested(static_cast<uint32_t>(p.iterations));
   out->set_iterations_run(static_cast<uint32_t>(result.iterations_run));
-  out->set_step(p.step.value_or(FlowOf(result.flow).default_step));
+  out->set_step(p.step.value_or(DefaultStep(result.flow)));
   out->set_effective_step(result.effective_step);
   out->set_taubin_mu(result.effective_mu);
   out->set_mean_edge_length(result.mean_edge_length);
@@ -229,7 +226,7 @@ std::string JobLogLine(const JobReport& report, const JobParams& params) {
   char seconds[128];
   std::snprintf(seconds, sizeof seconds, "decode=%.3fs queue=%.3fs smooth=%.3fs encode=%.3fs", report.decode_seconds,
                 report.queue_seconds, report.smooth_seconds, report.encode_seconds);
-  return absl::StrCat("meshsmoothd job=", report.job_id, " flow=", std::string(FlowOf(params.flow.flow).name),
+  return absl::StrCat("meshsmoothd job=", report.job_id, " flow=", std::string(FlowName(params.flow.flow.value_or(kDefaultFlow))),
                       " vertices=", report.vertices, " iterations=", report.flow.iterations_run, "/",
                       params.flow.iterations == kAutoIterations ? std::string("auto")
                                                                 : absl::StrCat(params.flow.iterations),

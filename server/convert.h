@@ -9,7 +9,7 @@
 #include "core/io/draco_codec.h"
 #include "core/features/ridges.h"
 #include "core/flows/flow.h"
-#include "core/flows/flow_info.h"
+#include "core/flows/catalogue.h"
 #include "core/measure/metrics.h"
 #include "core/topology.h"
 #include "meshsmooth/v1/smoothing.pb.h"

@@ -7,7 +7,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
-#include "core/flows/flow_info.h"
+#include "core/flows/catalogue.h"
 #include "server/convert.h"
 #include "server/smooth_job.h"
 

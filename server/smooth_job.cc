@@ -119,10 +119,7 @@ absl::StatusOr<FlowResult> SmoothJob::SmoothMesh(Mesh& mesh, const Topology& top
   FlowParams flow = params_.flow;
   flow.threads = options_.threads_per_job;
   RunControl control;
-  control.cancel = &cancel_;
-  if (stop.deadline() != Clock::time_point::max()) {  // what is left of the job's time
-    control.time_budget_seconds = std::max(1e-9, Seconds(Clock::now(), stop.deadline()));
-  }
+  control.stop = stop;  // the job's cancel flag and what is left of its time
   Clock::time_point last_progress = decoded - kProgressInterval;  // the first iteration is reported
   control.on_progress = [&](const Progress& p) {
     report.flow.iterations_run = p.iteration;  // what the log says if the run ends early

@@ -2,6 +2,7 @@
 // The paper prints "+ lambda U^2"; the stable sign (thin-plate gradient descent, Taubin with
 // mu = lambda) is minus (docs/paper.md). Uses the plain umbrella U0 as the paper does. lambda is
 // dimensionless, (0, 0.5] (U0^2 has eigenvalues up to 4); default 0.2.
+#include "core/flows/flow_table.h"
 #include "core/flows/step_loops.h"
 
 namespace meshsmooth::flows {
@@ -33,8 +34,14 @@ class Bilaplacian final : public FlowKernel {
   std::vector<Vec3> u_;
 };
 
+std::unique_ptr<FlowKernel> MakeBilaplacian(const FlowParams&, double) { return std::make_unique<Bilaplacian>(); }
+
 }  // namespace
 
-std::unique_ptr<FlowKernel> MakeBilaplacian(const FlowParams&, double) { return std::make_unique<Bilaplacian>(); }
+FlowRow BilaplacianRow() {
+  return {FlowId::kBilaplacian, "bilaplacian", FlowKind::kUmbrella, 0.2, 0.5,
+          "Bilaplacian flow P -= lambda U0^2(P): smooth, slight deformation", "Section 2 (sign: docs/paper.md)", {},
+          {}, nullptr, MakeBilaplacian};
+}
 
 }  // namespace meshsmooth::flows

@@ -7,6 +7,7 @@
 // included; A_j the area and c_j the centroid of face j. Then the vertex update of
 // normal_filtering.h. The range weight keeps the normals of the two sides of a crease apart,
 // so creases stay sharp where every flow of the paper rounds them.
+#include "core/flows/flow_table.h"
 #include "core/flows/normal_filtering.h"
 
 namespace meshsmooth::flows {
@@ -22,10 +23,18 @@ class BilateralNormal final : public NormalFilterKernel {
   }
 };
 
-}  // namespace
-
 std::unique_ptr<FlowKernel> MakeBilateralNormal(const FlowParams& p, double) {
   return std::make_unique<BilateralNormal>(p.normal_filter);
+}
+
+}  // namespace
+
+FlowRow BilateralNormalRow() {
+  return {FlowId::kBilateralNormal, "bilateral_normal", FlowKind::kNormalFilter, 1.0, 1.0,
+          "Bilateral filtering of the face normals, then vertices fitted to them: removes noise and keeps "
+          "sharp creases; one iteration = normal_iterations filter passes + vertex_iterations vertex updates",
+          "Zheng et al. 2011 (docs/normal-filtering.md)", NormalFilterParameters(), {}, ValidateNormalFilter,
+          MakeBilateralNormal};
 }
 
 }  // namespace meshsmooth::flows

@@ -16,6 +16,7 @@
 #include "absl/strings/str_format.h"
 #include "core/flows/auto_stop.h"
 #include "core/flows/flow_kernel.h"
+#include "core/flows/flow_table.h"
 #include "core/flows/lane_batches.h"
 #include "core/flows/step_loops.h"
 #include "core/measure/metrics.h"
@@ -75,7 +76,7 @@ absl::StatusOr<double> CheckInput(const Mesh& mesh, const Topology& topo, double
 class FlowRun {
  public:
   FlowRun(const Topology& topo, const FlowParams& p, double h, double diagonal)
-      : topo_(topo), p_(p), row_(FlowOf(p.flow)), n_(topo.num_vertices()), h_(h), diagonal_(diagonal) {}
+      : topo_(topo), p_(p), row_(FlowOf(*p.flow)), n_(topo.num_vertices()), h_(h), diagonal_(diagonal) {}
 
   // Kernel, roles, step context, lane batches and the constant threshold.
   void SetUp(const Mesh& mesh, FlowResult& result) {
@@ -259,11 +260,11 @@ VectorIsa BestVectorIsa() {
 }
 
 absl::StatusOr<FlowResult> RunIterations(Mesh& mesh, const Topology& topo, const FlowParams& p,
-                                         const RunControl& control, double h) {
+                                         const RunControl& control, double h, int fixed_auto_iterations) {
   const absl::StatusOr<double> diagonal = CheckInput(mesh, topo, h);
   if (!diagonal.ok()) return diagonal.status();
   FlowResult result;
-  result.flow = p.flow;
+  result.flow = *p.flow;
   FlowRun run(topo, p, h, *diagonal);
   run.SetUp(mesh, result);
 
@@ -281,11 +282,11 @@ absl::StatusOr<FlowResult> RunIterations(Mesh& mesh, const Topology& topo, const
       return result;
     }
     last_iteration = std::min(p.max_auto_iterations, kMaxAutoIterations);
-    if (p.sampled_iterations > 0) last_iteration = std::min(last_iteration, p.sampled_iterations);
+    if (fixed_auto_iterations > 0) last_iteration = std::min(last_iteration, fixed_auto_iterations);
     result.stop_reason = StopReason::kIterations;
   }
-  // A count chosen on a sample of the mesh (Smooth()) runs as it is: no probe, no estimate.
-  const bool estimate_risk = auto_stop && p.sampled_iterations == 0;
+  // A count chosen on a sample of the mesh (choice.h) runs as it is: no probe, no estimate.
+  const bool estimate_risk = auto_stop && fixed_auto_iterations == 0;
   const int32_t n = mesh.num_vertices();
   std::vector<Vec3> cur = std::move(mesh.positions), next(n), mid;
   if (run.passes() > 1) mid.resize(n);
@@ -303,9 +304,8 @@ absl::StatusOr<FlowResult> RunIterations(Mesh& mesh, const Topology& topo, const
     probe_next.resize(n);
     if (probe->passes() > 1) probe_mid.resize(n);
   }
-  const auto t0 = std::chrono::steady_clock::now();
   for (int it = 1; it <= last_iteration; ++it) {
-    if (control.cancel != nullptr && control.cancel->load(std::memory_order_relaxed)) {
+    if (control.stop.Cancelled()) {
       mesh.positions = std::move(cur);
       return absl::CancelledError(absl::StrCat("cancelled after ", it - 1, " iterations"));
     }
@@ -337,8 +337,7 @@ absl::StatusOr<FlowResult> RunIterations(Mesh& mesh, const Topology& topo, const
       result.stop_reason = StopReason::kTolerance;
       break;
     }
-    if (control.time_budget_seconds > 0.0 &&
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() > control.time_budget_seconds) {
+    if (control.stop.PastDeadline()) {
       result.stop_reason = StopReason::kTimeBudget;
       break;
     }

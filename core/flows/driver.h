@@ -15,11 +15,12 @@ inline constexpr int32_t kParallelThreshold = 20000;
 // (0 = all hardware threads).
 int ThreadsFor(int32_t n, const FlowParams& p);
 
-// The iterations of a valid `p` on `mesh`: roles (free, fixed, boundary curve), the Jacobi
-// double buffer, eq. (14)'s threshold, stopping, progress and the divergence checks. `h` is
-// the input's mean edge length. Errors as Smooth()'s; the mesh always gets back the positions
-// of the last accepted iteration.
+// The iterations of a valid `p` (its flow set) on `mesh`: roles (free, fixed, boundary curve),
+// the Jacobi double buffer, eq. (14)'s threshold, stopping, progress and the divergence checks.
+// `h` is the input's mean edge length. With automatic iterations, `fixed_auto_iterations` > 0
+// runs that many with no risk estimate (a count chosen on a sample, choice.h). Errors as
+// Smooth()'s; the mesh always gets back the positions of the last accepted iteration.
 absl::StatusOr<FlowResult> RunIterations(Mesh& mesh, const Topology& topo, const FlowParams& p,
-                                         const RunControl& control, double h);
+                                         const RunControl& control, double h, int fixed_auto_iterations);
 
 }  // namespace meshsmooth::flows

@@ -1,28 +1,22 @@
-// The paper's smoothing flows behind one small interface: a flow (FlowId, from the flow table
-// in core/flows/flow_table.h), a parameter struct and a run control. Equation numbers are the
-// paper's; docs/paper.md says where it slips and what we chose where it is silent.
+// The smoothing flows behind one small interface: Smooth(mesh, params, control). The flows, their
+// names, kinds and parameters are in the catalogue (core/flows/catalogue.h, ListFlows); equation
+// numbers are the paper's, and docs/paper.md says where it slips and what we chose where it is
+// silent.
 //
 // Every flow is an explicit Jacobi iteration: each iteration reads the old positions and
 // writes new ones, so the result is bit-identical whatever the number of threads.
 //
-// Flows ("flow" field) and what one iteration does, with F the flow's speed and lambda the
-// effective step:
-//   laplacian       P += lambda U(P), U = U0 (eq. 3) or U1 (eq. 4)                    eq. (2)
-//   taubin          P += lambda U(P) over the whole mesh, then P -= mu U(P): one
-//                   iteration is one lambda pass plus one mu pass                     eq. (6)
-//   bilaplacian     P -= lambda U0^2(P) (the stable sign, docs/paper.md)
-//   mcf             P += lambda H n, cotangent weights, H the true mean curvature     eqs. (7)-(8)
-//   mcf_tangential  P += lambda H n + step C (U0 - (U0.n) n)                          eq. (11)
-//   median          P += lambda F, F of eq. (13) with epsilon                         eqs. (12)-(13)
-// and the adaptive threshold of eq. (14) wraps any of them (AdaptiveMode).
+// The front door is one rule: FlowParams{} (no flow, automatic iterations, no step) is the
+// default job, the same as an empty JobSpec and `meshsmooth smooth IN -o OUT` (see
+// FlowParams::flow).
 //
-// Units: the umbrella flows (laplacian, taubin, bilaplacian) take a dimensionless step. The
-// curvature flows (mcf, mcf_tangential, median) take the step relative to the squared mean
-// edge length h^2 of the input (effective lambda = step * h^2), so the same parameters work on
-// a mesh in millimetres and in metres. FlowResult reports the effective step.
+// Units, by flow kind (FlowKind): umbrella flows take a dimensionless step; curvature flows take
+// the step relative to the squared mean edge length h^2 of the input (effective lambda =
+// step * h^2), so the same parameters work on a mesh in millimetres and in metres;
+// normal-filtering flows take a dimensionless step <= 1. FlowResult reports the effective step.
+// The adaptive threshold of eq. (14) wraps any flow (AdaptiveMode).
 #pragma once
 
-#include <atomic>
 #include <cstdint>
 #include <functional>
 #include <optional>
@@ -31,9 +25,10 @@
 #include <vector>
 
 #include "absl/status/statusor.h"
-#include "core/flows/flow_table.h"
+#include "core/flows/catalogue.h"
 #include "core/mesh.h"
 #include "core/topology.h"
+#include "core/util/stop_token.h"
 
 namespace meshsmooth {
 
@@ -82,22 +77,18 @@ inline constexpr int kAutoIterations = 0;
 inline constexpr int kMaxAutoIterations = 1000;
 
 struct FlowParams {
-  FlowId flow = kDefaultFlow;
-  // 1 .. kMaxIterations, or kAutoIterations: estimate the input's noise (core/measure/noise.h) and
-  // return the iteration whose estimated error to the noise-free surface is least (Stein's
+  // Unset: the job names no flow. With automatic iterations and no step it chooses: the input's
+  // noise is estimated, the candidate flows each run to their least estimated error and the
+  // least of them wins (core/flows/choice.h; FlowResult::flow says which; on large meshes the
+  // choice and the count are made on patches of the mesh). Otherwise unset is kDefaultFlow.
+  std::optional<FlowId> flow;
+  // 1 .. kMaxIterations, or kAutoIterations: estimate the input's noise (core/measure/noise.h)
+  // and return the iteration whose estimated error to the noise-free surface is least (Stein's
   // unbiased risk estimate, auto_stop.h; FlowResult says why the run stopped).
   int iterations = kAutoIterations;
   // The most iterations automatic stopping may run (1 .. kMaxAutoIterations; a server sets
   // its own limit here).
   int max_auto_iterations = kMaxAutoIterations;
-  // With automatic stopping: run every flow of kChoiceFlows instead of `flow` and keep the one
-  // whose estimated error is least (auto_stop.h; FlowResult::flow says which). On meshes of
-  // more than kMaxChoiceVertices vertices the choice (and automatic stopping's count) is made
-  // on patches of the mesh (flow_table.h).
-  bool choose_flow = false;
-  // Set by Smooth() for a large mesh: automatic stopping runs exactly this many iterations,
-  // chosen on its patches, then repairs folds and keeps the volume as usual.
-  int sampled_iterations = 0;
   // The paper's lambda: dimensionless for the umbrella flows, relative to h^2 for the
   // curvature flows. Unset = the flow's default (DefaultStep); set, it must be > 0.
   std::optional<double> step;
@@ -145,8 +136,9 @@ struct RunControl {
   // Called after every iteration, on the calling thread. The mesh's positions are held by the
   // run until Smooth() returns: do not read the mesh from here.
   std::function<void(const Progress&)> on_progress;
-  const std::atomic<bool>* cancel = nullptr;         // checked every iteration
-  double time_budget_seconds = 0.0;                  // > 0: stop when exceeded
+  // Checked every iteration: once cancelled the run ends with Cancelled; past its deadline the
+  // run stops with StopReason::kTimeBudget and returns the last iteration.
+  StopToken stop;
 };
 
 enum class StopReason {
@@ -174,7 +166,7 @@ struct AutoStopReport {
 };
 
 struct FlowResult {
-  FlowId flow = kDefaultFlow;  // the flow that ran (FlowParams::choose_flow picks one)
+  FlowId flow = kDefaultFlow;  // the flow that ran (chosen when FlowParams::flow is unset)
   int iterations_run = 0;
   StopReason stop_reason = StopReason::kIterations;
   double effective_step = 0.0;  // lambda actually used (mesh units for the curvature flows)

@@ -1,5 +1,6 @@
 // What a flow author reads: the interface a flow implements (FlowKernel), what a step gets
-// (StepContext), the kernel factories the flow table calls, and the block loop. A flow file
+// (StepContext), and the block loop. A flow file also defines the flow's row of the table
+// (core/flows/flow_table.h): its name, kind, steps, parameters, checks and kernel factory. A flow file
 // implements FlowKernel::Step with ApplyStep (a speed per vertex) or ApplyCurvatureStep (a
 // speed from the cotangent kernel's lanes), both in core/flows/step_loops.h; the operators it
 // can use (U0, U1, the mean-curvature normal) are in core/flows/operators.h.
@@ -99,23 +100,6 @@ class FlowKernel {
   virtual void Prepare(const StepContext& /*c*/, const Vec3* /*cur*/, int32_t /*n*/, int /*threads*/) {}
   virtual BlockStats Step(const StepContext& c, const Vec3* cur, Vec3* next, int32_t begin, int32_t end) const = 0;
 };
-
-// The factories of the flow table (core/flows/flow_table.cc), one per flow file. `step` is the
-// flow's step as the user gave it (before the curvature flows' scaling by h^2); p is valid.
-std::unique_ptr<FlowKernel> MakeLaplacian(const FlowParams& p, double step);
-std::unique_ptr<FlowKernel> MakeTaubin(const FlowParams& p, double step);
-std::unique_ptr<FlowKernel> MakeBilaplacian(const FlowParams& p, double step);
-std::unique_ptr<FlowKernel> MakeMcf(const FlowParams& p, double step);
-std::unique_ptr<FlowKernel> MakeMcfTangential(const FlowParams& p, double step);
-std::unique_ptr<FlowKernel> MakeMedian(const FlowParams& p, double step);
-std::unique_ptr<FlowKernel> MakeBilateralNormal(const FlowParams& p, double step);
-std::unique_ptr<FlowKernel> MakeGuidedNormal(const FlowParams& p, double step);
-
-// Checks of a flow's own parameters that involve the step (the flow table's `validate`):
-// InvalidArgument naming the parameters.
-absl::Status ValidateTaubin(const FlowParams& p, double step);
-absl::Status ValidateMcfTangential(const FlowParams& p, double step);
-absl::Status ValidateNormalFilter(const FlowParams& p, double step);
 
 // Eq. (14)'s T(P): mean |H| over the first ring (rings = 1) or the first and second rings
 // (rings = 2) of every vertex, over interior neighbours only; written to `t`.

@@ -20,6 +20,7 @@
 #include <cmath>
 #include <limits>
 
+#include "core/flows/flow_table.h"
 #include "core/flows/normal_filtering.h"
 
 namespace meshsmooth::flows {
@@ -97,10 +98,19 @@ class GuidedNormal final : public NormalFilterKernel {
   std::vector<Vec3> patch_mean_, guide_;
 };
 
-}  // namespace
-
 std::unique_ptr<FlowKernel> MakeGuidedNormal(const FlowParams& p, double) {
   return std::make_unique<GuidedNormal>(p.normal_filter);
+}
+
+}  // namespace
+
+FlowRow GuidedNormalRow() {
+  return {FlowId::kGuidedNormal, "guided_normal", FlowKind::kNormalFilter, 1.0, 1.0,
+          "Guided filtering of the face normals (the range weight compares the mean normals of each "
+          "face's most consistent patch), then vertices fitted to them: keeps the creases and corners of "
+          "CAD parts; one iteration as bilateral_normal",
+          "Zhang et al. 2015, eqs. (3)-(6) (docs/normal-filtering.md)", NormalFilterParameters(), {},
+          ValidateNormalFilter, MakeGuidedNormal};
 }
 
 }  // namespace meshsmooth::flows

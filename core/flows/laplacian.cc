@@ -2,6 +2,7 @@
 // (eq. 4, inverse-distance weights). U0 improves the sampling rate but shrinks and flattens the
 // shape; U1 worsens the sampling rate (the paper's eq. (5) argument). lambda is dimensionless,
 // (0, 1]; default 0.5.
+#include "core/flows/flow_table.h"
 #include "core/flows/step_loops.h"
 
 namespace meshsmooth::flows {
@@ -17,11 +18,17 @@ class Laplacian final : public FlowKernel {
   }
 };
 
-}  // namespace
-
 std::unique_ptr<FlowKernel> MakeLaplacian(const FlowParams& p, double /*step*/) {
   if (p.weights == UmbrellaWeights::kInverseDistance) return std::make_unique<Laplacian<true>>();
   return std::make_unique<Laplacian<false>>();
+}
+
+}  // namespace
+
+FlowRow LaplacianRow() {
+  return {FlowId::kLaplacian, "laplacian", FlowKind::kUmbrella, 0.5, 1.0,
+          "Laplacian smoothing: regularises the sampling but shrinks and flattens", "eqs. (2)-(4)",
+          {WeightsParameter()}, {}, nullptr, MakeLaplacian};
 }
 
 }  // namespace meshsmooth::flows

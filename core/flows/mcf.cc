@@ -3,6 +3,7 @@
 // the whole one-ring area of eq. (8), so H is the true mean curvature (1/r on a sphere of
 // radius r; docs/paper.md) and a sphere follows r(t)^2 = r0^2 - 2t. Smooths well but makes the
 // sampling more irregular. lambda = step * h^2; default step 0.1.
+#include "core/flows/flow_table.h"
 #include "core/flows/step_loops.h"
 
 namespace meshsmooth::flows {
@@ -16,8 +17,14 @@ class Mcf final : public FlowKernel {
   }
 };
 
+std::unique_ptr<FlowKernel> MakeMcf(const FlowParams&, double) { return std::make_unique<Mcf>(); }
+
 }  // namespace
 
-std::unique_ptr<FlowKernel> MakeMcf(const FlowParams&, double) { return std::make_unique<Mcf>(); }
+FlowRow McfRow() {
+  return {FlowId::kMcf, "mcf", FlowKind::kCurvature, 0.1, 10.0,
+          "Mean curvature flow with cotangent weights: smooths well, sampling gets irregular", "eqs. (7)-(8)", {}, {},
+          nullptr, MakeMcf};
+}
 
 }  // namespace meshsmooth::flows

@@ -6,7 +6,10 @@
 // moves a vertex by step * C * U0_t (dimensionless, like a Laplacian step; must be <= 1).
 // n is the unit area-weighted normal of the one-ring. Defaults: step 0.1, C 5 (tangential
 // step 0.5, as the Laplacian default).
+#include <limits>
+
 #include "absl/strings/str_format.h"
+#include "core/flows/flow_table.h"
 #include "core/flows/step_loops.h"
 
 namespace meshsmooth::flows {
@@ -37,8 +40,6 @@ class McfTangential final : public FlowKernel {
   double c_;
 };
 
-}  // namespace
-
 absl::Status ValidateMcfTangential(const FlowParams& p, double step) {
   if (!(p.tangential_weight >= 0.0) || !(step * p.tangential_weight <= 1.0)) {
     return absl::InvalidArgumentError(absl::StrFormat(
@@ -50,6 +51,17 @@ absl::Status ValidateMcfTangential(const FlowParams& p, double step) {
 
 std::unique_ptr<FlowKernel> MakeMcfTangential(const FlowParams& p, double) {
   return std::make_unique<McfTangential>(p.tangential_weight);
+}
+
+}  // namespace
+
+FlowRow McfTangentialRow() {
+  const FlowParams d;
+  return {FlowId::kMcfTangential, "mcf_tangential", FlowKind::kCurvature, 0.1, 10.0,
+          "Mean curvature flow plus a tangential umbrella that evens out the sampling", "eq. (11)",
+          {{"tangential_weight", "C: the tangential part moves a vertex by step * C * U0_t (step * C <= 1)",
+            d.tangential_weight, 0.0, std::numeric_limits<double>::infinity(), false, true, {}}},
+          {"step * tangential_weight <= 1"}, ValidateMcfTangential, MakeMcfTangential};
 }
 
 }  // namespace meshsmooth::flows

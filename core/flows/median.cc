@@ -6,6 +6,7 @@
 // with cos(theta) = m . Hn / |Hn|. Smooths like the mean curvature flow and keeps or improves
 // the regularity. Where |Hn| or |U0| is (numerically) zero the vertex does not move that
 // iteration (docs/paper.md). lambda = step * h^2; defaults step 0.1, epsilon 0.1.
+#include "core/flows/flow_table.h"
 #include "core/flows/step_loops.h"
 
 namespace meshsmooth::flows {
@@ -47,8 +48,18 @@ class Median final : public FlowKernel {
   double epsilon_;
 };
 
+std::unique_ptr<FlowKernel> MakeMedian(const FlowParams& p, double) { return std::make_unique<Median>(p.epsilon); }
+
 }  // namespace
 
-std::unique_ptr<FlowKernel> MakeMedian(const FlowParams& p, double) { return std::make_unique<Median>(p.epsilon); }
+FlowRow MedianRow() {
+  const FlowParams d;
+  return {FlowId::kMedian, "median", FlowKind::kCurvature, 0.1, 10.0,
+          "The paper's flow: moves along the umbrella direction with normal speed equal to the mean "
+          "curvature; smooths like mcf and keeps the mesh regular",
+          "eqs. (12)-(13)",
+          {{"epsilon", "vertices with |cos(theta)| <= epsilon do not move", d.epsilon, 0.0, 1.0, true, true, {}}},
+          {}, nullptr, MakeMedian};
+}
 
 }  // namespace meshsmooth::flows

@@ -22,6 +22,10 @@
 
 namespace meshsmooth::flows {
 
+// The checks of the normal-filtering flows' rows (flow_table.h): the filter's counts and sigmas
+// in range; InvalidArgument naming the parameter.
+absl::Status ValidateNormalFilter(const FlowParams& p, double step);
+
 // The faces of a run and their neighbourhoods, built once per run.
 struct FaceGraph {
   // The usable faces (Topology::faces) in Morton order of their centroids: neighbouring faces

@@ -4,7 +4,10 @@
 // rule (6) is the same thing (docs/paper.md). mu is given, or derived from the pass band
 // k_PB = 1/lambda - 1/mu (paper's example: lambda = 0.3, k_PB = 0.1 -> mu = 0.3093).
 // U is U0 or U1. Defaults: lambda = 0.5, k_PB = 0.1 (mu = 0.5263).
+#include <limits>
+
 #include "absl/strings/str_format.h"
+#include "core/flows/flow_table.h"
 #include "core/flows/step_loops.h"
 
 namespace meshsmooth::flows {
@@ -32,8 +35,6 @@ double TaubinMu(const FlowParams& p, double lambda) {
   return p.taubin_mu > 0.0 ? p.taubin_mu : 1.0 / (1.0 / lambda - p.taubin_pass_band);
 }
 
-}  // namespace
-
 absl::Status ValidateTaubin(const FlowParams& p, double step) {
   if (p.taubin_mu > 0.0) {
     if (!(p.taubin_mu > step) || !(p.taubin_mu <= 1.0)) {
@@ -52,6 +53,23 @@ std::unique_ptr<FlowKernel> MakeTaubin(const FlowParams& p, double step) {
   const double lambda = step, mu = TaubinMu(p, step);
   if (p.weights == UmbrellaWeights::kInverseDistance) return std::make_unique<Taubin<true>>(lambda, mu);
   return std::make_unique<Taubin<false>>(lambda, mu);
+}
+
+}  // namespace
+
+FlowRow TaubinRow() {
+  const FlowParams d;
+  return {FlowId::kTaubin, "taubin", FlowKind::kUmbrella, 0.5, 1.0,
+          "Taubin lambda|mu smoothing: no shrinkage, but turns noise into low-frequency waves; one "
+          "iteration is a lambda pass and a mu pass",
+          "eq. (6)",
+          {WeightsParameter(),
+           {"taubin_mu", "mu (> lambda, <= 1); unset = from the pass band", 0.0, 0.0, 1.0, true, false, {}},
+           {"taubin_pass_band", "k_PB = 1/lambda - 1/mu, used when mu is unset", d.taubin_pass_band, 0.0,
+            std::numeric_limits<double>::infinity(), true, true, {}}},
+          {"taubin_mu set: step < taubin_mu <= 1",
+           "taubin_mu unset: 0 < taubin_pass_band < 1/step - 1 (so step < 1 / (1 + taubin_pass_band))"},
+          ValidateTaubin, MakeTaubin};
 }
 
 }  // namespace meshsmooth::flows

@@ -1,7 +1,6 @@
 // A cancel flag and a deadline that long steps of a job (decode, topology, metrics, features,
 // encode) poll between blocks of work, so that a cancelled or timed-out job frees its worker
-// within a fraction of a second whatever the mesh. The flows take the same two things through
-// RunControl.
+// within a fraction of a second whatever the mesh. The flows take one through RunControl.
 #pragma once
 
 #include <atomic>
@@ -35,6 +34,11 @@ class StopToken {
     }
     return absl::OkStatus();
   }
+
+  // The two causes apart (a flow run ends on the first and returns its last iteration on the
+  // second).
+  bool Cancelled() const { return cancel_ != nullptr && cancel_->load(std::memory_order_relaxed); }
+  bool PastDeadline() const { return deadline_ != Clock::time_point::max() && Clock::now() >= deadline_; }
 
   Clock::time_point deadline() const { return deadline_; }
 

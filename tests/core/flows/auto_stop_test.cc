@@ -10,6 +10,7 @@
 
 #include "core/measure/evaluation.h"
 #include "core/flows/auto_stop.h"
+#include "core/flows/choice.h"
 #include "core/flows/flow.h"
 #include "core/flows/flow_kernel.h"
 #include "core/io/mesh_io.h"
@@ -63,7 +64,8 @@ TEST(NoiseEstimateTest, SameForAnyThreadCount) {
 TEST(AutoStopTest, CleanMeshComesBackUnchanged) {
   const Mesh clean = TwoRateTorus();
   Mesh m = clean;
-  FlowParams p;  // the defaults: the default flow, automatic stopping
+  FlowParams p;  // automatic stopping with the default flow
+  p.flow = kDefaultFlow;
   ASSERT_EQ(p.iterations, kAutoIterations);
   absl::StatusOr<FlowResult> r = Smooth(m, p);
   ASSERT_TRUE(r.ok()) << r.status();
@@ -83,7 +85,7 @@ TEST(AutoStopTest, NoisySphereComesBackCloserWithItsVolume) {
     AddNormalNoise(m, sigma, 11);
     const absl::StatusOr<Quality> before = truth.Evaluate(m);
     const double input_volume = ComputeMetrics(m, BuildTopology(m)).signed_volume;
-    absl::StatusOr<FlowResult> r = Smooth(m, FlowParams{});
+    absl::StatusOr<FlowResult> r = Smooth(m, testing::Params("bilaplacian", kAutoIterations));
     ASSERT_TRUE(r.ok()) << r.status();
     const absl::StatusOr<Quality> after = truth.Evaluate(m);
     ASSERT_TRUE(before.ok() && after.ok());
@@ -112,7 +114,7 @@ TEST(AutoStopTest, DefaultJobNeverFailsOnNeedles) {
       Mesh m = clean;
       if (sigma > 0.0) AddNormalNoise(m, sigma, 5);
       const Topology topo = BuildTopology(m);
-      absl::StatusOr<FlowResult> r = Smooth(m, topo, FlowParams{});
+      absl::StatusOr<FlowResult> r = Smooth(m, topo, testing::Params("bilaplacian", kAutoIterations));
       ASSERT_TRUE(r.ok()) << name << " sigma " << sigma << ": " << r.status();
       for (const Vec3& p : m.positions) ASSERT_TRUE(IsFinite(p)) << name;
       std::printf("%s, sigma %.1f: %d iterations (%s)\n", name.c_str(), sigma, r->iterations_run,
@@ -140,15 +142,14 @@ TEST(AutoStopTest, DefaultJobGeneralisesToIsoSurfacesAndHoleyMeshes) {
     Mesh m = clean;
     AddNormalNoise(m, 0.2, 2);
     const absl::StatusOr<Quality> before = truth.Evaluate(m);
-    FlowParams p;
-    p.choose_flow = true;  // the default job
+    const FlowParams p;  // no flow, iterations or step: the default job
     absl::StatusOr<FlowResult> r = Smooth(m, p);
     ASSERT_TRUE(r.ok()) << name << ": " << r.status();
     const absl::StatusOr<Quality> after = truth.Evaluate(m);
     ASSERT_TRUE(before.ok() && after.ok());
     for (const Vec3& q : m.positions) ASSERT_TRUE(IsFinite(q)) << name;
     std::printf("%s (%d vertices): %s, %d iterations; RMS %.4f -> %.4f h, normal %.2f -> %.2f deg, %lld flipped\n",
-                name.c_str(), clean.num_vertices(), std::string(FlowOf(r->flow).name).c_str(), r->iterations_run,
+                name.c_str(), clean.num_vertices(), std::string(FlowName(r->flow)).c_str(), r->iterations_run,
                 before->rms_distance, after->rms_distance, before->normal_error_deg, after->normal_error_deg,
                 static_cast<long long>(after->flipped_faces));
     EXPECT_GT(r->iterations_run, 0) << name;
@@ -225,13 +226,12 @@ TEST(AutoStopTest, FoldRepairUnfoldsNeedlesWithinItsReach) {
 // faces, against 0.052 h and 41 within kFoldRepairReachH).
 TEST(AutoStopTest, FoldRepairLeavesThinFeaturesOfACadPart) {
   MESHSMOOTH_REQUIRE_SHARED("meshes");
-  FlowParams p;
-  p.choose_flow = true;  // the default job
+  const FlowParams p;  // no flow, iterations or step: the default job
   NoisyRun run;
   ASSERT_NO_FATAL_FAILURE(RunOnNoisySharedMesh("turbine.obj", 0.1, p, &run));
   const Quality& after = run.after;
   std::printf("turbine sigma 0.1: %s, %d iterations, RMS %.4f h, %lld flipped faces (%lld in fine detail)\n",
-              std::string(FlowOf(run.result.flow).name).c_str(), run.result.iterations_run, after.rms_distance,
+              std::string(FlowName(run.result.flow)).c_str(), run.result.iterations_run, after.rms_distance,
               static_cast<long long>(after.flipped_faces), static_cast<long long>(after.flipped_in_fine_detail));
   EXPECT_LT(after.rms_distance, 0.056);
   EXPECT_LT(after.flipped_faces, 50);
@@ -257,13 +257,13 @@ TEST(AutoStopTest, NoisyFandiskComesBackCloser) {
   ASSERT_TRUE(clean.ok()) << clean.status();
   {
     Mesh m = *clean;
-    absl::StatusOr<FlowResult> r = Smooth(m, FlowParams{});
+    absl::StatusOr<FlowResult> r = Smooth(m, testing::Params("bilaplacian", kAutoIterations));
     ASSERT_TRUE(r.ok()) << r.status();
     EXPECT_EQ(r->iterations_run, 0) << "the clean part has no noise to remove";
     EXPECT_EQ(m.positions, clean->positions);
   }
   NoisyRun run;
-  ASSERT_NO_FATAL_FAILURE(RunOnNoisySharedMesh("fandisk.obj", 0.2, FlowParams{}, &run));
+  ASSERT_NO_FATAL_FAILURE(RunOnNoisySharedMesh("fandisk.obj", 0.2, testing::Params("bilaplacian", kAutoIterations), &run));
   const Quality &before = run.before, &after = run.after;
   std::printf("fandisk sigma 0.2: %d iterations, RMS %.4f -> %.4f h, normal %.2f -> %.2f deg, volume %.2f%%\n",
               run.result.iterations_run, before.rms_distance, after.rms_distance, before.normal_error_deg,
@@ -274,20 +274,19 @@ TEST(AutoStopTest, NoisyFandiskComesBackCloser) {
   EXPECT_EQ(after.flipped_faces, 0);
 }
 
-// A job that names no flow (choose_flow) on the CAD part: the estimated error picks
+// A job that names no flow (the default job) on the CAD part: the estimated error picks
 // bilateral_normal, which keeps the creases: within 1.25 times the best fixed count's distance
 // (0.0523 h at 16 rounds, bench/quality.cc) and a few degrees of normal error next to creases,
 // where the bilaplacian flow at its own best count leaves 22 degrees.
 TEST(AutoStopTest, ChosenFlowKeepsTheCreasesOfANoisyCadPart) {
   MESHSMOOTH_REQUIRE_SHARED("meshes");
-  FlowParams p;
-  p.choose_flow = true;
+  const FlowParams p;  // the default job
   NoisyRun run;
   ASSERT_NO_FATAL_FAILURE(RunOnNoisySharedMesh("fandisk.obj", 0.2, p, &run));
   const FlowResult& r = run.result;
   const Quality& after = run.after;
   std::printf("fandisk sigma 0.2, flow chosen: %s, %d iterations (%s), RMS %.4f h, crease normal %.2f deg\n",
-              std::string(FlowOf(r.flow).name).c_str(), r.iterations_run,
+              std::string(FlowName(r.flow)).c_str(), r.iterations_run,
               std::string(StopReasonName(r.stop_reason)).c_str(), after.rms_distance, after.crease_normal_error_deg);
   EXPECT_EQ(r.flow, FlowId::kBilateralNormal);
   EXPECT_LT(after.rms_distance, 1.25 * 0.0523);
@@ -295,17 +294,16 @@ TEST(AutoStopTest, ChosenFlowKeepsTheCreasesOfANoisyCadPart) {
   EXPECT_EQ(after.flipped_faces, 0);
 }
 
-// Above kMaxChoiceVertices the flow and the count are chosen on patches of the mesh and the
+// Above flows::kMaxChoiceVertices the flow and the count are chosen on patches of the mesh and the
 // whole mesh runs once at that count: a 131k-vertex noisy torus still comes back far closer
 // (the 1,456-vertex one: 0.30 times the noisy distance), its volume kept; the clean torus
 // comes back unchanged.
 TEST(AutoStopTest, LargeMeshChoosesOnItsPatches) {
   const GroundTruth truth(TwoRateTorus(256));
-  ASSERT_GT(truth.mesh().num_vertices(), kMaxChoiceVertices);
+  ASSERT_GT(truth.mesh().num_vertices(), flows::kMaxChoiceVertices);
   {
     Mesh m = truth.mesh();
-    FlowParams p;
-    p.choose_flow = true;
+    const FlowParams p;  // the default job
     absl::StatusOr<FlowResult> r = Smooth(m, p);
     ASSERT_TRUE(r.ok()) << r.status();
     EXPECT_EQ(r->iterations_run, 0);
@@ -315,14 +313,13 @@ TEST(AutoStopTest, LargeMeshChoosesOnItsPatches) {
   AddNormalNoise(m, 0.2, 3);
   const absl::StatusOr<Quality> before = truth.Evaluate(m);
   const double input_volume = ComputeMetrics(m, BuildTopology(m)).signed_volume;
-  FlowParams p;
-  p.choose_flow = true;
+  const FlowParams p;  // the default job
   absl::StatusOr<FlowResult> r = Smooth(m, p);
   ASSERT_TRUE(r.ok()) << r.status();
   const absl::StatusOr<Quality> after = truth.Evaluate(m);
   ASSERT_TRUE(before.ok() && after.ok());
   std::printf("torus of %d vertices, sigma 0.2: %s, %d iterations (%s), RMS %.4f -> %.4f h\n",
-              m.num_vertices(), std::string(FlowOf(r->flow).name).c_str(), r->iterations_run,
+              m.num_vertices(), std::string(FlowName(r->flow)).c_str(), r->iterations_run,
               std::string(StopReasonName(r->stop_reason)).c_str(), before->rms_distance, after->rms_distance);
   EXPECT_GT(r->iterations_run, 0);
   EXPECT_LT(after->rms_distance, 0.4 * before->rms_distance);

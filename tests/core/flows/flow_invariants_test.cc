@@ -3,13 +3,15 @@
 // default, locked vertices fixed, and the same bytes with 1 and 2 threads.
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cstdlib>
 #include <cstring>
 #include <string>
 #include <utility>
 #include <vector>
 
-#include "core/flows/flow_info.h"
+#include "core/flows/catalogue.h"
+#include "core/flows/flow_table.h"
 #include "core/flows/lane_batches.h"
 #include "core/flows/reorder.h"
 #include "core/flows/vector_isa.h"
@@ -100,7 +102,7 @@ TEST(FlowInvariantsTest, InternalReorderingChangesNoPosition) {
     ASSERT_TRUE(Smooth(a, topo, p).ok());
     p.reorder = ReorderMode::kNever;
     ASSERT_TRUE(Smooth(b, topo, p).ok());
-    EXPECT_TRUE(SameBytes(a, b)) << FlowOf(p.flow).name;
+    EXPECT_TRUE(SameBytes(a, b)) << FlowName(*p.flow);
   }
 }
 
@@ -353,7 +355,7 @@ TEST(FlowInvariantsTest, ProgressCancelToleranceAndTimeBudget) {
   {
     std::atomic<bool> cancel{false};
     RunControl control;
-    control.cancel = &cancel;
+    control.stop = StopToken(&cancel, StopToken::Clock::time_point::max());
     control.on_progress = [&](const Progress& pr) {
       if (pr.iteration == 3) cancel = true;
     };
@@ -374,7 +376,7 @@ TEST(FlowInvariantsTest, ProgressCancelToleranceAndTimeBudget) {
   }
   {
     RunControl control;
-    control.time_budget_seconds = 1e-6;
+    control.stop = StopToken(nullptr, StopToken::Clock::now() + std::chrono::microseconds(1));
     Mesh m = noisy;
     absl::StatusOr<FlowResult> r = Smooth(m, Params("median", 1000), control);
     ASSERT_TRUE(r.ok());

@@ -1,8 +1,10 @@
-#include "core/flows/flow_info.h"
+#include "core/flows/catalogue.h"
 
 #include <limits>
 #include <utility>
 
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_join.h"
 #include "core/flows/flow.h"
 #include "core/flows/flow_table.h"
 
@@ -18,6 +20,39 @@ ParameterInfo Step(const FlowRow& row) {
 }
 
 }  // namespace
+
+std::string_view FlowName(FlowId id) { return FlowOf(id).name; }
+
+FlowKind KindOf(FlowId id) { return FlowOf(id).kind; }
+
+double DefaultStep(FlowId id) { return FlowOf(id).default_step; }
+
+double MaxStep(FlowId id) { return FlowOf(id).max_step; }
+
+absl::StatusOr<FlowId> ParseFlowName(std::string_view name) {
+  for (const FlowRow& row : FlowTable()) {
+    if (row.name == name) return row.id;
+  }
+  return absl::InvalidArgumentError(
+      absl::StrCat("unknown flow '", std::string(name), "' (", absl::StrJoin(FlowNames(), ", "), ")"));
+}
+
+const std::vector<std::string>& FlowNames() {
+  static const std::vector<std::string>* const kNames = [] {
+    auto* names = new std::vector<std::string>;
+    for (const FlowRow& row : FlowTable()) names->emplace_back(row.name);
+    return names;
+  }();
+  return *kNames;
+}
+
+std::vector<std::string> FlowNamesOfKind(FlowKind kind) {
+  std::vector<std::string> names;
+  for (const FlowRow& row : FlowTable()) {
+    if (row.kind == kind) names.emplace_back(row.name);
+  }
+  return names;
+}
 
 std::vector<FlowInfo> DescribeFlows() {
   std::vector<FlowInfo> flows;
