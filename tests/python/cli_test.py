@@ -18,6 +18,14 @@ import zlib
 from harness import Server, parser, ply_counts, run, run_checks
 
 
+def flow_names(cli, *server):
+    """The flow names, in order, of `meshsmooth flows --json` (the ListFlows response as JSON),
+    from the in-process server or, given "--server", ADDRESS, from that one."""
+    r = run([cli, "flows", "--json", *server])
+    assert r.returncode == 0, (r.returncode, r.stderr)
+    return [f["name"] for f in json.loads(r.stdout)["flows"]]
+
+
 def read_ply_colors(path):
     """(vertex count, face count, [(r, g, b)] per vertex) of a PLY whose vertices are x y z float
     followed by red green blue uchar (binary little endian or ASCII)."""
@@ -151,20 +159,10 @@ def cli_checks(a, check, tmp):
         assert s["after"]["edge_length_cv"] > 0
     check("--json prints the summary as JSON", json_summary)
 
-    def flows_json():
-        r = run([cli, "flows", "--json"])
-        assert r.returncode == 0, r.stderr
-        names = [f["name"] for f in json.loads(r.stdout)["flows"]]
-        assert names == ["laplacian", "taubin", "bilaplacian", "mcf", "mcf_tangential", "median",
-                         "bilateral_normal", "guided_normal"], names
-    check("flows --json lists every flow", flows_json)
-
     def flow_choices_are_the_flows():
         # --flow's choices and help come from the flow table: every flow ListFlows names is
         # offered, accepted and runs; a name it does not list is refused.
-        r = run([cli, "flows", "--json"])
-        assert r.returncode == 0, r.stderr
-        names = [f["name"] for f in json.loads(r.stdout)["flows"]]
+        names = flow_names(cli)
         r = run([cli, "smooth", "--help"])
         assert r.returncode == 0, r.returncode
         # "auto" (the default: the server chooses) comes first.
@@ -301,6 +299,15 @@ def cli_checks(a, check, tmp):
             with open(out) as f:
                 assert f.readline().strip() == "OFF"
         check(f"smooth through meshsmoothd at {address}", through_server)
+
+        def flows_are_the_servers():
+            # meshsmoothd's ListFlows is the list: the CLI's in-process server offers the same
+            # flows, in the same order.
+            served = flow_names(cli, "--server", address)
+            assert served and len(set(served)) == len(served), f"no flows or a name twice: {served}"
+            embedded = flow_names(cli)
+            assert embedded == served, f"embedded {embedded}, meshsmoothd {served}"
+        check("flows --json lists every flow meshsmoothd's ListFlows reports", flows_are_the_servers)
 
         def huge_page_tunable():
             # base/huge_pages.h: the binaries re-execute themselves with glibc's THP tunable when
