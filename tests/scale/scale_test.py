@@ -285,6 +285,8 @@ def self_test():
 
 
 def self_checks(checks, tmp):
+    """One check per kind of violation: check_phase on records, outputs and replica logs made up
+    in tmp must name it (and name nothing for a clean run)."""
     out_dir = os.path.join(tmp, "out")
     os.makedirs(out_dir)
     ids = ["a", "b", "c"]
