@@ -12,34 +12,22 @@ Run by ctest: kubernetes_test.py --deploy deploy/kubernetes --dockerfile docker/
                                  --server build/server/meshsmoothd
 Prints one line per check and ends with 'N passed, M failed'.
 """
-import argparse
 import os
 import re
 import shutil
-import subprocess
 import sys
 
 import yaml
+
+# The harness the Python tests share, tests/python/harness.py.
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "python"))
+from harness import parser, run, run_checks  # noqa: E402
 
 # meshsmoothd's peak resident memory per vertex of one job (the most any flow measured, 410,
 # rounded up) and an allowance for the process itself (17 MiB idle): scripts/peak-memory.sh,
 # docs/deployment.md "Memory".
 PEAK_BYTES_PER_VERTEX = 420
 IDLE_BYTES = 64 << 20
-
-passed, failed = 0, 0
-
-
-def check(name, fn):
-    global passed, failed
-    try:
-        fn()
-        passed += 1
-        print(f"ok: {name}")
-    except Exception as e:  # noqa: BLE001 - one failure must not hide the others
-        failed += 1
-        print(f"FAIL: {name}: {type(e).__name__}: {e}")
-
 
 def quantity(value):
     """A Kubernetes quantity ("3Gi", "512M", "1500m", 2) as a number."""
@@ -56,16 +44,20 @@ def subset(labels, of):
 
 
 def main():
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--deploy", required=True)
-    ap.add_argument("--dockerfile", required=True)
-    ap.add_argument("--server", required=True, help="meshsmoothd, for its --help")
+    ap = parser(__doc__, required=("server",))
+    ap.add_argument("--deploy", required=True, help="the folder of manifests, deploy/kubernetes")
+    ap.add_argument("--dockerfile", required=True, help="docker/Dockerfile, for the image's port and user")
     a = ap.parse_args()
+    return run_checks(lambda checks: manifest_checks(a, checks.check))
 
+
+def manifest_checks(a, check):
+    """Every check, in order; the ones that read the Deployment need the files to parse."""
     files = sorted(f for f in os.listdir(a.deploy) if f.endswith((".yaml", ".yml")))
     docs = {}  # file -> list of objects
 
     def parse():
+        assert files, f"no .yaml or .yml file in {a.deploy}"
         for f in files:
             with open(os.path.join(a.deploy, f)) as fh:
                 objs = [d for d in yaml.safe_load_all(fh) if d is not None]
@@ -79,8 +71,7 @@ def main():
             docs[f] = objs
     check("every file is YAML with apiVersion, kind and a name", parse)
     if not docs:
-        print(f"{passed} passed, {failed} failed")
-        return 1
+        return
     objs = [d for ds in docs.values() for d in ds]
 
     def of_kind(kind):
@@ -156,7 +147,7 @@ def main():
     check("a headless Service and a ClusterIP Service", services)
 
     def server_flags():
-        out = subprocess.run([a.server, "--help"], capture_output=True, text=True, timeout=30)
+        out = run([a.server, "--help"], timeout=30)
         assert out.returncode == 0, out.stderr
         known = set(re.findall(r"(--[a-z0-9-]+)", out.stdout))
         unknown = sorted(set(flags) - known)
@@ -208,7 +199,7 @@ def main():
     kubectl = shutil.which("kubectl")
     if kubectl:
         def kustomize():
-            out = subprocess.run([kubectl, "kustomize", a.deploy], capture_output=True, text=True, timeout=120)
+            out = run([kubectl, "kustomize", a.deploy])
             assert out.returncode == 0, out.stderr
             rendered = [d for d in yaml.safe_load_all(out.stdout) if d]
             assert len(rendered) == len(objs) - 1, f"{len(rendered)} objects rendered"
@@ -216,10 +207,7 @@ def main():
             assert all(d["metadata"].get("namespace") == ns for d in rendered if d["kind"] != "Namespace")
         check("kubectl kustomize renders every object in the namespace", kustomize)
     else:
-        print("skip: kubectl kustomize (no kubectl on PATH)")
-
-    print(f"{passed} passed, {failed} failed")
-    return 1 if failed else 0
+        print("skip: kubectl kustomize (no kubectl on PATH)", flush=True)
 
 
 if __name__ == "__main__":

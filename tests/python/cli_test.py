@@ -5,7 +5,6 @@ meshsmoothd, JSON output, flows, info, exit codes, and Ctrl-C.
 Run by ctest: cli_test.py --cli build/client/meshsmooth --server build/server/meshsmoothd [--shared DIR]
 Prints one line per check and ends with 'N passed, M failed'.
 """
-import argparse
 import json
 import os
 import re
@@ -13,42 +12,18 @@ import signal
 import struct
 import subprocess
 import sys
-import tempfile
 import time
 import zlib
 
-passed, failed = 0, 0
+from harness import Server, parser, ply_counts, run, run_checks
 
 
-def check(name, fn):
-    global passed, failed
-    try:
-        fn()
-        passed += 1
-        print(f"ok: {name}")
-    except Exception as e:  # noqa: BLE001 - one failure must not hide the others
-        failed += 1
-        print(f"FAIL: {name}: {e}")
-
-
-def run(cmd, timeout=120, **kw):
-    return subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, **kw)
-
-
-def ply_counts(path):
-    with open(path, "rb") as f:
-        header = b""
-        while not header.endswith(b"end_header\n"):
-            line = f.readline()
-            if not line:
-                raise AssertionError("truncated PLY header")
-            header += line
-    counts = {}
-    for line in header.decode().splitlines():
-        parts = line.split()
-        if len(parts) == 3 and parts[0] == "element":
-            counts[parts[1]] = int(parts[2])
-    return counts.get("vertex"), counts.get("face")
+def flow_names(cli, *server):
+    """The flow names, in order, of `meshsmooth flows --json` (the ListFlows response as JSON),
+    from the in-process server or, given "--server", ADDRESS, from that one."""
+    r = run([cli, "flows", "--json", *server])
+    assert r.returncode == 0, (r.returncode, r.stderr)
+    return [f["name"] for f in json.loads(r.stdout)["flows"]]
 
 
 def read_ply_colors(path):
@@ -148,13 +123,14 @@ def read_png(path):
 
 
 def main():
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--cli", required=True)
-    ap.add_argument("--server", required=True)
-    ap.add_argument("--shared", default="")
+    ap = parser(__doc__, required=("cli", "server"), optional=("shared",))
     ap.add_argument("--sanitized", action="store_true", help="ASan build: no huge-page re-exec")
     a = ap.parse_args()
-    tmp = tempfile.mkdtemp()
+    return run_checks(lambda checks, tmp: cli_checks(a, checks.check, tmp), tmp_prefix="meshsmooth-cli-")
+
+
+def cli_checks(a, check, tmp):
+    """Every check, in order; the files they write go to tmp."""
     cli = a.cli
 
     def help_lists_defaults():
@@ -183,20 +159,10 @@ def main():
         assert s["after"]["edge_length_cv"] > 0
     check("--json prints the summary as JSON", json_summary)
 
-    def flows_json():
-        r = run([cli, "flows", "--json"])
-        assert r.returncode == 0, r.stderr
-        names = [f["name"] for f in json.loads(r.stdout)["flows"]]
-        assert names == ["laplacian", "taubin", "bilaplacian", "mcf", "mcf_tangential", "median",
-                         "bilateral_normal", "guided_normal"], names
-    check("flows --json lists every flow", flows_json)
-
     def flow_choices_are_the_flows():
         # --flow's choices and help come from the flow table: every flow ListFlows names is
         # offered, accepted and runs; a name it does not list is refused.
-        r = run([cli, "flows", "--json"])
-        assert r.returncode == 0, r.stderr
-        names = [f["name"] for f in json.loads(r.stdout)["flows"]]
+        names = flow_names(cli)
         r = run([cli, "smooth", "--help"])
         assert r.returncode == 0, r.returncode
         # "auto" (the default: the server chooses) comes first.
@@ -323,10 +289,8 @@ def main():
             assert "non-manifold edges: 47" in r.stdout and "non-manifold vertices: 45" in r.stdout, r.stdout
         check("info reports the beetle's non-manifold edges and vertices", info_beetle)
 
-    server = subprocess.Popen([a.server, "--listen", "127.0.0.1:0", "--quiet"], stdout=subprocess.PIPE, text=True)
-    try:
-        line = server.stdout.readline()
-        address = line.strip().rsplit(" ", 1)[-1]
+    with Server(a.server, "--quiet") as server:
+        address = server.address
 
         def through_server():
             out = os.path.join(tmp, "via_server.off")
@@ -336,10 +300,19 @@ def main():
                 assert f.readline().strip() == "OFF"
         check(f"smooth through meshsmoothd at {address}", through_server)
 
+        def flows_are_the_servers():
+            # meshsmoothd's ListFlows is the list: the CLI's in-process server offers the same
+            # flows, in the same order.
+            served = flow_names(cli, "--server", address)
+            assert served and len(set(served)) == len(served), f"no flows or a name twice: {served}"
+            embedded = flow_names(cli)
+            assert embedded == served, f"embedded {embedded}, meshsmoothd {served}"
+        check("flows --json lists every flow meshsmoothd's ListFlows reports", flows_are_the_servers)
+
         def huge_page_tunable():
             # base/huge_pages.h: the binaries re-execute themselves with glibc's THP tunable when
             # the kernel grants huge pages on request, and not when told otherwise.
-            with open(f"/proc/{server.pid}/environ", "rb") as f:
+            with open(f"/proc/{server.proc.pid}/environ", "rb") as f:
                 env = f.read().split(b"\0")
             try:
                 with open("/sys/kernel/mm/transparent_hugepage/enabled") as f:
@@ -350,15 +323,9 @@ def main():
             # glibc edits the variable in place while parsing it: only its start is certain.
             tuned = any(e.startswith(b"GLIBC_TUNABLES=glibc.malloc.hugetlb=1") for e in env)
             assert tuned == expected, (expected, env)
-            off = subprocess.Popen([a.server, "--listen", "127.0.0.1:0", "--quiet"], stdout=subprocess.PIPE,
-                                   text=True, env=dict(os.environ, MESHSMOOTH_HUGE_PAGES="0"))
-            try:
-                assert "listening on" in off.stdout.readline()
-                with open(f"/proc/{off.pid}/environ", "rb") as f:
+            with Server(a.server, "--quiet", env=dict(os.environ, MESHSMOOTH_HUGE_PAGES="0")) as off:
+                with open(f"/proc/{off.proc.pid}/environ", "rb") as f:
                     assert b"hugetlb" not in f.read()
-            finally:
-                off.terminate()
-                off.wait(timeout=10)
         check("meshsmoothd runs with huge pages for large buffers where THP is on request, not with MESHSMOOTH_HUGE_PAGES=0",
               huge_page_tunable)
 
@@ -376,12 +343,6 @@ def main():
             assert "interrupted" in err, err
             assert not os.path.exists(os.path.join(tmp, "never.ply"))
         check("Ctrl-C cancels the job and exits 130", ctrl_c_cancels)
-    finally:
-        server.send_signal(signal.SIGTERM)
-        try:
-            server.wait(timeout=15)
-        except subprocess.TimeoutExpired:
-            server.kill()
 
     def token_files_trimmed_alike():
         # The server and the CLI read a token file by one rule: whitespace at both ends dropped.
@@ -394,10 +355,8 @@ def main():
         wrong_token = os.path.join(tmp, "wrong.token")
         with open(wrong_token, "w") as f:
             f.write("s3cret-tokem\n")
-        guarded = subprocess.Popen([a.server, "--listen", "127.0.0.1:0", "--quiet", "--auth-token-file", server_token],
-                                   stdout=subprocess.PIPE, text=True)
-        try:
-            guarded_address = guarded.stdout.readline().strip().rsplit(" ", 1)[-1]
+        with Server(a.server, "--quiet", "--auth-token-file", server_token) as guarded:
+            guarded_address = guarded.address
             out = os.path.join(tmp, "with_token.ply")
             r = run([cli, "smooth", "builtin:noisy-sphere", "-o", out, "--iterations", "3", "--server", guarded_address,
                      "--token-file", client_token])
@@ -409,14 +368,8 @@ def main():
             assert r.returncode == 1, (r.returncode, r.stderr)
             assert "UNAUTHENTICATED" in r.stderr, r.stderr
             assert not os.path.exists(os.path.join(tmp, "wrong_token.ply"))
-        finally:
-            guarded.terminate()
-            guarded.wait(timeout=15)
     check("a token file with spaces around the token works from the CLI; a wrong token exits 1 (UNAUTHENTICATED)",
           token_files_trimmed_alike)
-
-    print(f"{passed} passed, {failed} failed")
-    return 1 if failed else 0
 
 
 if __name__ == "__main__":

@@ -12,25 +12,18 @@ public contract, not against the C++ code. Prints one "ok: ..." / "FAIL: ..." li
 and closes with "N passed, M failed"; exits 1 when anything failed.
 """
 
-import argparse
 import importlib
 import os
-import queue
 import re
-import signal
-import subprocess
 import sys
-import tempfile
-import threading
-import traceback
 
 import numpy as np
+
+from harness import Server, parser, ply_counts, require, run, run_checks
 
 PROTO_FILE = "meshsmooth/v1/smoothing.proto"
 GRPC_PYTHON_PLUGIN = "/usr/bin/grpc_python_plugin"
 EXPECTED_FLOWS = {"laplacian", "taubin", "bilaplacian", "mcf", "mcf_tangential", "median"}
-READY_RE = re.compile(r"^meshsmoothd listening on 127\.0\.0\.1:(\d+)$")
-READY_TIMEOUT_S = 30.0
 SMOOTH_DEADLINE_S = 60.0
 ERROR_DEADLINE_S = 30.0
 # Well below the contract's 1 MiB limit. The lossless sequential test mesh is ~15 KB, so 64 KiB
@@ -38,46 +31,6 @@ ERROR_DEADLINE_S = 30.0
 CHUNK_BYTES = 4 * 1024
 ICOSPHERE_VERTICES = 642
 ICOSPHERE_FACES = 1280
-
-
-class CheckFailed(Exception):
-    pass
-
-
-def require(condition, message):
-    if not condition:
-        raise CheckFailed(message)
-
-
-class Report:
-    def __init__(self):
-        self.passed = 0
-        self.failed = 0
-
-    def ok(self, name):
-        self.passed += 1
-        print(f"ok: {name}", flush=True)
-
-    def fail(self, name, why):
-        self.failed += 1
-        print(f"FAIL: {name}: {why}", flush=True)
-
-    def check(self, name, fn, *args, **kwargs):
-        """Runs fn; any exception is a failure of this check only. Returns fn's value or None."""
-        try:
-            value = fn(*args, **kwargs)
-        except CheckFailed as e:
-            self.fail(name, e)
-            return None
-        except Exception as e:  # noqa: BLE001 - one broken check must not hide the others
-            self.fail(name, f"{type(e).__name__}: {e}")
-            traceback.print_exc(file=sys.stderr)
-            return None
-        self.ok(name)
-        return value
-
-    def summary_line(self):
-        return f"{self.passed} passed, {self.failed} failed"
 
 
 # ----------------------------------------------------------------------------------------------
@@ -91,8 +44,8 @@ def generate_stubs(proto_root, out_dir):
             f"{PROTO_FILE} not found under {proto_root}")
     cmd = ["protoc", "-I", proto_root, f"--python_out={out_dir}", f"--grpc_out={out_dir}",
            f"--plugin=protoc-gen-grpc={GRPC_PYTHON_PLUGIN}", PROTO_FILE]
-    run = subprocess.run(cmd, capture_output=True, text=True)
-    require(run.returncode == 0, f"protoc failed ({run.returncode}): {run.stderr.strip()}")
+    r = run(cmd)
+    require(r.returncode == 0, f"protoc failed ({r.returncode}): {r.stderr.strip()}")
     # Regular packages, so that an unrelated 'meshsmooth' elsewhere on sys.path cannot shadow them.
     for pkg in ("meshsmooth", os.path.join("meshsmooth", "v1")):
         init = os.path.join(out_dir, pkg, "__init__.py")
@@ -104,70 +57,6 @@ def generate_stubs(proto_root, out_dir):
     pb2_grpc = importlib.import_module("meshsmooth.v1.smoothing_pb2_grpc")
     require(hasattr(pb2_grpc, "MeshSmootherStub"), "generated stubs have no MeshSmootherStub")
     return pb2, pb2_grpc
-
-
-# ----------------------------------------------------------------------------------------------
-# Server process
-
-
-class Server:
-    def __init__(self, path):
-        self.path = path
-        self.proc = None
-        self.port = None
-        self._lines = queue.Queue()
-        self._reader = None
-
-    def start(self):
-        require(os.path.isfile(self.path) and os.access(self.path, os.X_OK),
-                f"server binary {self.path} not found or not executable")
-        self.proc = subprocess.Popen(
-            [self.path, "--listen", "127.0.0.1:0", "--workers", "2"],
-            stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=None,
-            text=True, bufsize=1)
-        # A thread drains stdout for the whole run, so a chatty server never blocks on the pipe.
-        self._reader = threading.Thread(target=self._read_stdout, daemon=True)
-        self._reader.start()
-        seen = []
-        while True:
-            try:
-                line = self._lines.get(timeout=READY_TIMEOUT_S)
-            except queue.Empty:
-                raise CheckFailed(f"no ready line within {READY_TIMEOUT_S:.0f} s; stdout so far: "
-                                  f"{seen!r}") from None
-            if line is None:
-                raise CheckFailed(f"server exited (code {self.proc.wait()}) before its ready "
-                                  f"line; stdout: {seen!r}")
-            seen.append(line)
-            m = READY_RE.match(line)
-            if m:
-                self.port = int(m.group(1))
-                require(0 < self.port < 65536, f"bad port in {line!r}")
-                return self.port
-
-    def _read_stdout(self):
-        ready = False
-        for raw in self.proc.stdout:
-            line = raw.rstrip("\r\n")
-            if ready:
-                print(f"[meshsmoothd stdout] {line}", file=sys.stderr, flush=True)
-            else:
-                self._lines.put(line)
-                ready = READY_RE.match(line) is not None
-        self._lines.put(None)
-
-    def stop(self):
-        """SIGTERM, up to 10 s, then SIGKILL. Returns the exit code and whether it was killed."""
-        if self.proc is None:
-            return None, False
-        if self.proc.poll() is not None:
-            return self.proc.returncode, False
-        self.proc.send_signal(signal.SIGTERM)
-        try:
-            return self.proc.wait(timeout=10), False
-        except subprocess.TimeoutExpired:
-            self.proc.kill()
-            return self.proc.wait(), True
 
 
 # ----------------------------------------------------------------------------------------------
@@ -233,33 +122,13 @@ def make_test_mesh(work_dir):
     ply = os.path.join(work_dir, "mesh.ply")
     drc = os.path.join(work_dir, "mesh.drc")
     write_ascii_ply(ply, verts, faces)
-    run = subprocess.run(["draco_encoder", "-i", ply, "-o", drc, "-qp", "0", "-cl", "0"],
-                         capture_output=True, text=True)
-    require(run.returncode == 0 and os.path.isfile(drc),
-            f"draco_encoder failed ({run.returncode}): {run.stdout.strip()} {run.stderr.strip()}")
+    r = run(["draco_encoder", "-i", ply, "-o", drc, "-qp", "0", "-cl", "0"])
+    require(r.returncode == 0 and os.path.isfile(drc),
+            f"draco_encoder failed ({r.returncode}): {r.stdout.strip()} {r.stderr.strip()}")
     with open(drc, "rb") as f:
         data = f.read()
     require(len(data) > 2 * CHUNK_BYTES, f"mesh.drc is only {len(data)} bytes: too few chunks")
     return data
-
-
-def ply_header_counts(path):
-    """Reads an ASCII or binary PLY header; returns {element name: count} and the format."""
-    with open(path, "rb") as f:
-        require(f.readline().strip() == b"ply", f"{path} is not a PLY file")
-        counts, fmt = {}, None
-        while True:
-            line = f.readline()
-            require(line != b"", f"{path}: no end_header")
-            words = line.decode("ascii", "replace").split()
-            if not words:
-                continue
-            if words[0] == "end_header":
-                return counts, fmt
-            if words[0] == "format":
-                fmt = words[1] if len(words) > 1 else None
-            elif words[0] == "element" and len(words) >= 3:
-                counts[words[1]] = int(words[2])
 
 
 def decode_counts(work_dir, name, data):
@@ -268,11 +137,10 @@ def decode_counts(work_dir, name, data):
     ply = os.path.join(work_dir, f"{name}.ply")
     with open(drc, "wb") as f:
         f.write(data)
-    run = subprocess.run(["draco_decoder", "-i", drc, "-o", ply], capture_output=True, text=True)
-    require(run.returncode == 0 and os.path.isfile(ply),
-            f"draco_decoder failed ({run.returncode}): {run.stdout.strip()} {run.stderr.strip()}")
-    counts, _ = ply_header_counts(ply)
-    return counts.get("vertex"), counts.get("face")
+    r = run(["draco_decoder", "-i", drc, "-o", ply])
+    require(r.returncode == 0 and os.path.isfile(ply),
+            f"draco_decoder failed ({r.returncode}): {r.stdout.strip()} {r.stderr.strip()}")
+    return ply_counts(ply)
 
 
 # ----------------------------------------------------------------------------------------------
@@ -394,22 +262,8 @@ def expect_error(stub, grpc, messages, code_name, words):
 
 
 def main():
-    parser = argparse.ArgumentParser(description=__doc__,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--server", required=True, help="path to meshsmoothd")
-    parser.add_argument("--proto-root", required=True, help="folder holding meshsmooth/v1/")
-    parser.add_argument("--shared", help="the shared/ folder (optional point-cloud case)")
-    args = parser.parse_args()
-
-    report = Report()
-    with tempfile.TemporaryDirectory(prefix="meshsmooth-e2e-") as tmp:
-        try:
-            run_all(args, report, tmp)
-        except Exception as e:  # noqa: BLE001 - a bug in the harness is a failure too
-            report.fail("test harness", f"{type(e).__name__}: {e}")
-            traceback.print_exc(file=sys.stderr)
-    print(report.summary_line(), flush=True)
-    return 1 if report.failed else 0
+    args = parser(__doc__, required=("server", "proto-root"), optional=("shared",)).parse_args()
+    return run_checks(lambda checks, tmp: run_all(args, checks, tmp), tmp_prefix="meshsmooth-e2e-")
 
 
 def check_health(channel):
@@ -430,78 +284,78 @@ def check_reflection(channel):
         raise AssertionError(f"reflection did not list meshsmooth.v1.MeshSmoother: {replies!r}")
 
 
-def run_all(args, report, tmp):
+def run_all(args, checks, tmp):
     stub_dir = os.path.join(tmp, "stubs")
     work_dir = os.path.join(tmp, "work")
     os.makedirs(stub_dir)
     os.makedirs(work_dir)
 
-    stubs = report.check("python stubs generated from the proto", generate_stubs,
+    stubs = checks.check("python stubs generated from the proto", generate_stubs,
                          args.proto_root, stub_dir)
     if stubs is None:
         return
     pb2, pb2_grpc = stubs
     import grpc  # after the stubs, so a missing python3-grpcio shows up as that check failing
 
-    mesh = report.check("test mesh: noisy icosphere (642 v, 1280 f) encoded by draco_encoder",
+    mesh = checks.check("test mesh: noisy icosphere (642 v, 1280 f) encoded by draco_encoder",
                         make_test_mesh, work_dir)
     if mesh is not None:
-        report.check("test mesh decodes back to 642 v / 1280 f with draco_decoder",
+        checks.check("test mesh decodes back to 642 v / 1280 f with draco_decoder",
                      lambda: require(decode_counts(work_dir, "input", mesh)
                                      == (ICOSPHERE_VERTICES, ICOSPHERE_FACES),
                                      "draco_decoder counts differ"))
 
-    server = Server(args.server)
+    server = checks.check("server starts and prints its ready line",
+                          Server, args.server, "--workers", "2")
+    if server is None:
+        return
     channel = None
     try:
-        port = report.check("server starts and prints its ready line", server.start)
-        if port is None:
-            return
-        channel = grpc.insecure_channel(f"127.0.0.1:{port}")
-        ready = report.check("gRPC channel ready within 10 s",
+        channel = grpc.insecure_channel(server.address)
+        ready = checks.check("gRPC channel ready within 10 s",
                              lambda: grpc.channel_ready_future(channel).result(timeout=10) or True)
         if ready is None:
             return
         stub = pb2_grpc.MeshSmootherStub(channel)
 
-        report.check("health service answers SERVING", check_health, channel)
-        report.check("server reflection lists meshsmooth.v1.MeshSmoother", check_reflection, channel)
-        report.check("ListFlows names all six flows, each with a described parameter",
+        checks.check("health service answers SERVING", check_health, channel)
+        checks.check("server reflection lists meshsmooth.v1.MeshSmoother", check_reflection, channel)
+        checks.check("ListFlows names all six flows, each with a described parameter",
                      check_list_flows, stub, pb2)
 
         if mesh is not None:
             spec = pb2.JobSpec(flow="median", iterations=10)
-            result = report.check("Smooth call made (median, 10 iterations, 4 KiB chunks)",
+            result = checks.check("Smooth call made (median, 10 iterations, 4 KiB chunks)",
                                   run_smooth, stub, pb2, spec, mesh)
             if result is not None:
                 responses = result[0]
-                report.check("Smooth ends with status OK", check_smooth_status, result, grpc)
-                report.check("Smooth response order accepted, progress*, result_chunk+, "
+                checks.check("Smooth ends with status OK", check_smooth_status, result, grpc)
+                checks.check("Smooth response order accepted, progress*, result_chunk+, "
                              "summary", check_smooth_order, responses)
-                report.check("accepted: job_id, 642 vertices, 1280 faces, closed",
+                checks.check("accepted: job_id, 642 vertices, 1280 faces, closed",
                              check_accepted, responses)
-                report.check("progress: iteration <= total == 10", check_progress, responses)
-                report.check("summary: median, 10 iterations run, positive volume, "
+                checks.check("progress: iteration <= total == 10", check_progress, responses)
+                checks.check("summary: median, 10 iterations run, positive volume, "
                              "result_bytes matches", check_summary, responses)
-                report.check("result decodes with draco_decoder to 642 v / 1280 f",
+                checks.check("result decodes with draco_decoder to 642 v / 1280 f",
                              check_result_decodes, work_dir, responses)
 
         spec_median = pb2.JobSpec(flow="median", iterations=10)
-        report.check("error: mesh_chunk first -> INVALID_ARGUMENT naming the spec",
+        checks.check("error: mesh_chunk first -> INVALID_ARGUMENT naming the spec",
                      expect_error, stub, grpc,
                      [pb2.SmoothRequest(mesh_chunk=mesh or b"\0" * 16)],
                      "INVALID_ARGUMENT", ["spec"])
-        report.check("error: unknown flow -> INVALID_ARGUMENT naming it",
+        checks.check("error: unknown flow -> INVALID_ARGUMENT naming it",
                      expect_error, stub, grpc,
                      [pb2.SmoothRequest(spec=pb2.JobSpec(flow="nope", iterations=10))]
                      + [pb2.SmoothRequest(mesh_chunk=c) for c in chunked(mesh or b"", CHUNK_BYTES)],
                      "INVALID_ARGUMENT", ["nope"])
-        report.check("error: garbage bytes -> INVALID_ARGUMENT naming draco",
+        checks.check("error: garbage bytes -> INVALID_ARGUMENT naming draco",
                      expect_error, stub, grpc,
                      [pb2.SmoothRequest(spec=spec_median),
                       pb2.SmoothRequest(mesh_chunk=b"not draco at all")],
                      "INVALID_ARGUMENT", ["draco"])
-        report.check("error: two specs -> INVALID_ARGUMENT naming the spec",
+        checks.check("error: two specs -> INVALID_ARGUMENT naming the spec",
                      expect_error, stub, grpc,
                      [pb2.SmoothRequest(spec=spec_median), pb2.SmoothRequest(spec=spec_median)],
                      "INVALID_ARGUMENT", ["spec"])
@@ -509,7 +363,7 @@ def run_all(args, report, tmp):
         if cube_pc and os.path.isfile(cube_pc):
             with open(cube_pc, "rb") as f:
                 pc = f.read()
-            report.check("error: Draco point cloud -> INVALID_ARGUMENT naming it",
+            checks.check("error: Draco point cloud -> INVALID_ARGUMENT naming it",
                          expect_error, stub, grpc,
                          [pb2.SmoothRequest(spec=spec_median)]
                          + [pb2.SmoothRequest(mesh_chunk=c) for c in chunked(pc, CHUNK_BYTES)],
@@ -520,11 +374,10 @@ def run_all(args, report, tmp):
     finally:
         if channel is not None:
             channel.close()
-        code, killed = server.stop()
-        if server.port is not None:
-            report.check("server exits cleanly on SIGTERM within 10 s",
-                         lambda: require(not killed and code == 0,
-                                         "killed after 10 s" if killed else f"exit code {code}"))
+        code, killed = server.stop(timeout=10)
+        checks.check("server exits cleanly on SIGTERM within 10 s",
+                     lambda: require(not killed and code == 0,
+                                     "killed after 10 s" if killed else f"exit code {code}"))
 
 
 if __name__ == "__main__":

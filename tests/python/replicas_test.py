@@ -7,89 +7,38 @@ grace + 1 s) and --max-queue-wait.
 Run by ctest: replicas_test.py --cli build/client/meshsmooth --server build/server/meshsmoothd
 Prints one line per check and ends with 'N passed, M failed'.
 """
-import argparse
 import json
 import os
 import re
 import signal
-import socket
 import subprocess
 import sys
-import tempfile
 import threading
 import time
 
 import grpc
 
-passed, failed = 0, 0
+from harness import Server, free_port, parser, run, run_checks
 
 
-def check(name, fn):
-    global passed, failed
-    try:
-        fn()
-        passed += 1
-        print(f"ok: {name}", flush=True)
-    except Exception as e:  # noqa: BLE001 - one failure must not hide the others
-        failed += 1
-        print(f"FAIL: {name}: {e!r}", flush=True)
-
-
-def run(cmd, timeout=120):
-    return subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
-
-
-def free_port():
-    """A loopback port nothing listens on (bound, then closed)."""
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
-class Replica:
-    """One meshsmoothd on a free loopback port; its stderr lines are kept with their times."""
+class Replica(Server):
+    """One meshsmoothd on a free loopback port; its stderr lines are kept."""
 
     def __init__(self, binary, *flags):
-        self.proc = subprocess.Popen([binary, "--listen", "127.0.0.1:0", *flags], stdout=subprocess.PIPE,
-                                     stderr=subprocess.PIPE, text=True)
-        line = self.proc.stdout.readline()
-        m = re.match(r"meshsmoothd listening on (\S+)$", line.strip())
-        assert m, f"no ready line: {line!r}"
-        self.address = m.group(1)
-        self.lines = []  # (time.monotonic(), line)
-        self._reader = threading.Thread(target=self._read, daemon=True)
-        self._reader.start()
-
-    def _read(self):
-        for line in self.proc.stderr:
-            self.lines.append((time.monotonic(), line.rstrip("\n")))
+        super().__init__(binary, *flags, stderr=Server.KEEP)
 
     def jobs(self, status=None):
         """The job ids of the server's log lines, optionally only those with `status`."""
-        ids = []
-        for _, line in list(self.lines):
-            m = re.match(r"meshsmoothd job=(\S+) .* status=(\S+) ", line)
-            if m and (status is None or m.group(2) == status):
-                ids.append(m.group(1))
-        return ids
-
-    def stop(self):
-        if self.proc.poll() is None:
-            self.proc.send_signal(signal.SIGTERM)
-            try:
-                self.proc.wait(timeout=15)
-            except subprocess.TimeoutExpired:
-                self.proc.kill()
-                self.proc.wait()
-        self._reader.join(timeout=5)
+        return [jid for jid, st in self.job_lines() if status is None or st == status]
 
 
 def main():
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--cli", required=True)
-    ap.add_argument("--server", required=True)
-    a = ap.parse_args()
-    tmp = tempfile.mkdtemp()
+    a = parser(__doc__, required=("cli", "server")).parse_args()
+    return run_checks(lambda checks, tmp: replica_checks(a, checks.check, tmp), tmp_prefix="meshsmooth-replicas-")
+
+
+def replica_checks(a, check, tmp):
+    """Every check, in order; the files they write go to tmp."""
     cli, server = a.cli, a.server
 
     def smooth(address, *extra, out="out.ply", timeout=120):
@@ -325,9 +274,6 @@ def main():
             rep.stop()
     check("--max-queue-wait: a job that finds no worker in time gets RESOURCE_EXHAUSTED naming the flag",
           max_queue_wait)
-
-    print(f"{passed} passed, {failed} failed")
-    return 1 if failed else 0
 
 
 if __name__ == "__main__":

@@ -7,36 +7,27 @@ import re
 import signal
 import socket
 import subprocess
+import sys
 import time
 
-LISTENING = re.compile(r"meshsmoothd listening on (\S+):(\d+)")
-JOB_LOG = re.compile(r"^meshsmoothd job=(\S+) .* status=(\S+)")
+# The harness the Python tests share, tests/python/harness.py.
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "python"))
+from harness import CheckFailed, Server, free_port  # noqa: E402
 
 
-def free_port():
-    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
-class Replica:
+class Replica(Server):
     """One meshsmoothd on 127.0.0.1:0; its stderr (the per-job log lines) goes to a file."""
 
     def __init__(self, binary, name, workdir, extra_args):
         self.name = name
-        self.log_path = os.path.join(workdir, f"{name}.log")
         self.fate = "alive"
         self.exit_code = None
         self.exit_seconds = None
-        self._log = open(self.log_path, "wb")
-        self.proc = subprocess.Popen([binary, "--listen", "127.0.0.1:0"] + extra_args,
-                                     stdout=subprocess.PIPE, stderr=self._log, text=True)
-        line = self.proc.stdout.readline()
-        m = LISTENING.search(line)
-        if not m:
-            self.proc.kill()
-            raise RuntimeError(f"{name} did not start: {line!r} (log: {self.log_path})")
-        self.address = f"{m.group(1)}:{m.group(2)}"
+        log_path = os.path.join(workdir, f"{name}.log")
+        try:
+            super().__init__(binary, *extra_args, stderr=log_path)
+        except CheckFailed as e:
+            raise RuntimeError(f"{name} did not start: {e} (log: {log_path})") from None
 
     def kill(self):
         self.fate = "SIGKILL"
@@ -55,20 +46,8 @@ class Replica:
             self.proc.kill()
             self.exit_code = self.proc.wait()
 
-    def stop(self):
-        if self.proc.poll() is None:
-            self.proc.send_signal(signal.SIGTERM)
-            try:
-                self.proc.wait(timeout=10)
-            except subprocess.TimeoutExpired:
-                self.proc.kill()
-                self.proc.wait()
-        self._log.close()
-
-    def job_lines(self):
-        """(job id, status) of each job log line."""
-        with open(self.log_path, errors="replace") as f:
-            return [m.groups() for m in map(JOB_LOG.match, f) if m]
+    def stop(self, timeout=10):
+        return super().stop(timeout)
 
 
 NGINX_MAIN = """\

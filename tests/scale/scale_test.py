@@ -25,7 +25,6 @@ Usage (ctest runs it this way, see tests/CMakeLists.txt):
 Standard library only: runs under Debian's /usr/bin/python3 as it comes.
 """
 
-import argparse
 import concurrent.futures
 import hashlib
 import json
@@ -34,11 +33,14 @@ import re
 import shutil
 import subprocess
 import sys
-import tempfile
 import threading
 import time
 
 from cluster import Nginx, Replica
+
+# The harness the Python tests share, tests/python/harness.py.
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "python"))
+from harness import fresh_dir, job_lines, parser, run, run_checks  # noqa: E402
 
 # The inputs and parameters the jobs cycle through: small built-in meshes and fixed iteration
 # counts, so 300 jobs stay within the time budget whatever the default job costs, and several
@@ -67,7 +69,7 @@ def sha256(path):
 
 
 def run_cli(cli, args, timeout):
-    return subprocess.run([cli, "smooth"] + args, capture_output=True, text=True, timeout=timeout)
+    return run([cli, "smooth"] + args, timeout=timeout)
 
 
 def make_references(cli, workdir):
@@ -279,78 +281,82 @@ def print_summary(mode, args, wall, counts, replicas, nginx, records):
 
 def self_test():
     """The checks on made-up records: each kind of violation must be reported."""
-    tmp = tempfile.mkdtemp(prefix="scale-selftest-")
-    try:
-        out_dir = os.path.join(tmp, "out")
-        os.makedirs(out_dir)
-        ids = ["a", "b", "c"]
-        variant_of = {"a": 0, "b": 1, "c": 0}
-        refs = []
-        for v in range(2):
-            with open(os.path.join(tmp, f"ref{v}"), "wb") as f:
-                f.write(f"mesh {v}".encode())
-            refs.append(sha256(os.path.join(tmp, f"ref{v}")))
+    return run_checks(self_checks, tmp_prefix="scale-selftest-")
 
-        class FakeReplica:
-            def __init__(self, name, lines, fate="alive"):
-                self.name, self.fate, self.exit_code, self.exit_seconds = name, fate, 0, 0.5
-                self.log_path = os.path.join(tmp, name)
-                with open(self.log_path, "w") as f:
-                    f.writelines(f"meshsmoothd job={j} flow=x status={s} decode=0s\n" for j, s in lines)
 
-            def job_lines(self):
-                return Replica.job_lines(self)
+def self_checks(checks, tmp):
+    """One check per kind of violation: check_phase on records, outputs and replica logs made up
+    in tmp must name it (and name nothing for a clean run)."""
+    out_dir = os.path.join(tmp, "out")
+    os.makedirs(out_dir)
+    ids = ["a", "b", "c"]
+    variant_of = {"a": 0, "b": 1, "c": 0}
+    refs = []
+    for v in range(2):
+        with open(os.path.join(tmp, f"ref{v}"), "wb") as f:
+            f.write(f"mesh {v}".encode())
+        refs.append(sha256(os.path.join(tmp, f"ref{v}")))
 
-        def write(jid, v):
-            with open(os.path.join(out_dir, f"{jid}.ply"), "wb") as f:
-                f.write(f"mesh {v}".encode())
+    class FakeReplica:
+        def __init__(self, name, lines, fate="alive"):
+            self.name, self.fate, self.exit_code, self.exit_seconds = name, fate, 0, 0.5
+            self.lines = [f"meshsmoothd job={j} flow=x status={s} decode=0s" for j, s in lines]
 
-        def ok(jid):
-            return {"id": jid, "exit": 0, "stdout": f"job {jid}: laplacian, 8 iterations\n", "stderr": ""}
+        def job_lines(self):
+            return job_lines(self.lines)
 
-        def run(records, logs, max_errors=1):
-            reps = [FakeReplica(f"r{i}", l) for i, l in enumerate(logs)]
-            return check_phase(ids, variant_of, records, out_dir, refs, reps, max_errors, 0, 1)[0]
+    def write(jid, v):
+        with open(os.path.join(out_dir, f"{jid}.ply"), "wb") as f:
+            f.write(f"mesh {v}".encode())
 
-        good_logs = [[("a", "OK")], [("b", "OK"), ("c", "UNAVAILABLE")]]
-        failed_c = {"id": "c", "exit": 3, "stdout": "", "stderr": "meshsmooth: UNAVAILABLE: replica went away\n"}
-        write("a", 0)
-        write("b", 1)
-        cases = {
-            "a clean run": ([ok("a"), ok("b"), failed_c], good_logs, None),
-            "a lost job": ([ok("a"), ok("b")], good_logs, "lost"),
-            "a job run twice": ([ok("a"), ok("b"), failed_c, ok("a")], good_logs, "duplicated"),
-            "a wrong result": ([ok("a"), ok("b"), failed_c], good_logs, "wrong result"),
-            "a failure without a status": ([ok("a"), ok("b"), dict(failed_c, stderr="Segmentation fault\n",
-                                                                     exit=-11)], good_logs, "clear status"),
-            "a summary of another job": ([ok("a"), dict(ok("b"), stdout="job a: laplacian\n"), failed_c], good_logs,
-                                         "summary names"),
-            "a job smoothed twice": ([ok("a"), ok("b"), failed_c], [[("a", "OK")], [("b", "OK"), ("a", "OK")]],
-                                     "smoothed 2 times"),
-            "a success no replica logged": ([ok("a"), ok("b"), failed_c], [[("a", "OK")], [("c", "OK")]],
-                                            "no replica logged"),
-            "an idle replica": ([ok("a"), ok("b"), failed_c], good_logs + [[]], "smoothed no job"),
-            "too many failures": ([ok("a"), ok("b"), failed_c], good_logs, "jobs failed"),
-        }
-        failures = 0
-        for name, (records, logs, expect) in cases.items():
-            if name == "a wrong result":
-                write("b", 0)
-            bad = run(records, logs, max_errors=0 if name == "too many failures" else 1)
+    def ok(jid):
+        return {"id": jid, "exit": 0, "stdout": f"job {jid}: laplacian, 8 iterations\n", "stderr": ""}
+
+    def violations(records, logs, max_errors=1):
+        reps = [FakeReplica(f"r{i}", l) for i, l in enumerate(logs)]
+        return check_phase(ids, variant_of, records, out_dir, refs, reps, max_errors, 0, 1)[0]
+
+    good_logs = [[("a", "OK")], [("b", "OK"), ("c", "UNAVAILABLE")]]
+    failed_c = {"id": "c", "exit": 3, "stdout": "", "stderr": "meshsmooth: UNAVAILABLE: replica went away\n"}
+    write("a", 0)
+    write("b", 1)
+    cases = {
+        "a clean run": ([ok("a"), ok("b"), failed_c], good_logs, None),
+        "a lost job": ([ok("a"), ok("b")], good_logs, "lost"),
+        "a job run twice": ([ok("a"), ok("b"), failed_c, ok("a")], good_logs, "duplicated"),
+        "a wrong result": ([ok("a"), ok("b"), failed_c], good_logs, "wrong result"),
+        "a failure without a status": ([ok("a"), ok("b"), dict(failed_c, stderr="Segmentation fault\n",
+                                                                 exit=-11)], good_logs, "clear status"),
+        "a summary of another job": ([ok("a"), dict(ok("b"), stdout="job a: laplacian\n"), failed_c], good_logs,
+                                     "summary names"),
+        "a job smoothed twice": ([ok("a"), ok("b"), failed_c], [[("a", "OK")], [("b", "OK"), ("a", "OK")]],
+                                 "smoothed 2 times"),
+        "a success no replica logged": ([ok("a"), ok("b"), failed_c], [[("a", "OK")], [("c", "OK")]],
+                                        "no replica logged"),
+        "an idle replica": ([ok("a"), ok("b"), failed_c], good_logs + [[]], "smoothed no job"),
+        "too many failures": ([ok("a"), ok("b"), failed_c], good_logs, "jobs failed"),
+    }
+
+    def caught(name, records, logs, expect):
+        if name == "a wrong result":
+            write("b", 0)
+        try:
+            bad = violations(records, logs, max_errors=0 if name == "too many failures" else 1)
+        finally:
             if name == "a wrong result":
                 write("b", 1)
-            hit = any(expect in b for b in bad) if expect else not bad
-            print(f"{'ok  ' if hit else 'FAIL'} {name}: {bad if bad else 'no violation'}")
-            failures += not hit
-        return 1 if failures else 0
-    finally:
-        shutil.rmtree(tmp)
+        if expect:
+            assert any(expect in b for b in bad), f"no violation naming {expect!r}: {bad}"
+        else:
+            assert not bad, bad
+
+    for name, (records, logs, expect) in cases.items():
+        checks.check(f"{name}: {f'reported ({expect!r})' if expect else 'no violation'}",
+                     caught, name, records, logs, expect)
 
 
 def main():
-    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("--cli", help="the meshsmooth binary")
-    p.add_argument("--server", help="the meshsmoothd binary")
+    p = parser(__doc__, optional=("cli", "server"))
     p.add_argument("--nginx", default=shutil.which("nginx") or "/usr/sbin/nginx")
     p.add_argument("--nginx-conf", help="the deployment file deploy/nginx/meshsmooth.conf")
     p.add_argument("--modes", default="nginx,direct", help="nginx (through the proxy), direct (client round-robin)")
@@ -383,10 +389,7 @@ def main():
             print(f"scale test: no nginx at {args.nginx} (scripts/setup.sh installs Debian's)", file=sys.stderr)
             return 1
 
-    workdir = args.workdir or tempfile.mkdtemp(prefix="meshsmooth-scale-")
-    if args.workdir:
-        shutil.rmtree(workdir, ignore_errors=True)
-        os.makedirs(workdir)
+    workdir = fresh_dir(args.workdir, prefix="meshsmooth-scale-")
     start = time.monotonic()
     refs = make_references(args.cli, workdir)
     violations = []
