@@ -1,8 +1,8 @@
 // The replaceable global allocation functions ([new.delete]) with the bound of
 // core/io/allocation_limit.h: outside a ScopedAllocationLimit they behave as the standard ones
 // (malloc and free underneath). Process-wide, so it lives in the base library, which only the
-// programs link. Under AddressSanitizer, blocks from new are then seen as malloc'd, so ASan no
-// longer reports a new/free mismatch; every other check stays.
+// programs link. Under AddressSanitizer, blocks from new are then seen as malloc'd, so ASan does
+// not report a new/free mismatch; every other check stays.
 #include <cstdlib>
 #include <new>
 

@@ -23,7 +23,7 @@ void UseHugePagesForLargeBuffers(char** argv) {
   std::string value = tunables != nullptr && *tunables != '\0' ? std::string(tunables) + ":" : std::string();
   // One arena: glibc gives each allocating thread an arena of its own, and a job runs on a
   // worker thread, where its decode, topology and encode ran slower than the same steps on the
-  // main thread (docs/performance.md; presumably the thread arenas' heaps get no
+  // main thread (docs/decisions.md, "Speed"; presumably the thread arenas' heaps get no
   // huge pages or are trimmed and faulted in again). Small allocations still avoid the arena's
   // lock through glibc's per-thread cache.
   value += "glibc.malloc.hugetlb=1:glibc.malloc.arena_max=1";

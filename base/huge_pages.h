@@ -7,7 +7,7 @@
 // (/sys/kernel/mm/transparent_hugepage/enabled is "madvise"), glibc's malloc asks for them when
 // the tunable glibc.malloc.hugetlb=1 is set, and the same memory costs a small fraction of
 // that; with glibc.malloc.arena_max=1 the worker threads allocate from the main arena too, where
-// a job's steps run faster than in their own arenas (figures in docs/performance.md).
+// a job's steps run faster than in their own arenas (figures in docs/decisions.md, "Speed").
 // Tunables are read when a program starts, so the binaries call this first thing in main().
 #pragma once
 

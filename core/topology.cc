@@ -94,7 +94,7 @@ bool WalkFan(Scratch& s, int32_t start, int32_t start_face, bool closed, int32_t
 
 // Up to this many faces the closed-fan check compares every pair (fast for the usual valence
 // 4-8); above it looks the faces up in a sorted list, so that a vertex of valence k costs
-// O(k log k), not O(k^2) (a fan of valence 120,000 took 10 s).
+// O(k log k), not O(k^2) (pairs would take ~10 s on a fan of valence 120,000).
 constexpr int32_t kPairwiseFanFaces = 32;
 
 // The face whose a is `b`, or -1 when none is; -2 when two are (a repeated neighbour).

@@ -34,7 +34,7 @@ Welded WeldPoints(const std::vector<Vec3>& points) {
   // int32) and sorted by the hash bits, stably (RadixSortBits): equal positions end up adjacent
   // with their indices ascending, and other positions share a key rarely (~n^2 / 2^34 pairs).
   // Three passes of 11 bits (2048 buckets) rather than the whole hash in four 16-bit ones, whose
-  // scattered writes miss the caches (docs/performance.md).
+  // scattered writes miss the caches (docs/decisions.md, "Speed").
   constexpr int kIndexBits = 31, kDigitBits = 11, kPasses = 3;
   constexpr uint64_t kIndexMask = (uint64_t{1} << kIndexBits) - 1;
   std::vector<uint64_t> key(n);

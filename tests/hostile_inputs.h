@@ -1,4 +1,4 @@
-// Hostile inputs shared by the core and service tests (issue 19): Draco bytes that Draco's
+// Hostile inputs shared by the core and service tests: Draco bytes that Draco's
 // decoder accepts but meshsmooth must refuse (a point cloud among them), and a fan whose centre
 // has a huge valence.
 #pragma once
@@ -122,7 +122,8 @@ inline std::string EdgebreakerHead(bool v22, uint32_t vertices, uint32_t faces) 
   return out + std::string(1300, '\x0b');
 }
 
-// The issue's example: a 20 x 15 torus (1160 vertices here) with one face index set to 65535.
+// A 20 x 15 torus (1160 vertices here) with one face index set to 65535, which Draco's decoder
+// accepts.
 inline Mesh TorusWithIndexPastThePoints() {
   Mesh m = TwoRateTorus(20);
   m.triangles[5][1] = 65535;

@@ -93,8 +93,8 @@ VertexEstimate EstimateAt(const Mesh& mesh, const Topology& topo, const std::vec
 
   // Two sums: the faces whose corners are all interior, and the others. A boundary vertex's
   // normal comes from a one-sided fan and is tilted where the surface bends, so its faces
-  // count only when the vertex has no other (measured on the cosine wave: a row next to a
-  // boundary crest came out 20% low and made a false ridge beside it).
+  // count only when the vertex has no other (measured on the cosine wave: counted, they put a
+  // row next to a boundary crest 20% low and make a false ridge beside it).
   double sums[2][4] = {};  // b11, b12, b22, weight sum
   for (int32_t k = 0; k < n; ++k) {
     const int32_t qa = ring[k], qb = ring[k + 1 == n ? 0 : k + 1];

@@ -31,7 +31,7 @@ constexpr double kSaliencyEpsilon = 1e-9;
 // A patch is a guide for face i only when its mean normal lies within ~23 degrees of n_i
 // (cos 23° = 0.92). At a corner every patch containing a face reaches onto the other sides,
 // and the most consistent one can lie mostly there: its mean would pull the face onto the
-// other side (a noisy cube's corner faces folded by ~89 degrees with any patch allowed, by 22
+// other side (a noisy cube's corner faces fold by ~89 degrees with any patch allowed, by 22
 // at 30 degrees; 20-25 degrees keep every cube edge within 3 degrees of 90). With no such
 // patch the face's own normal guides it, as in bilateral_normal.
 constexpr double kMinGuideCosine = 0.92;

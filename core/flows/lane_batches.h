@@ -12,7 +12,7 @@ namespace meshsmooth::flows {
 // The free vertices of each block of kBlock vertices (core/flows/flow_kernel.h), in batches of
 // `width` for MeanCurvatureLanes: a batch takes as many kernel steps as its largest valence,
 // so the free vertices of a block are sorted by valence (stably) before they are cut into
-// batches: on scans that saves a quarter of the steps (docs/performance.md). The rows replace
+// batches: on scans that saves a quarter of the steps (docs/decisions.md, "Speed"). The rows replace
 // the gathers of ring indices.
 //
 // Batch j (of lanes[j] <= width vertices; a block's last batch may be short) starts at

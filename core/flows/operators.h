@@ -234,7 +234,7 @@ inline Curvature MeanCurvatureNormal(const StepContext& c, const Vec3* pos, int3
 // The loads of a batch of the cotangent kernel wait on the cache misses of its neighbours'
 // positions (the arithmetic leaves the core too few loads in flight to hide them): each batch
 // prefetches the neighbours of the vertices kRingPrefetchAhead further on (16 to 96 vertices
-// ahead all measure the same: docs/performance.md).
+// ahead all measure the same: docs/decisions.md, "Speed").
 inline constexpr int32_t kRingPrefetchAhead = 32;
 inline constexpr int32_t kBatchPrefetchAhead = 4;  // batches of CurvatureStepLanes: 32 vertices with 8 lanes
 

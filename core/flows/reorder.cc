@@ -32,14 +32,14 @@ constexpr int32_t kReorderMaxVertices = 1 << 25;
 // MortonOrderPaysOff(): neighbours further than kNearIndices from their vertex count as far;
 // one in kLocalitySampleStride vertices is counted, in runs of kLocalitySampleRun consecutive
 // ones (contiguous reads are cheaper than single scattered vertices). The shares of far
-// neighbours of typical inputs are in docs/performance.md.
+// neighbours of typical inputs are in docs/decisions.md ("Speed").
 constexpr int32_t kNearIndices = 4096;
 constexpr int32_t kLocalitySampleStride = 32;
 constexpr int32_t kLocalitySampleRun = 64;
 // Up to this share an order is as local as a Morton order would make it.
 constexpr double kLocalFarShare = 0.03;
 // Reordering repays itself after about this many iterations divided by the share: the middle
-// of the break-even points measured on icospheres and the dragon (docs/performance.md).
+// of the break-even points measured on icospheres and the dragon (docs/decisions.md, "Speed").
 constexpr double kRepayingFarShareIterations = 2.5;
 
 }  // namespace

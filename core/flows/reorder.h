@@ -21,7 +21,7 @@ std::vector<int32_t> MortonOrder(const std::vector<Vec3>& positions, int threads
 // ReorderMode::kAuto's choice: a mesh of 100k .. 2^25 vertices whose order leaves more than 3%
 // of its neighbours over 4096 indices away from their vertex (a Morton order leaves about 2%),
 // for a run of at least 2.5 / (that share) iterations: reordering costs about as much as a few
-// iterations in a scattered order lose (docs/performance.md). The share is counted on the
+// iterations in a scattered order lose (docs/decisions.md, "Speed"). The share is counted on the
 // rings of one vertex in 32 (runs of 64 in every 2048).
 bool MortonOrderPaysOff(const Topology& topo, int iterations);
 

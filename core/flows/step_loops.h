@@ -60,7 +60,7 @@ inline Vec3 Threshold(const Vec3& f, double t) {
 // order most neighbours lie within a few thousand vertices of a vertex, on either side; those
 // behind were read recently, those ahead are not yet in cache and the hardware prefetcher
 // (which follows the sequential stream only a few lines ahead) does not fetch them. 4096 is
-// the best distance measured (docs/performance.md).
+// the best distance measured (docs/decisions.md, "Speed").
 inline constexpr int32_t kPositionPrefetchAhead = 4096;
 
 // Called for every vertex v of a loop over [0, n) reading pos at v's neighbours: one prefetch

@@ -90,7 +90,7 @@ absl::StatusOr<std::optional<DeclaredSizes>> CheckDeclaredEdgebreakerSizes(std::
         " vertices are decoded"));
   }
   // Within the limit, counts no real encoding can back: files read from disk have no limit
-  // but int32 indices, and 436 bytes declaring 657 million faces made Draco ask for 7.9 GB.
+  // but int32 indices, and 436 bytes declaring 657 million faces make Draco ask for 7.9 GB.
   const int64_t plausible = kDeclaredCountFloor + kDeclaredCountsPerByte * static_cast<int64_t>(bytes.size());
   if (faces > plausible || declared_vertices > plausible) {
     return absl::InvalidArgumentError(absl::StrCat(

@@ -126,7 +126,7 @@ absl::StatusOr<Mesh> PointMesh(const draco::Mesh& dm) {
   const uint32_t n = dm.num_points();
   mesh.positions.resize(n);
   // Plain float32 xyz (what a lossless encoder writes) is read directly, one copy per point;
-  // ConvertValue's per-value type switch gives the same doubles, slower (docs/performance.md).
+  // ConvertValue's per-value type switch gives the same doubles, slower (docs/decisions.md).
   const bool float_xyz = pos->data_type() == draco::DT_FLOAT32 && pos->num_components() == 3;
   for (uint32_t i = 0; i < n; ++i) {
     const draco::AttributeValueIndex avi = pos->mapped_index(draco::PointIndex(i));

@@ -52,7 +52,7 @@ struct EdgeLengthSums {
 
 // Rings are contiguous but the positions they name are scattered in a mesh's own order: the
 // edge pass prefetches the position of the ring entry this far ahead (it pays on meshes too
-// large for the caches; docs/performance.md).
+// large for the caches; docs/decisions.md, "Speed").
 constexpr int32_t kEdgePrefetchEntries = 64;
 
 // The lengths of the edges (a < b) of the vertices' rings, summed in fixed blocks of vertices:

@@ -244,7 +244,8 @@ int64_t StatsField(const std::string& json, const std::string& file, const std::
 }
 
 // Every real mesh loads, and its counts match stats.json. Definitions agree for every field
-// compared here (see SOURCES.md); fields whose definitions differ are not compared.
+// compared here (those of ValidationReport, core/topology.h); fields whose definitions differ
+// are not compared.
 TEST(TopologyTest, SharedMeshesMatchStatsJson) {
   MESHSMOOTH_REQUIRE_SHARED("meshes");
   const auto dir = testing::SharedData("meshes");

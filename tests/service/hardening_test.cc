@@ -1,4 +1,4 @@
-// The hostile requests of issue 19 through the service: each gets a clear status and leaves the
+// Hostile requests through the service: each gets a clear status and leaves the
 // server serving (docs/reliability.md lists the classes and these tests).
 #include <atomic>
 #include <chrono>
@@ -35,7 +35,8 @@ v1::JobSpec Output(v1::JobSpec spec, uint32_t bits, bool edgebreaker) {
   return spec;
 }
 
-// The issue's crashing uploads: refused with INVALID_ARGUMENT, and the server still serves.
+// Uploads that would crash Draco's encoder or index past a buffer: refused with
+// INVALID_ARGUMENT, and the server still serves.
 TEST(HardeningTest, HostileDracoUploadsAreRefusedAndTheServerServesOn) {
   auto server = StartServer();
   auto channel = server->InProcessChannel();
@@ -74,16 +75,16 @@ TEST(HardeningTest, QuantizationAboveTheCapIsRefusedWithTheSpec) {
   EXPECT_TRUE(Call(server->InProcessChannel(), Output(Spec("median", 3), 24, false), *EncodeDraco(Icosphere(2))).ok());
 }
 
-// A 2.2 MB fan whose centre has valence 120,000 held a worker ~10 s in validation, quadratic
-// in the valence. It now validates in milliseconds; the steps that stay quadratic in a vertex's
-// valence (eq. (14)'s second rings, Draco's Edgebreaker encoder) are refused for it, at once.
+// A 2.2 MB fan whose centre has valence 120,000 validates in milliseconds (a check quadratic in
+// the valence would hold a worker ~10 s); the steps that stay quadratic in a vertex's valence
+// (eq. (14)'s second rings, Draco's Edgebreaker encoder) are refused for it, at once.
 TEST(HardeningTest, HighValenceFanCompletesOrIsRefusedFast) {
   auto server = StartServer();
   const std::string fan = *EncodeDraco(Fan(120000));
   ASSERT_GT(fan.size(), 2'000'000u);
   absl::StatusOr<SmoothOutcome> out = Call(server->InProcessChannel(), Spec("median", 3), fan);
   ASSERT_TRUE(out.ok()) << out.status();
-  EXPECT_LT(out->summary.timings().decode_seconds(), 2.0);  // 10 s before; generous
+  EXPECT_LT(out->summary.timings().decode_seconds(), 2.0);  // quadratic: ~10 s; generous
   EXPECT_EQ(out->summary.parameters().iterations_run(), 3u);
 
   v1::JobSpec ring2 = Spec("median", 3);
@@ -109,7 +110,7 @@ TEST(HardeningTest, TimeLimitCoversEveryStepOfTheJob) {
   ExpectStatus(s, absl::StatusCode::kDeadlineExceeded, "time limit of 1e-06 s while decoding the upload");
 }
 
-// A job cancelled mid-smoothing logged iterations=0/N: the log line now says how many ran.
+// A job cancelled mid-smoothing logs the iterations it ran, not iterations=0/N.
 TEST(HardeningTest, CancelledJobLogsTheIterationsItRan) {
   server::ServerOptions o;
   o.workers = 1;
@@ -137,8 +138,8 @@ TEST(HardeningTest, CancelledJobLogsTheIterationsItRan) {
   EXPECT_GE(seen.load(), 3u);
 }
 
-// Proto3 keeps enum numbers it does not know: they ran as the defaults. Each enum of the
-// JobSpec now refuses them with INVALID_ARGUMENT naming the field.
+// Proto3 keeps enum numbers it does not know, which would run as the defaults. Each enum of the
+// JobSpec refuses them with INVALID_ARGUMENT naming the field.
 template <typename Enum>
 void ExpectUnknownValuesRefused(const std::string& field, const std::function<void(v1::JobSpec&, Enum)>& set) {
   auto server = StartServer();
@@ -169,7 +170,7 @@ TEST(HardeningTest, UnknownAdaptiveModeIsRefused) {
 
 // One rule for sizes: beyond one of this server's limits (a chunk, the upload, the vertices) is
 // RESOURCE_EXHAUSTED, whoever checks it: a chunk between 1 MiB + 1 and gRPC's own receive limit
-// (1 MiB + 64 KiB) got INVALID_ARGUMENT from us, a larger one RESOURCE_EXHAUSTED from gRPC.
+// (1 MiB + 64 KiB) as much as a larger one, which gRPC itself refuses.
 TEST(HardeningTest, SizesBeyondTheLimitsAreResourceExhausted) {
   server::ServerOptions o;
   o.max_upload_bytes = 3 << 20;
@@ -192,9 +193,9 @@ TEST(HardeningTest, SizesBeyondTheLimitsAreResourceExhausted) {
       << g.error_message();
 }
 
-// Streams that sent a spec and then nothing held their call slot for ever: with every slot
-// taken, everyone else got "too many concurrent Smooth calls". An upload that stops sending
-// for --upload-idle-seconds now ends with DEADLINE_EXCEEDED, and its slot is free again.
+// Streams that send a spec and then nothing would hold their call slot for ever, and with every
+// slot taken everyone else would get "too many concurrent Smooth calls". An upload that stops
+// sending for --upload-idle-seconds ends with DEADLINE_EXCEEDED, and its slot is free again.
 TEST(HardeningTest, IdleUploadsAreEndedAndFreeTheirSlots) {
   server::ServerOptions o;
   o.max_concurrent_streams = 4;

@@ -1,4 +1,4 @@
-// Load and faults together (issue 19): 32 concurrent clients on two workers, each sending a mix
+// Load and faults together: 32 concurrent clients on two workers, each sending a mix
 // of valid jobs and hostile requests over loopback TCP. Every valid job must come back equal
 // to the core's own Smooth() of the same input, every hostile one must end with its status,
 // and at the end the server still serves and its memory stayed below the admission budget
@@ -31,7 +31,7 @@ constexpr int kRoundsPerClient = 6;
 constexpr int64_t kBudgetBytes = 64 << 20;
 // What the test process holds besides the admitted bytes: code, gRPC's buffers (at most one
 // message of 1 MiB + 64 KiB per open call), the running jobs' meshes, the clients' inputs,
-// results and expected meshes. The issue's memory bombs took 0.5-3.7 GB.
+// results and expected meshes. Unrefused, a 27- to 30-bit quantization would take 0.5-3.7 GB.
 constexpr int64_t kRssMarginBytes = 320 << 20;
 
 // Peak resident memory of this process (VmHWM), in bytes; 0 when /proc cannot tell.

@@ -1,4 +1,4 @@
-// Issue 20's acceptance: curvature and ridges on the triangulations scanners and meshers
+// Curvature and ridges on the triangulations scanners and meshers
 // produce, not only on regular meshes. The meshes are built here:
 // - the cosine sheet z = cos x on a 241 x 49 grid, each square split by one diagonal
 //   (consistent), by alternating diagonals (criss-cross: half the vertices have valence 4), and
@@ -157,8 +157,8 @@ LineScore ScoreSheet(const Mesh& m, const Features& f, FeatureLabel label, doubl
 
 // Crests (ridges) and troughs (ravines) of the sheet in all three triangulations: precision
 // >= 0.9 and recall >= 0.8 each, with the threshold of the other wave tests (0.1: half the
-// sheet has a principal curvature that is 0 on the smooth surface, see ridges_test.cc). Today's
-// estimate needs no help from the valence: every interior vertex has one.
+// sheet has a principal curvature that is 0 on the smooth surface, see ridges_test.cc). The
+// estimate needs no help from the valence: every interior vertex gets one.
 TEST(CurvatureMeshesTest, CosineSheetCrestsAndTroughsInEveryTriangulation) {
   const struct {
     Diagonals diagonals;
@@ -291,7 +291,7 @@ std::pair<double, double> TorusCurvatures(const Vec3& p) {
   return {1.0, around_axis};
 }
 
-// Prints the errors of `m` and checks issue 20's bounds: median <= 5%, 95th percentile <= 15%,
+// Prints the errors of `m` and checks the estimator's bounds: median <= 5%, 95th percentile <= 15%,
 // every vertex with an estimate.
 template <typename Truth>
 void ExpectAccurate(const char* name, const Mesh& m, Truth truth) {
@@ -324,7 +324,7 @@ Mesh MarchingTetrahedraSphere(double step) {
 // extraction is printed but not bounded: its vertices sit off the sphere by the linear
 // interpolation's error (up to about step^2 / 8 = 3e-4 here), which on edges as short as
 // 0.01 puts a 1-ring estimate off by tens of percent (measured: median 32.7%, 95th percentile
-// 208%); issue 20 asks for 5% / 15% there, which needs a wider support than the 1-ring.
+// 208%); the bounds of 5% / 15% there need a wider support than the 1-ring (docs/decisions.md).
 TEST(CurvatureMeshesTest, MarchingTetrahedraSphere) {
   const Vec3 centre = kCentre;
   const Mesh raw = MarchingTetrahedraSphere(0.05);

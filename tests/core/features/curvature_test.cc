@@ -16,10 +16,10 @@ double AngleDeg(const Vec3& a, const Vec3& b) {
   return std::atan2(Norm(Cross(a, b)), Dot(a, b)) * 180.0 / std::numbers::pi;
 }
 
-// Icosphere(5), r = 1 and 3 (issue 6): kmax and kmin within 3% of 1/r and the normal within 1
-// degree of the radius at every vertex, and an orthonormal frame. Taubin's closed form
-// (kmax = 3a - b) missed this by 25.1% on the distorted hexagons; the least-squares fit is exact
-// for a radial normal, so what remains is the area-weighted normal's tilt.
+// Icosphere(5), r = 1 and 3: kmax and kmin within 3% of 1/r and the normal within 1 degree of
+// the radius at every vertex, and an orthonormal frame. Taubin's closed form (kmax = 3a - b)
+// misses this by 25.1% on the distorted hexagons; Max's normals and the per-face tensors are
+// exact for points on a sphere.
 TEST(CurvatureTest, SphereHasBothCurvaturesOneOverRadius) {
   for (double r : {1.0, 3.0}) {
     Mesh m = Icosphere(5);
@@ -102,7 +102,7 @@ TEST(CurvatureTest, PlaneIsFlatAndItsBoundaryIsNotValid) {
 }
 
 // A regular octahedron: every ring has its four edges in only two tangent directions modulo pi
-// (a fit of the tensor to directional curvatures is undetermined there; issue 20). The per-face
+// (a fit of the tensor to directional curvatures is undetermined there). The per-face
 // tensors from normal differences still give every vertex one, and with exactly radial normals
 // it is exact: kmax = kmin = 1.
 TEST(CurvatureTest, TwoDirectionRingsHaveATensor) {

@@ -72,11 +72,10 @@ TEST(RidgesTest, CleanWaveHasRidgesOnTheCrestsAndRavinesInTheTroughs) {
   const Mesh m = Wave();
   const Topology topo = BuildTopology(m);
   // Threshold 0.1 A. Where the wave is concave its kmax is 0 along y on the smooth surface; the
-  // estimate there is up to 0.0007 A (Taubin's closed form gave 0.06 A and, without a threshold,
-  // hundreds of spurious labels: precision about 25%) and exactly constant along y, its own
-  // curvature line, so the strict comparison is decided by rounding. The least-squares fit
-  // scores 100% here even without the threshold; it stays as the guard against that rounding.
-  // Likewise for kmin where the wave is convex.
+  // estimate there is near 0 and exactly constant along y, its own curvature line, so the strict
+  // comparison is decided by rounding, and the threshold guards against that (Taubin's closed
+  // form reads up to 0.06 A there and, without a threshold, gives hundreds of spurious labels:
+  // precision about 25%). Likewise for kmin where the wave is convex.
   FeatureOptions options;
   options.min_abs_curvature = 0.1 * kAmplitude;
   const Features f = DetectFeatures(m, topo, options);
@@ -148,7 +147,7 @@ TEST(RidgesTest, MedianSmoothingRecoversTheCrestsOfANoisyWave) {
 }
 
 // Boundary, non-manifold, isolated and degenerate vertices are never labelled, their neighbours
-// still are (issue 20: a poor neighbour used to hide every vertex around it), nothing is NaN,
+// still are (a poor neighbour does not hide the vertices around it), nothing is NaN,
 // and the counts match the labels, on a noisy wave with a bow tie attached, a collapsed
 // one-ring, a zero-area sliver and a non-finite coordinate.
 TEST(RidgesTest, BrokenVerticesAreNotLabelledAndNothingIsNaN) {

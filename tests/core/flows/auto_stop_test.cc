@@ -222,8 +222,8 @@ TEST(AutoStopTest, FoldRepairUnfoldsNeedlesWithinItsReach) {
 
 // A CAD part with features thinner than the noise: the turbine's narrow strips between
 // right-angled creases meet at more than kFoldAngleDeg after a run, like folds. Pulling their
-// vertices on to their rings' centroids without bound flattened them (RMS 0.061 h, 72 flipped
-// faces, against 0.052 h and 41 within kFoldRepairReachH).
+// vertices on to their rings' centroids without bound flattens them (RMS 0.061 h, 72 flipped
+// faces, against 0.052 h and 41 within kFoldRepairReachH; docs/decisions.md).
 TEST(AutoStopTest, FoldRepairLeavesThinFeaturesOfACadPart) {
   MESHSMOOTH_REQUIRE_SHARED("meshes");
   const FlowParams p;  // no flow, iterations or step: the default job

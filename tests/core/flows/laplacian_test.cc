@@ -53,7 +53,7 @@ struct DoubleTraits : OpenMesh::DefaultTraits {
 };
 using OMesh = OpenMesh::TriMesh_ArrayKernelT<DoubleTraits>;
 
-// RECIPES.md #11: on a closed mesh OpenMesh's JacobiLaplaceSmootherT (Tangential_and_Normal,
+// On a closed mesh OpenMesh's JacobiLaplaceSmootherT (Tangential_and_Normal,
 // C0) is a uniform Laplacian step with lambda = 0.5.
 TEST(LaplacianTest, EqualsOpenMeshJacobiLaplaceOnClosedMesh) {
   Mesh m = NoisySphere(3);

@@ -141,9 +141,9 @@ TEST(NormalFilterTest, NoisyCubeComesBackWithSharpEdgesAndCorners) {
   }
 }
 
-// Issue-level figures on fandisk at sigma = 0.2 h, one seed (the quality benchmark gives the
-// means over seeds and the other noise levels). guided_normal's overall bound is above the
-// issue's 1.9 degrees, which it does not reach yet (docs/normal-filtering.md).
+// Fandisk at sigma = 0.2 h, one seed, against the targets of docs/normal-filtering.md ("On
+// fandisk"; the quality benchmark gives the means over seeds and the other noise levels).
+// guided_normal's overall bound is above its target of 1.9 degrees, which it does not reach.
 TEST(NormalFilterTest, FandiskKeepsItsCreases) {
   const std::filesystem::path path = testing::SharedData("meshes") / "fandisk.obj";
   if (!std::filesystem::exists(path)) GTEST_SKIP() << path << " absent";

@@ -1,7 +1,7 @@
-// The paper's claims (NOTES.md, "What the paper claims") as threshold assertions, on the noisy
-// icosphere and, for the regularity claims, the noisy two-rate torus. Every flow gets the same
-// iteration budget N = 20; umbrella flows use step 0.5 (taubin 0.5 / mu 0.53), curvature flows
-// step 0.1 (x h^2), as ../shared/reference/paper_flows.py does.
+// The paper's claims (docs/paper.md, "What the paper claims, and how the tests measure it") as
+// threshold assertions, on the noisy icosphere and, for the regularity claims, the noisy
+// two-rate torus. Every flow gets the same iteration budget N = 20; umbrella flows use step 0.5
+// (taubin 0.5 / mu 0.53), curvature flows step 0.1 (x h^2).
 #include <cstdio>
 
 #include "gtest/gtest.h"

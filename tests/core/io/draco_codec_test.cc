@@ -124,9 +124,9 @@ TEST(DracoCodecTest, MeshWithoutFacesIsRefusedAsEmpty) {
   EXPECT_NE(s.message().find("empty"), std::string::npos) << s;
 }
 
-// Found by fuzz_drc: Draco's sequential decoder refuses more than 3 points per face, so
-// such a mesh (unreferenced vertices, or faces out of range left out) was written as bytes
-// that no Draco decoder reads. Now the encoder says so.
+// Draco's sequential decoder refuses more than 3 points per face, so the encoder refuses to
+// write such a mesh (unreferenced vertices, or faces out of range left out): no Draco decoder
+// would read the bytes. A fuzz_drc input.
 TEST(DracoCodecTest, MorePointsThanThreePerFaceAreRefusedForSequential) {
   Mesh m;
   for (int i = 0; i < 7; ++i) m.positions.push_back({static_cast<double>(i), 0.5 * i * i, 0.0});
@@ -143,10 +143,10 @@ TEST(DracoCodecTest, MorePointsThanThreePerFaceAreRefusedForSequential) {
   EXPECT_TRUE(DecodeDraco(*ok).ok());
 }
 
-// Found by fuzz_job: Draco's quantizer divides by the positions' extent in float32, so for a
-// mesh a few 1e-38 wide the grid overflowed and the decoded vertices landed at -1.2e-32, a
-// million boxes away from the mesh. Quantization now needs an extent of at least
-// kMinQuantizedExtent (or none at all); within that the round trip stays on the grid.
+// Draco's quantizer divides by the positions' extent in float32, so for a mesh a few 1e-38
+// wide the grid overflows and the decoded vertices land at -1.2e-32, a million boxes away from
+// the mesh (a fuzz_job input). Quantization needs an extent of at least kMinQuantizedExtent (or
+// none at all); within that the round trip stays on the grid.
 TEST(DracoCodecTest, ExtentTooSmallToQuantizeIsRefused) {
   for (int bits : {1, 12, kMaxQuantizationBits}) {
     for (DracoMethod method : {DracoMethod::kSequential, DracoMethod::kEdgebreaker}) {
@@ -210,7 +210,7 @@ TEST(DracoCodecTest, TakenWeldedMeshEncodesBackToEveryPoint) {
   EXPECT_NE(wrong.message().find("expected " + std::to_string(n) + " positions"), std::string::npos) << wrong;
 }
 
-// Draco's own bitstreams, versions 0.9 to 2.2 (counts from shared/data/draco/SOURCES.md).
+// Draco's own bitstreams, versions 0.9 to 2.2, with the vertex and face counts each file holds.
 TEST(DracoCodecTest, DecodesDracosOwnTestFiles) {
   MESHSMOOTH_REQUIRE_SHARED("draco");
   struct Expect {

@@ -1,4 +1,4 @@
-// Hostile Draco uploads (issue 19): face indices past the point count, a second POSITION
+// Hostile Draco uploads: face indices past the point count, a second POSITION
 // attribute, extreme or non-finite coordinates, and output encodings whose cost or result
 // would be unbounded. Each is refused with INVALID_ARGUMENT (sizes beyond the vertex limit with
 // RESOURCE_EXHAUSTED) before anything indexes, allocates or encodes with it, and every encoding
@@ -49,7 +49,7 @@ TEST(HostileDracoTest, FaceIndexPastThePointsIsRefused) {
   ExpectInvalid(DecodeDracoAttribute(bytes, "kmax").status(), words);
 }
 
-// A second POSITION attribute crashed Draco's Edgebreaker encoder: refused at decode.
+// A second POSITION attribute crashes Draco's Edgebreaker encoder: refused at decode.
 TEST(HostileDracoTest, SecondPositionAttributeIsRefused) {
   const std::string bytes = RawDraco(TwoRateTorus(20), /*positions=*/2);
   ExpectInvalid(DracoMesh::Decode(bytes).status(), "2 POSITION attributes");
@@ -96,7 +96,7 @@ TEST(HostileDracoTest, MoreThan256AttributesAreRefused) {
   }
 }
 
-// Found by fuzz_job: a raw Draco file whose POSITION attribute says DT_BOOL, with a byte of 49
+// A raw Draco file (a fuzz_job input) whose POSITION attribute says DT_BOOL, with a byte of 49
 // for a value. Reading it as a number loads a bool that is neither 0 nor 1 (undefined; UBSan
 // stops there). Positions and named attributes must be of an integer or floating-point type.
 TEST(HostileDracoTest, PositionsOfTypeBoolAreRefused) {
@@ -135,7 +135,7 @@ TEST(HostileDracoTest, PositionsOfTypeBoolAreRefused) {
                 "attribute 'kmax' holds booleans");
 }
 
-// Coordinates must be finite and at most kMaxCoordinate in magnitude: 3.4e38 made Draco's
+// Coordinates must be finite and at most kMaxCoordinate in magnitude: 3.4e38 makes Draco's
 // quantizer overflow (a SIGSEGV in its entropy estimate), and NaN has no grid cell.
 TEST(HostileDracoTest, ExtremeAndNonFiniteCoordinatesAreRefused) {
   Mesh m = TwoRateTorus(20);
@@ -203,9 +203,9 @@ TEST(HostileDracoTest, EdgebreakerThatWouldDropAVertexIsRefused) {
   EXPECT_TRUE(sm->CheckEncodable(eb).ok());
 }
 
-// Draco's Edgebreaker decoder allocated its corner table from the declared counts before it
-// read a symbol (fuzz_job: 1.4 KB declaring 235 million faces took 2.8 GB); the counts are now
-// checked against the vertex limit first.
+// Draco's Edgebreaker decoder allocates its corner table from the declared counts before it
+// reads a symbol (a fuzz_job input: 1.4 KB declaring 235 million faces takes 2.8 GB); the counts
+// are checked against the vertex limit first.
 TEST(HostileDracoTest, EdgebreakerSizesBeyondTheVertexLimitAreRefusedBeforeDecoding) {
   constexpr int64_t kLimit = 1 << 20;
   for (bool v22 : {false, true}) {
@@ -237,9 +237,9 @@ TEST(HostileDracoTest, EdgebreakerSizesBeyondTheVertexLimitAreRefusedBeforeDecod
   EXPECT_NE(tight.message().find("declares 320 faces and 163 vertices"), std::string::npos) << tight;
 }
 
-// Files read from disk have no vertex limit, so counts within int32 went to Draco: fuzz_drc's
-// 436 bytes (bitstream 1.1) declare 656,877,351 faces and Draco asked for 7.9 GB. Counts beyond
-// what the bytes can encode are refused on every path, limit or not.
+// Files read from disk have no vertex limit, so any count within int32 would reach Draco: this
+// fuzz_drc input's 436 bytes (bitstream 1.1) declare 656,877,351 faces, for which Draco asks
+// 7.9 GB. Counts beyond what the bytes can encode are refused on every path, limit or not.
 TEST(HostileDracoTest, EdgebreakerCountsTheBytesCannotHoldAreRefused) {
   const std::string fuzzed(
       "\x44\x52\x41\x43\x4f\x01\x01\x01\x01\x21\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x27\x27\x27\x27"
@@ -290,7 +290,7 @@ std::set<std::tuple<double, double, double>> VertexSet(const std::string& bytes)
 // decodes that many (2^31: a 256 MB table and 5 s of CPU) before it sees the data has run out.
 // Each 4-byte window of a textured Edgebreaker file is set to 2^31 - 1 in turn: where that is
 // the count, the decode must be refused at once, as a block no valid encoding of that many faces
-// needs (it used to succeed after seconds), and no window may make it succeed with a mesh of
+// needs (unbounded, it succeeds after seconds), and no window may make it succeed with a mesh of
 // another size.
 TEST(HostileDracoTest, CountsTheDeclaredFacesCannotNeedAreRefusedBeforeTheirWork) {
   using testing::TexturedEdgebreakerDraco;

@@ -178,8 +178,8 @@ TEST(IoTest, TruncatedFilesNeverCrash) {
   }
 }
 
-// Found by fuzz_ply: a second vertex element replaced the positions but left the first one's
-// colours, one per vertex of another count.
+// A second vertex element would replace the positions but leave the first one's colours, one
+// per vertex of another count: refused (a fuzz_ply input).
 TEST(IoTest, PlyWithTwoVertexElementsIsRefused) {
   const std::string ply =
       "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\n"
