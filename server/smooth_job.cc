@@ -155,7 +155,7 @@ absl::StatusOr<std::string> SmoothJob::EncodeAndMeasure(DracoMesh& draco, const 
   // Draco encodes on one thread, then the displacement follows there; the summary's "after"
   // metrics take the job's other threads meanwhile, and that one once it is free (all only read
   // the mesh). The metrics on every core beside the encoder's thread would put one thread more
-  // than there are cores (docs/performance.md has the figures).
+  // than there are cores (docs/decisions.md, "Speed", has the figures).
   absl::StatusOr<std::string> encoded;
   absl::StatusOr<Displacement> displacement;
   report.after = ComputeMetricsBeside(

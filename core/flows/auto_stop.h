@@ -77,11 +77,11 @@ inline constexpr int kFoldRepairRounds = 20;
 // The fold repair moves no vertex further than this (in h) from where the run left it. A fold
 // the noise made on a needle comes undone within it; the faces of a feature thinner than the
 // noise (the turbine's narrow strips between right-angled creases) also meet at more than
-// kFoldAngleDeg after a run, and pulling their vertices on to their rings' centroids flattened
-// the feature: the turbine's default job at sigma = 0.1 / 0.2 / 0.3 h ended at RMS 0.061 /
-// 0.092 / 0.123 h with the repair unbounded, 0.052 / 0.081 / 0.113 h with this bound, 0.051 /
-// 0.079 / 0.112 h without the repair; the dragon keeps most of what the repair gains there
-// (docs/quality.md, "How the defaults were chosen").
+// kFoldAngleDeg after a run, and pulling their vertices on to their rings' centroids without a
+// bound flattens the feature: the turbine's default job at sigma = 0.1 / 0.2 / 0.3 h ends at RMS
+// 0.061 / 0.092 / 0.123 h with the repair unbounded, 0.052 / 0.081 / 0.113 h with this bound,
+// 0.051 / 0.079 / 0.112 h without the repair; the dragon keeps most of what the repair gains
+// there (docs/decisions.md, "Fold repair, within 0.2 h").
 inline constexpr double kFoldRepairReachH = 0.2;
 
 class AutoStop {

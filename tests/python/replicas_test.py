@@ -209,7 +209,7 @@ def replica_checks(a, check, tmp):
                                          "--flow", flow, "--iterations", iterations, "--server", rep.address,
                                          "--retries", "0", "--job-id", job_id, "--quiet"],
                                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-            # The short job is sized to ~2.5 s on this machine as it is now: 1,000 iterations timed.
+            # The short job is sized to ~2.5 s on this machine: 1,000 iterations timed.
             t = time.monotonic()
             calib = job("taubin", "1000", "calibration")
             calib.wait(timeout=120)
