@@ -23,6 +23,7 @@
 
 #include "CLI/CLI.hpp"
 #include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
 #include "absl/strings/str_join.h"
 #include "client/commands.h"
 #include "client/inputs.h"
@@ -83,10 +84,10 @@ void AddSmoothOptions(CLI::App* smooth, SmoothOptions& so) {
   flow_choices.insert(flow_choices.begin(), "auto");
   smooth->add_option("--flow", so.flow,
                      absl::StrCat(absl::StrJoin(flow_choices, " | "),
-                                  ". auto (with --iterations auto and no --step): run bilaplacian and "
-                                  "bilateral_normal and keep the result with the smaller estimated error "
-                                  "(meshes above 100,000 vertices choose on patches of themselves); "
-                                  "otherwise bilaplacian"))
+                                  ". auto (with --iterations auto and no --step): run ", ChoiceFlowNames(),
+                                  " and keep the result with the smaller estimated error (meshes above ",
+                                  kMaxChoiceVertices / 1000, absl::StrFormat(",%03d", kMaxChoiceVertices % 1000),
+                                  " vertices choose on patches of themselves); otherwise ", std::string(FlowName(kDefaultFlow))))
       ->capture_default_str()
       ->check(CLI::IsMember(flow_choices));
   smooth->add_option("--iterations", so.iterations,

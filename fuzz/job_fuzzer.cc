@@ -83,29 +83,26 @@ struct Box {
   }
 };
 
-// The box no vertex of the result may leave: the upload's, grown by what the flow may move a
-// vertex (per axis, from what each flow guarantees for a pass), then by the quantization.
-//   laplacian: every pass is a convex combination of neighbours (step <= 1): no growth.
-//   taubin (its mu pass, mu <= 1) and bilaplacian (|U0^2| <= 2 extents, step <= 0.5): a pass
-//     moves a vertex by at most the current extent on each axis, so k passes grow the box by
-//     (3^k - 1) / 2 extents on each side.
-//   curvature and normal-filter flows: every step of a vertex is capped at h, the input's mean
-//     edge length, and boundary curves move to a convex combination: k steps, k h.
+// The box no vertex of the result may leave: the upload's, grown by what the flow that ran may
+// move a vertex (its row's PassReach, flow_table.h), then by the quantization.
+//   kConvex: every pass is a convex combination of neighbours (step <= 1): no growth.
+//   kExtent: a pass moves a vertex by at most the current extent on each axis, so k passes grow
+//     the box by (3^k - 1) / 2 extents on each side.
+//   kMeanEdge: every step of a vertex is capped at h, the input's mean edge length, and
+//     boundary curves move to a convex combination: k passes, k h.
 //   quantized output: half a grid step (the largest extent / (2^bits - 1)) on each axis.
 // Plus float32 rounding.
 Box ResultBound(const Box& in, const server::JobParams& params, const v1::Summary& summary) {
   const Vec3 extent = in.hi - in.lo;
-  const int iterations = static_cast<int>(summary.parameters().iterations_run());
   const double h = summary.parameters().mean_edge_length();
-  const FlowId id = params.flow.flow;
+  FlowParams ran = params.flow;
+  ran.flow = ParseFlowName(summary.parameters().flow()).value();
+  const int passes = static_cast<int>(summary.parameters().iterations_run()) * PassesPerIteration(ran);
   Vec3 margin;
-  if (id == FlowId::kTaubin || id == FlowId::kBilaplacian) {
-    margin = extent * ((std::pow(3.0, iterations) - 1.0) / 2.0);
-  } else if (FlowOf(id).kind != FlowKind::kUmbrella) {
-    const int passes = FlowOf(id).kind == FlowKind::kNormalFilter
-                           ? iterations * params.flow.normal_filter.vertex_iterations
-                           : iterations;
-    margin = Vec3{1, 1, 1} * (passes * h);
+  switch (FlowOf(*ran.flow).reach) {
+    case PassReach::kConvex: break;
+    case PassReach::kExtent: margin = extent * ((std::pow(3.0, passes) - 1.0) / 2.0); break;
+    case PassReach::kMeanEdge: margin = Vec3{1, 1, 1} * (passes * h); break;
   }
   Box bound = in.Grown(margin);
   const Vec3 grown = bound.hi - bound.lo;

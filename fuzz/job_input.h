@@ -7,7 +7,7 @@
 #include <cstdint>
 #include <string_view>
 
-#include "core/flows/flow_table.h"
+#include "core/flows/catalogue.h"
 #include "meshsmooth/v1/smoothing.pb.h"
 
 namespace meshsmooth::fuzz {

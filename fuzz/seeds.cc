@@ -29,18 +29,35 @@ namespace fs = std::filesystem;
 
 constexpr uintmax_t kMaxSharedBytes = 200 * 1024;
 
-// Heads that reach every flow, both boundary modes, the adaptive modes, features and each
-// output encoding (byte meanings in job_input.h).
-constexpr std::array<std::array<uint8_t, kSpecBytes>, 8> kHeads = {{
-    {0, 1, 0, 0, 2, 2, 0, 0, 0, 0, 0, 0, 0, 0},          // laplacian U1, boundary as curves
-    {1, 2, 0, 0, 0, 0, 0, 0, 1, 200, 0, 0, 0, 0},        // taubin with mu
-    {2, 0, 0, 0, 0, 0, 0, 0, 0, 0, 1, 0, 0, 0},          // bilaplacian, features
-    {3, 2, 0, 0, 0, 0, 0, 0, 0, 0, 0, 128 + 12, 0, 0},   // mcf, Edgebreaker, 12 bits
-    {4, 1, 0, 0, 0, 0, 2, 0x15, 0, 0, 0, 20, 0, 0},      // mcf_tangential, ring1, 20 bits
-    {5, 2, 0, 0, 0, 2, 3, 0x15, 0, 0, 3, 128, 0, 0},     // median, ring2, features, Edgebreaker
-    {5, 0, 0, 0, 0, 0, 1, 0x20, 0x18, 60, 0, 0, 0, 0},   // median, constant T, epsilon, tolerance
-    {6, 1, 0, 0, 0, 2, 0, 0, 0, 0, 0, 8, 15, 9},         // bilateral_normal, every filter parameter
-}};
+// Heads by the kind of flow they suit (byte meanings in job_input.h); byte 0, the flow, is
+// filled in for every flow of that kind in the table, so every flow gets seeds.
+struct HeadTemplate {
+  FlowKind kind;
+  std::array<uint8_t, kSpecBytes> bytes;
+};
+constexpr HeadTemplate kTemplates[] = {
+    {FlowKind::kUmbrella, {0, 1, 0, 0, 2, 2, 0, 0, 0, 0, 0, 0, 0, 0}},              // U1, boundary as curves
+    {FlowKind::kUmbrella, {0, 2, 0, 0, 0, 0, 0, 0, 1, 200, 0, 0, 0, 0}},            // taubin's mu
+    {FlowKind::kUmbrella, {0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 1, 0, 0, 0}},              // features
+    {FlowKind::kCurvature, {0, 2, 0, 0, 0, 0, 0, 0, 0, 0, 0, 128 + 12, 0, 0}},      // Edgebreaker, 12 bits
+    {FlowKind::kCurvature, {0, 1, 0, 0, 0, 0, 2, 0x15, 0, 0, 0, 20, 0, 0}},         // ring1, 20 bits
+    {FlowKind::kCurvature, {0, 2, 0, 0, 0, 2, 3, 0x15, 0, 0, 3, 128, 0, 0}},        // ring2, features, Edgebreaker
+    {FlowKind::kCurvature, {0, 0, 0, 0, 0, 0, 1, 0x20, 0x18, 60, 0, 0, 0, 0}},      // constant T, epsilon, tolerance
+    {FlowKind::kNormalFilter, {0, 1, 0, 0, 0, 2, 0, 0, 0, 0, 0, 8, 15, 9}},         // every filter parameter
+};
+
+std::vector<std::array<uint8_t, kSpecBytes>> Heads() {
+  std::vector<std::array<uint8_t, kSpecBytes>> heads;
+  for (size_t f = 0; f < FlowNames().size(); ++f) {
+    const FlowKind kind = KindOf(static_cast<FlowId>(f));
+    for (const HeadTemplate& t : kTemplates) {
+      if (t.kind != kind) continue;
+      heads.push_back(t.bytes);
+      heads.back()[0] = static_cast<uint8_t>(f);
+    }
+  }
+  return heads;
+}
 
 void WriteFile(const fs::path& path, std::string_view bytes) {
   if (const absl::Status s = WriteFileBytes(path.string(), bytes); !s.ok()) {
@@ -112,14 +129,15 @@ class SeedWriter {
  private:
   // Two heads per upload, a different pair for each.
   void AddJob(const std::string& name, const std::string& upload) {
-    for (size_t k : {jobs_ % kHeads.size(), (jobs_ + 3) % kHeads.size()}) {
-      std::string bytes(kHeads[k].begin(), kHeads[k].end());
+    for (size_t k : {jobs_ % heads_.size(), (jobs_ + 3) % heads_.size()}) {
+      std::string bytes(heads_[k].begin(), heads_[k].end());
       WriteFile(out_ / "job" / absl::StrCat(name, ".h", k), bytes + upload);
     }
     ++jobs_;
   }
 
   fs::path out_;
+  const std::vector<std::array<uint8_t, kSpecBytes>> heads_ = Heads();
   size_t jobs_ = 0;
 };
 

@@ -41,7 +41,7 @@ std::unique_ptr<FlowKernel> MakeBilaplacian(const FlowParams&, double) { return 
 FlowRow BilaplacianRow() {
   return {FlowId::kBilaplacian, "bilaplacian", FlowKind::kUmbrella, 0.2, 0.5,
           "Bilaplacian flow P -= lambda U0^2(P): smooth, slight deformation", "Section 2 (sign: docs/paper.md)", {},
-          {}, nullptr, MakeBilaplacian};
+          {}, nullptr, MakeBilaplacian, PassReach::kExtent};
 }
 
 }  // namespace meshsmooth::flows

@@ -34,7 +34,7 @@ FlowRow BilateralNormalRow() {
           "Bilateral filtering of the face normals, then vertices fitted to them: removes noise and keeps "
           "sharp creases; one iteration = normal_iterations filter passes + vertex_iterations vertex updates",
           "Zheng et al. 2011 (docs/normal-filtering.md)", NormalFilterParameters(), {}, ValidateNormalFilter,
-          MakeBilateralNormal};
+          MakeBilateralNormal, PassReach::kMeanEdge};
 }
 
 }  // namespace meshsmooth::flows

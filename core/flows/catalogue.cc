@@ -54,6 +54,12 @@ std::vector<std::string> FlowNamesOfKind(FlowKind kind) {
   return names;
 }
 
+std::string ChoiceFlowNames() {
+  std::vector<std::string> names;
+  for (FlowId id : kChoiceFlows) names.emplace_back(FlowName(id));
+  return absl::StrJoin(names, " and ");
+}
+
 std::vector<FlowInfo> DescribeFlows() {
   std::vector<FlowInfo> flows;
   for (const FlowRow& row : FlowTable()) {
@@ -71,7 +77,7 @@ std::vector<ParameterInfo> CommonParameters(int max_iterations) {
       {"iterations",
        "number of iterations; 0 = automatic: estimate the input's noise and return the iteration whose estimated "
        "distance to the noise-free surface (SURE) is least (a clean mesh comes back unchanged; closed meshes keep "
-       "their volume); with no flow named and no step, bilaplacian and bilateral_normal both run and the smaller "
+       "their volume); with no flow named and no step, " + ChoiceFlowNames() + " both run and the smaller "
        "estimated error wins",
        static_cast<double>(d.iterations), 0, static_cast<double>(max_iterations), false, false, {}},
       {"adaptive.mode", "eq. (14): none, constant T, or T(P) = mean |H| over the 1-ring or the 1+2-rings", 0, 0, 0,

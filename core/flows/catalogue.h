@@ -52,6 +52,16 @@ enum class FlowKind : uint8_t {
 // best on scans (docs/quality-method.md). A job that names none and gives neither chooses
 // (FlowParams::flow).
 inline constexpr FlowId kDefaultFlow = FlowId::kBilaplacian;
+// The candidates of a job that chooses, by their estimated error: bilaplacian is the best on
+// scans, bilateral_normal on CAD parts and smooth shapes (docs/quality-method.md).
+inline constexpr FlowId kChoiceFlows[] = {FlowId::kBilaplacian, FlowId::kBilateralNormal};
+// Above this many vertices automatic stopping chooses the flow and the count on patches of the
+// mesh and runs the whole mesh once, at that count: the candidates and their probes would cost
+// several times the run itself.
+inline constexpr int32_t kMaxChoiceVertices = 100000;
+
+// "bilaplacian and bilateral_normal": the candidates' names, for help texts.
+std::string ChoiceFlowNames();
 
 struct ParameterInfo {
   std::string name;  // the JobSpec field

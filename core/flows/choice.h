@@ -1,7 +1,7 @@
 // Internal to core/flows: the default job's choice. A job whose FlowParams name no flow, with
 // automatic iterations and no step, runs every candidate flow with automatic stopping and keeps
 // the one whose estimated error to the noise-free surface is least; meshes above
-// kMaxChoiceVertices make that choice, and automatic stopping's count, on patches of themselves
+// kMaxChoiceVertices (catalogue.h) make that choice, and automatic stopping's count, on patches of themselves
 // and then run once. Smooth() (smooth.cc) is the only caller.
 #pragma once
 
@@ -12,13 +12,7 @@
 
 namespace meshsmooth::flows {
 
-// The candidates, by their estimated error: bilaplacian is the best on scans, bilateral_normal
-// on CAD parts and smooth shapes (docs/quality-method.md).
-inline constexpr FlowId kChoiceFlows[] = {FlowId::kBilaplacian, FlowId::kBilateralNormal};
-// Above this many vertices automatic stopping chooses the flow and the count on patches of the
-// mesh, kSampleVertices vertices in all, and runs the whole mesh once, at that count: the
-// candidates and their probes would cost several times the run itself.
-inline constexpr int32_t kMaxChoiceVertices = 100000;
+// The patches of a mesh above kMaxChoiceVertices (catalogue.h) hold this many vertices in all.
 inline constexpr int32_t kSampleVertices = 20000;
 
 // True when `p` leaves the flow to the estimated error: no flow named, automatic iterations, no

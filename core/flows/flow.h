@@ -57,7 +57,7 @@ enum class ReorderMode {
   kNever,
 };
 
-// The normal-filtering flows (bilateral_normal, guided_normal; docs/normal-filtering.md).
+// The normal-filtering flows (FlowKind::kNormalFilter; docs/normal-filtering.md).
 // One iteration of the job is one round: `normal_iterations` passes of the filter over the
 // face normals, then `vertex_iterations` updates that move the vertices so that the faces fit
 // the filtered normals.
@@ -93,12 +93,12 @@ struct FlowParams {
   // curvature flows. Unset = the flow's default (DefaultStep); set, it must be > 0.
   std::optional<double> step;
 
-  UmbrellaWeights weights = UmbrellaWeights::kUniform;  // laplacian, taubin
+  UmbrellaWeights weights = UmbrellaWeights::kUniform;  // umbrella flows that list it
   double taubin_mu = 0.0;          // taubin: mu > lambda; 0 = derive from the pass band
   double taubin_pass_band = 0.1;   // taubin: k_PB = 1/lambda - 1/mu (> 0), used when mu is 0
   double tangential_weight = 5.0;  // mcf_tangential: C; the tangential term moves by step*C*U0t
   double epsilon = 0.1;            // median: eq. (13)'s epsilon, in (0, 1)
-  NormalFilterParams normal_filter;  // bilateral_normal, guided_normal
+  NormalFilterParams normal_filter;  // the normal-filtering flows
 
   // Eq. (14). The threshold compares with |F|. For kConstant, T is in the flow's speed units:
   // curvature (1/length) for the curvature flows, and for the umbrella flows length relative

@@ -4,6 +4,7 @@
 // (validation, the kernel, ListFlows, the CLI's choices and help) reads the row.
 #pragma once
 
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <string_view>
@@ -18,6 +19,14 @@ struct FlowParams;
 namespace flows {
 class FlowKernel;
 }
+
+// How far one pass of a flow may move a vertex: what bounds where a result can lie (the job
+// fuzzer checks every result against it).
+enum class PassReach : uint8_t {
+  kConvex,    // to a convex combination of its neighbours: the bounding box never grows
+  kExtent,    // by at most the mesh's current extent on each axis
+  kMeanEdge,  // by at most h, the input's mean edge length (boundary curves: a convex combination)
+};
 
 struct FlowRow {
   FlowId id;
@@ -35,6 +44,8 @@ struct FlowRow {
   absl::Status (*validate)(const FlowParams& p, double step);
   // The flow's kernel for valid parameters; `step` before the scaling by h^2.
   std::unique_ptr<flows::FlowKernel> (*make_kernel)(const FlowParams& p, double step);
+  // What one of its passes that moves vertices may do (PassesPerIteration counts them, or more).
+  PassReach reach;
 };
 
 // Every flow, in FlowId order.

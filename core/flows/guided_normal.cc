@@ -110,7 +110,7 @@ FlowRow GuidedNormalRow() {
           "face's most consistent patch), then vertices fitted to them: keeps the creases and corners of "
           "CAD parts; one iteration as bilateral_normal",
           "Zhang et al. 2015, eqs. (3)-(6) (docs/normal-filtering.md)", NormalFilterParameters(), {},
-          ValidateNormalFilter, MakeGuidedNormal};
+          ValidateNormalFilter, MakeGuidedNormal, PassReach::kMeanEdge};
 }
 
 }  // namespace meshsmooth::flows

@@ -28,7 +28,7 @@ std::unique_ptr<FlowKernel> MakeLaplacian(const FlowParams& p, double /*step*/) 
 FlowRow LaplacianRow() {
   return {FlowId::kLaplacian, "laplacian", FlowKind::kUmbrella, 0.5, 1.0,
           "Laplacian smoothing: regularises the sampling but shrinks and flattens", "eqs. (2)-(4)",
-          {WeightsParameter()}, {}, nullptr, MakeLaplacian};
+          {WeightsParameter()}, {}, nullptr, MakeLaplacian, PassReach::kConvex};
 }
 
 }  // namespace meshsmooth::flows

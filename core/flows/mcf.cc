@@ -24,7 +24,7 @@ std::unique_ptr<FlowKernel> MakeMcf(const FlowParams&, double) { return std::mak
 FlowRow McfRow() {
   return {FlowId::kMcf, "mcf", FlowKind::kCurvature, 0.1, 10.0,
           "Mean curvature flow with cotangent weights: smooths well, sampling gets irregular", "eqs. (7)-(8)", {}, {},
-          nullptr, MakeMcf};
+          nullptr, MakeMcf, PassReach::kMeanEdge};
 }
 
 }  // namespace meshsmooth::flows

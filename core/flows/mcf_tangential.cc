@@ -61,7 +61,7 @@ FlowRow McfTangentialRow() {
           "Mean curvature flow plus a tangential umbrella that evens out the sampling", "eq. (11)",
           {{"tangential_weight", "C: the tangential part moves a vertex by step * C * U0_t (step * C <= 1)",
             d.tangential_weight, 0.0, std::numeric_limits<double>::infinity(), false, true, {}}},
-          {"step * tangential_weight <= 1"}, ValidateMcfTangential, MakeMcfTangential};
+          {"step * tangential_weight <= 1"}, ValidateMcfTangential, MakeMcfTangential, PassReach::kMeanEdge};
 }
 
 }  // namespace meshsmooth::flows

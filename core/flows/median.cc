@@ -59,7 +59,7 @@ FlowRow MedianRow() {
           "curvature; smooths like mcf and keeps the mesh regular",
           "eqs. (12)-(13)",
           {{"epsilon", "vertices with |cos(theta)| <= epsilon do not move", d.epsilon, 0.0, 1.0, true, true, {}}},
-          {}, nullptr, MakeMedian};
+          {}, nullptr, MakeMedian, PassReach::kMeanEdge};
 }
 
 }  // namespace meshsmooth::flows

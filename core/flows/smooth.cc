@@ -107,7 +107,7 @@ absl::StatusOr<FlowResult> Smooth(Mesh& mesh, const Topology& topo, const FlowPa
     return absl::InvalidArgumentError("the topology was built for another mesh");
   }
   const double h = MeanEdgeLength(mesh, topo);
-  if (p.iterations == kAutoIterations && n > flows::kMaxChoiceVertices) {
+  if (p.iterations == kAutoIterations && n > kMaxChoiceVertices) {
     return flows::SmoothSampled(mesh, topo, p, control, h);
   }
   if (flows::ChoosesFlow(p)) return flows::SmoothChoosing(mesh, topo, p, control, h);

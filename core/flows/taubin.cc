@@ -69,7 +69,7 @@ FlowRow TaubinRow() {
             std::numeric_limits<double>::infinity(), true, true, {}}},
           {"taubin_mu set: step < taubin_mu <= 1",
            "taubin_mu unset: 0 < taubin_pass_band < 1/step - 1 (so step < 1 / (1 + taubin_pass_band))"},
-          ValidateTaubin, MakeTaubin};
+          ValidateTaubin, MakeTaubin, PassReach::kExtent};
 }
 
 }  // namespace meshsmooth::flows

@@ -294,13 +294,13 @@ TEST(AutoStopTest, ChosenFlowKeepsTheCreasesOfANoisyCadPart) {
   EXPECT_EQ(after.flipped_faces, 0);
 }
 
-// Above flows::kMaxChoiceVertices the flow and the count are chosen on patches of the mesh and the
+// Above kMaxChoiceVertices the flow and the count are chosen on patches of the mesh and the
 // whole mesh runs once at that count: a 131k-vertex noisy torus still comes back far closer
 // (the 1,456-vertex one: 0.30 times the noisy distance), its volume kept; the clean torus
 // comes back unchanged.
 TEST(AutoStopTest, LargeMeshChoosesOnItsPatches) {
   const GroundTruth truth(TwoRateTorus(256));
-  ASSERT_GT(truth.mesh().num_vertices(), flows::kMaxChoiceVertices);
+  ASSERT_GT(truth.mesh().num_vertices(), kMaxChoiceVertices);
   {
     Mesh m = truth.mesh();
     const FlowParams p;  // the default job
