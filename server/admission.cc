@@ -6,6 +6,7 @@
 #include <utility>
 
 #include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
 
 namespace meshsmooth::server {
 
@@ -81,6 +82,136 @@ int64_t DefaultBufferedBytes(const std::string& meminfo_path) {
     if (fields >> key >> kib >> unit && key == "MemTotal:" && unit == "kB" && kib > 0) return kib * 1024 / 4;
   }
   return int64_t{4} << 30;
+}
+
+}  // namespace meshsmooth::server
+
+namespace meshsmooth::server {
+namespace {
+
+// `seconds` as a clock duration; 0 for "never" (<= 0), capped where a clock would overflow.
+Admission::Clock::duration Limit(double seconds) {
+  if (!(seconds > 0.0)) return Admission::Clock::duration::zero();
+  return std::chrono::duration_cast<Admission::Clock::duration>(std::chrono::duration<double>(std::min(seconds, 1e9)));
+}
+
+// For a job that has not started when the server begins to shut down: safe to send again.
+grpc::Status ShuttingDown() {
+  return grpc::Status(grpc::StatusCode::UNAVAILABLE,
+                      "meshsmoothd is shutting down; the job did not start: send it to another replica");
+}
+
+}  // namespace
+
+Admission::Admission(const ServerOptions& options)
+    : options_(options),
+      budget_(options.max_buffered_bytes > 0 ? options.max_buffered_bytes : DefaultBufferedBytes()) {
+  if (options.upload_idle_seconds > 0.0 || options.max_queue_wait_seconds > 0.0) {
+    reaper_ = std::thread([this] { Reap(); });
+  }
+}
+
+Admission::~Admission() { StopReaper(); }
+
+grpc::Status Admission::Open(AdmittedCall* call) {
+  size_t open = 0;
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    calls_.insert(call);
+    open = calls_.size();
+  }
+  if (draining_.load()) return ShuttingDown();
+  if (static_cast<int64_t>(open) > options_.max_concurrent_streams) {
+    return grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
+                        absl::StrCat("too many concurrent Smooth calls (limit ", options_.max_concurrent_streams,
+                                     "); retry later"));
+  }
+  return grpc::Status::OK;
+}
+
+void Admission::Close(AdmittedCall* call) {
+  std::lock_guard<std::mutex> lock(mu_);
+  calls_.erase(call);
+}
+
+grpc::Status Admission::CheckNotDraining() const { return draining_.load() ? ShuttingDown() : grpc::Status::OK; }
+
+grpc::Status Admission::QueueFull() const {
+  return grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
+                      absl::StrCat("the job queue is full (", options_.queue_depth, " jobs waiting); retry later"));
+}
+
+grpc::Status Admission::ChunkTooLarge(int64_t bytes) {
+  return grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
+                      absl::StrCat("a mesh chunk of ", bytes, " bytes is above this server's limit of ", kMaxChunkBytes,
+                                   " bytes per chunk"));
+}
+
+void Admission::Drain(Clock::time_point deadline) {
+  draining_.store(true);
+  // Uploads and queued jobs end at once: their clients can send them to another replica now
+  // rather than after the grace.
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    for (AdmittedCall* c : calls_) {
+      if (!c->Running()) c->Abort(ShuttingDown());
+    }
+  }
+  for (;;) {
+    {
+      std::lock_guard<std::mutex> lock(mu_);
+      if (calls_.empty()) break;
+    }
+    if (Clock::now() >= deadline) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  const grpc::Status after_grace(
+      grpc::StatusCode::UNAVAILABLE,
+      absl::StrFormat("meshsmoothd shut down; the job was cancelled after the %g s grace period",
+                      options_.grace_seconds));
+  std::lock_guard<std::mutex> lock(mu_);
+  for (AdmittedCall* c : calls_) c->Abort(after_grace);
+}
+
+void Admission::Reap() {
+  const Clock::duration idle = Limit(options_.upload_idle_seconds);
+  const Clock::duration queue_wait = Limit(options_.max_queue_wait_seconds);
+  // A call ends between its limit and 1.25 x its limit after it began to wait.
+  Clock::duration shortest = std::chrono::hours(1);
+  if (idle > Clock::duration::zero()) shortest = std::min(shortest, idle);
+  if (queue_wait > Clock::duration::zero()) shortest = std::min(shortest, queue_wait);
+  const auto period = std::clamp<Clock::duration>(shortest / 4, std::chrono::milliseconds(10), std::chrono::seconds(1));
+  const grpc::Status idle_status(
+      grpc::StatusCode::DEADLINE_EXCEEDED,
+      absl::StrFormat("no message for %g s: this server ends uploads that stop sending (--upload-idle-seconds); "
+                      "send the spec, the whole mesh, then half-close",
+                      options_.upload_idle_seconds));
+  const grpc::Status queue_status(
+      grpc::StatusCode::RESOURCE_EXHAUSTED,
+      absl::StrFormat("the job waited %g s for a worker without getting one (--max-queue-wait); this replica is "
+                      "saturated: retry later or on another replica",
+                      options_.max_queue_wait_seconds));
+  std::unique_lock<std::mutex> lock(mu_);
+  while (!reaper_stop_) {
+    reaper_cv_.wait_for(lock, period);
+    const Clock::time_point now = Clock::now();
+    for (AdmittedCall* c : calls_) {  // a call is deleted only after Close
+      if (idle > Clock::duration::zero() && c->IdleSince(now - idle)) {
+        c->Abort(idle_status);
+      } else if (queue_wait > Clock::duration::zero() && c->QueuedSince(now - queue_wait)) {
+        c->Abort(queue_status);
+      }
+    }
+  }
+}
+
+void Admission::StopReaper() {
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    reaper_stop_ = true;
+  }
+  reaper_cv_.notify_all();
+  if (reaper_.joinable()) reaper_.join();
 }
 
 }  // namespace meshsmooth::server

@@ -1,16 +1,31 @@
-// Memory admission: a server-wide budget for the bytes held by uploads in flight and by jobs
-// waiting for a worker. An upload takes its buffer's bytes before it keeps a chunk and is
-// refused (RESOURCE_EXHAUSTED) when they do not fit; a job gives them back once its upload is
-// decoded and freed. Running jobs' meshes are not counted: the number of workers bounds them.
+// Admission: which calls a server takes and how long it keeps them, in one place, with every
+// RESOURCE_EXHAUSTED and UNAVAILABLE text the service sends.
+//   - Open calls: at most --max-concurrent-streams Smooth calls at a time (Admission::Open).
+//   - Memory: a server-wide budget for the bytes held by uploads in flight and by jobs waiting
+//     for a worker (MemoryBudget). An upload takes its buffer's bytes before it keeps a chunk
+//     and is refused when they do not fit; a job gives them back once its upload is decoded
+//     and freed. Running jobs' meshes are not counted: the number of workers bounds them.
+//   - Draining: once shutdown begins, new calls, uploads and queued jobs end with UNAVAILABLE
+//     at once (safe to send elsewhere); running jobs get the grace period.
+//   - Time: an upload that sends nothing for --upload-idle-seconds and a job that waits longer
+//     than --max-queue-wait for a worker end (the reaper thread).
+// The queue's depth itself is the worker pool's (worker_pool.h); its refusal text is here.
 #pragma once
 
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
 #include <cstdint>
 #include <mutex>
+#include <set>
 #include <string>
 #include <string_view>
+#include <thread>
 #include <utility>
 
 #include "absl/status/status.h"
+#include "grpcpp/support/status.h"
+#include "server/options.h"
 
 namespace meshsmooth::server {
 
@@ -78,5 +93,65 @@ class UploadBuffer {
 // /proc/meminfo), or 4 GiB where that cannot be read. A quarter leaves the rest for the running
 // jobs, whose decoded meshes take several times their compressed upload.
 int64_t DefaultBufferedBytes(const std::string& meminfo_path = "/proc/meminfo");
+
+// A call that Admission keeps track of (the Smooth reactor). Called from the reaper's and the
+// shutdown's threads, under Admission's lock: none may call back into Admission.
+class AdmittedCall {
+ public:
+  using Clock = std::chrono::steady_clock;
+  virtual ~AdmittedCall() = default;
+  // True while the call still reads its upload and its last message arrived before `cutoff`.
+  virtual bool IdleSince(Clock::time_point cutoff) const = 0;
+  // True while the call's job waits in the queue and was queued before `cutoff`.
+  virtual bool QueuedSince(Clock::time_point cutoff) = 0;
+  // True once a worker runs the call's job.
+  virtual bool Running() = 0;
+  // Ends the call with `status` (its job, if any, is detached).
+  virtual void Abort(const grpc::Status& status) = 0;
+};
+
+class Admission {
+ public:
+  using Clock = std::chrono::steady_clock;
+  explicit Admission(const ServerOptions& options);
+  ~Admission();  // stops the reaper
+  Admission(const Admission&) = delete;
+  Admission& operator=(const Admission&) = delete;
+
+  // Registers a new call; OK when it may go on, else the status to end it with (draining:
+  // UNAVAILABLE; more than --max-concurrent-streams open: RESOURCE_EXHAUSTED). Every call that
+  // was opened is closed, whatever Open answered.
+  grpc::Status Open(AdmittedCall* call);
+  void Close(AdmittedCall* call);
+
+  // OK, or UNAVAILABLE once shutdown has begun: for a job about to be queued.
+  grpc::Status CheckNotDraining() const;
+
+  MemoryBudget& budget() { return budget_; }
+  const MemoryBudget& budget() const { return budget_; }
+
+  // The job queue is full: RESOURCE_EXHAUSTED.
+  grpc::Status QueueFull() const;
+  // A mesh chunk of `bytes` above kMaxChunkBytes: RESOURCE_EXHAUSTED, as gRPC's own answer to a
+  // message above its receive limit.
+  static grpc::Status ChunkTooLarge(int64_t bytes);
+
+  // Shutdown, in order: refuse new calls and end every call whose job has not started; wait
+  // until `deadline` for the rest; end what is left with UNAVAILABLE.
+  void Drain(Clock::time_point deadline);
+
+ private:
+  void Reap();
+  void StopReaper();
+
+  const ServerOptions options_;
+  MemoryBudget budget_;
+  std::atomic<bool> draining_{false};
+  std::mutex mu_;  // guards calls_ and reaper_stop_
+  std::set<AdmittedCall*> calls_;
+  std::condition_variable reaper_cv_;
+  bool reaper_stop_ = false;
+  std::thread reaper_;
+};
 
 }  // namespace meshsmooth::server

@@ -41,6 +41,12 @@ absl::Status CheckJobId(const std::string& id) {
 
 }  // namespace
 
+grpc::Status ToGrpc(const absl::Status& s) {
+  std::string message(s.message());
+  if (message.size() > 2000) message = message.substr(0, 2000) + "...";
+  return grpc::Status(static_cast<grpc::StatusCode>(s.code()), message);
+}
+
 absl::StatusOr<JobParams> FromProto(const v1::JobSpec& spec, int max_iterations) {
   for (const absl::Status& s : {CheckEnum("weights", spec.weights(), v1::UmbrellaWeights_descriptor()),
                                 CheckEnum("boundary", spec.boundary(), v1::BoundaryMode_descriptor()),

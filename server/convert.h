@@ -12,6 +12,7 @@
 #include "core/flows/catalogue.h"
 #include "core/measure/metrics.h"
 #include "core/topology.h"
+#include "grpcpp/support/status.h"
 #include "meshsmooth/v1/smoothing.pb.h"
 
 namespace meshsmooth::server {
@@ -60,6 +61,10 @@ std::string JobLogLine(const JobReport& report, const JobParams& params);
 // `max_iterations` included) and for enum values this server does not know; the flow's own
 // checks run here too, so a bad spec is refused before the upload.
 absl::StatusOr<JobParams> FromProto(const v1::JobSpec& spec, int max_iterations);
+
+// The one place an absl::Status becomes a grpc::Status: the codes share their numbers; messages
+// beyond 2,000 characters are cut so a status stays small.
+grpc::Status ToGrpc(const absl::Status& s);
 
 void ToProto(const ValidationReport& r, v1::ValidationReport* out);
 void ToProto(const MeshMetrics& m, v1::MeshMetrics* out);

@@ -4,12 +4,8 @@
 
 #include <atomic>
 #include <chrono>
-#include <condition_variable>
 #include <cstdint>
-#include <memory>
-#include <mutex>
-#include <set>
-#include <thread>
+#include <string>
 
 #include "meshsmooth/v1/smoothing.grpc.pb.h"
 #include "server/admission.h"
@@ -17,8 +13,6 @@
 #include "server/worker_pool.h"
 
 namespace meshsmooth::server {
-
-class SmoothReactor;
 
 class MeshSmootherService final : public v1::MeshSmoother::CallbackService {
  public:
@@ -37,30 +31,18 @@ class MeshSmootherService final : public v1::MeshSmoother::CallbackService {
   // Jobs waiting for a worker now (for tests).
   int queued_jobs() { return pool_.queued(); }
   // Bytes held against --max-buffered-bytes now: uploads in flight and queued jobs (for tests).
-  int64_t buffered_bytes() const { return budget_.held(); }
+  int64_t buffered_bytes() const { return admission_.budget().held(); }
 
  private:
-  friend class SmoothReactor;
-  bool Authorized(const grpc::CallbackServerContext* context) const;
-  void Register(SmoothReactor* r);
-  void Unregister(SmoothReactor* r);
-  // The reaper thread, until StopReaper(): ends the uploads idle for --upload-idle-seconds and
-  // the jobs queued for longer than --max-queue-wait.
-  void Reap();
-  void StopReaper();
+  // OK, or UNAUTHENTICATED when the server has a token and the call's metadata does not carry it.
+  grpc::Status Authenticate(const grpc::CallbackServerContext* context) const;
+  std::string NewJobId();
 
   const ServerOptions options_;
-  MemoryBudget budget_;
+  Admission admission_;
   WorkerPool pool_;
-  std::atomic<int> active_{0};
   std::atomic<uint64_t> next_job_{1};
-  std::atomic<bool> draining_{false};
   const uint64_t start_tag_;
-  std::mutex mu_;  // guards reactors_ and reaper_stop_
-  std::set<SmoothReactor*> reactors_;
-  std::condition_variable reaper_cv_;
-  bool reaper_stop_ = false;
-  std::thread reaper_;
 };
 
 }  // namespace meshsmooth::server
