@@ -211,7 +211,11 @@ TEST(ServiceTest, DivergingFlowEndsWithAClearError) {
   EXPECT_NE(s.message().find("diverged at iteration"), std::string::npos) << s;
 }
 
+// Every method of the service authenticates (MeshSmootherService::Authenticate, each handler's
+// first step): the two below are all the service has; a new method fails the count until it is
+// checked here too.
 TEST(ServiceTest, BearerTokenIsRequiredWhenConfigured) {
+  ASSERT_EQ(v1::SmoothRequest::descriptor()->file()->FindServiceByName("MeshSmoother")->method_count(), 2) << "check the new method's authentication below";
   ServerOptions o;
   o.auth_token = "s3cret-token";
   auto server = StartServer(o, /*listen=*/true);
