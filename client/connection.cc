@@ -13,7 +13,6 @@
 #include "absl/strings/str_join.h"
 #include "absl/strings/str_split.h"
 #include "core/io/file_bytes.h"
-#include "base/shutdown_signals.h"
 
 namespace meshsmooth::client {
 namespace {
@@ -144,24 +143,6 @@ absl::Status PrepareContext(const ConnectionOptions& options, grpc::ClientContex
     context.AddMetadata("authorization", "Bearer " + *token);
   }
   return absl::OkStatus();
-}
-
-InterruptWatcher::InterruptWatcher(std::function<void()> on_interrupt) : on_interrupt_(std::move(on_interrupt)) {
-  thread_ = std::thread([this] {
-    // Wakes every 100 ms to see whether the call is over.
-    while (!stop_.load()) {
-      if (WaitForShutdownSignal(std::chrono::milliseconds(100)) != 0) {
-        interrupted_.store(true);
-        on_interrupt_();
-        return;
-      }
-    }
-  });
-}
-
-InterruptWatcher::~InterruptWatcher() {
-  stop_.store(true);
-  thread_.join();
 }
 
 }  // namespace meshsmooth::client

@@ -12,6 +12,7 @@
 
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
+#include "base/shutdown_signals.h"
 #include "grpcpp/grpcpp.h"
 #include "server/server.h"
 
@@ -55,21 +56,22 @@ absl::Status PrepareContext(const ConnectionOptions& options, grpc::ClientContex
                             std::chrono::system_clock::time_point deadline);
 
 // Ctrl-C while a call runs: SIGINT/SIGTERM (blocked in every thread by main()) are waited for
-// on a thread of this object's own, and the first one calls `on_interrupt` (which cancels the
-// call on the server).
+// on a thread of their own, and the first one calls `on_interrupt` (which cancels the call on
+// the server). Ends at once when the call is over.
 class InterruptWatcher {
  public:
-  explicit InterruptWatcher(std::function<void()> on_interrupt);
-  ~InterruptWatcher();
-  InterruptWatcher(const InterruptWatcher&) = delete;
-  InterruptWatcher& operator=(const InterruptWatcher&) = delete;
+  explicit InterruptWatcher(std::function<void()> on_interrupt)
+      : on_interrupt_(std::move(on_interrupt)), watcher_([this](int) {
+          interrupted_.store(true);
+          on_interrupt_();
+        }) {}
 
   bool interrupted() const { return interrupted_.load(); }
 
  private:
   std::function<void()> on_interrupt_;
-  std::atomic<bool> stop_{false}, interrupted_{false};
-  std::thread thread_;
+  std::atomic<bool> interrupted_{false};
+  ShutdownSignalWatcher watcher_;  // last: its thread uses the members above
 };
 
 }  // namespace meshsmooth::client
