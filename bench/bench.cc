@@ -93,9 +93,10 @@ void MeshSection(const NamedMesh& nm, const Options& opt, const std::vector<Peer
     const double t1 = PlainU0Ms(nm.mesh, topo, iterations, 1, opt.runs);
     const double t2 = PlainU0Ms(nm.mesh, topo, iterations, std::min(2, hw), opt.runs);
     const double bytes = BytesPerVertex(FlowId::kLaplacian, valence);
-    std::printf("| (reference) plain CSR U0 loop, same order, no checks | %.2f | %.2f | %.2fx | %.0f | %.0f | %.0f%% "
-                "| - |\n",
-                t1, t2, t1 / t2, n / (t2 / 1000.0) / 1e6, bytes, 100.0 * bytes * n / (t2 / 1000.0) / 1e9 / bw2);
+    std::printf(
+        "| (reference) plain CSR U0 loop, same order, no checks | %.2f | %.2f | %.2fx | %.0f | %.0f | %.0f%% "
+        "| - |\n",
+        t1, t2, t1 / t2, n / (t2 / 1000.0) / 1e6, bytes, 100.0 * bytes * n / (t2 / 1000.0) / 1e9 / bw2);
   }
   if (opt.Wanted("bilateral_normal")) NormalFilterRows(nm.mesh, topo, u0_ms2, hw, opt.runs);
   std::string ratios;  // none when --only left the cotangent flows out

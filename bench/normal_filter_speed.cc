@@ -29,8 +29,7 @@ void NormalFilterRows(const Mesh& mesh, const Topology& topo, const double u0_ms
     base.threads = k == 0 ? 1 : std::min(2, hw);
     base.iterations = kIterations;
     // In the layout a job of 20 iterations runs in, whatever the count here.
-    base.reorder =
-        MortonOrderPaysOff(topo, 20 * PassesPerIteration(base)) ? ReorderMode::kAlways : ReorderMode::kNever;
+    base.reorder = MortonOrderPaysOff(topo, 20 * PassesPerIteration(base)) ? ReorderMode::kAlways : ReorderMode::kNever;
     FlowParams one = base;  // one filter pass and one vertex pass per iteration
     one.normal_filter.normal_iterations = one.normal_filter.vertex_iterations = 1;
     FlowParams two_filters = one, two_updates = one, single = base;
