@@ -14,7 +14,7 @@
 
 namespace meshsmooth::bench {
 
-// The real meshes that serve as ground truth (docs/quality.md says why these and not the
+// The real meshes that serve as ground truth (docs/quality-method.md says why these and not the
 // beetle), then the synthetic shapes: the paper's, iso-surface output and a sphere with many
 // holes (LoadSubject).
 inline const std::vector<std::string> kDefaultMeshes = {

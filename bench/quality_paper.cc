@@ -80,14 +80,8 @@ void PaperTable(std::string& out, const std::string& title, const GroundTruth& t
 }  // namespace
 
 void PaperSection(std::string& out, const std::filesystem::path& mesh_dir, int iterations) {
-  out += absl::StrFormat(
-      "\n## The paper's setting: %d iterations of each flow, uniform noise\n\n"
-      "Each coordinate gets uniform noise in [-0.3 h, 0.3 h]; every flow runs its default step for %d "
-      "iterations. The first distance column is from each vertex to its own clean position, so tangential "
-      "motion (the regularisation of mcf_tangential and median) counts against it; the last two columns "
-      "measure as the tables above do. The edge-length CV of the two-rate torus is dominated by its designed "
-      "2:1 sampling (clean: 0.36).\n",
-      iterations, iterations);
+  // How to read the tables: docs/quality-method.md, "The paper's setting".
+  out += absl::StrFormat("\n## The paper's setting: %d iterations of each flow, uniform noise\n", iterations);
   PaperTable(out, "Noisy sphere (icosphere level 4)", GroundTruth(Icosphere(4)), iterations);
   PaperTable(out, "Noisy two-rate torus (Fig. 4)", GroundTruth(TwoRateTorus(32)), iterations);
   absl::StatusOr<Mesh> bunny = ReadMesh((mesh_dir / "stanford-bunny.ply").string());

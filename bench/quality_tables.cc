@@ -70,8 +70,8 @@ void DetailRow(std::string& out, const Row& row, bool smoothed) {
                         smoothed && ok > 0 ? Fmt(1000.0 * seconds, 1) : "—", Status(row));
 }
 
-// The targets a default job is held to (docs/quality.md, "How to read"): the ones `d` misses,
-// or "none".
+// The targets a default job is held to (docs/quality-method.md, "Summary tables and targets"):
+// the ones `d` misses, or "none".
 std::string MissedTargets(const Case& c, const Quality& noisy, const Row& def, const Quality& d, const Row* best) {
   if (!AllOk(def)) return "no failure";
   std::vector<std::string> missed;

@@ -1,5 +1,5 @@
 // The quality benchmark's Markdown tables: the inputs, every row of one mesh in one noise case,
-// and the summary of one noise case over the meshes (docs/quality.md says how to read
+// and the summary of one noise case over the meshes (docs/quality-method.md says how to read
 // them).
 #pragma once
 
