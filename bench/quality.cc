@@ -3,22 +3,24 @@
 // noise along its vertex normals (sigma = 0, 0.1, 0.2, 0.3 of its mean edge length h, several
 // seeds) and in random directions; then the default job (a default JobSpec through the
 // service's FromProto), every flow of the flow table at its best iteration count ("oracle"),
-// and any job given on the command line run on it, and core/measure/evaluation.h measures each result
-// against the clean mesh. Markdown to stdout; docs/quality.md is its output:
-//   nice -n 10 build/bench/meshsmooth_quality > docs/quality.md
-// `--help` lists the options; `--quick` runs a subset in well under a minute.
-#include <omp.h>
+// and any job given on the command line run on it, and core/measure/evaluation.h measures each
+// result against the clean mesh. Markdown tables to stdout; docs/quality.md is its output:
+//   nice -n 10 build/bench/meshsmooth_quality --seeds 1 > docs/quality.md
+// docs/quality-method.md, written by hand, says how to read them; a change to what the tables
+// measure changes it too. `--help` lists the options; `--quick` runs a subset in about two
+// minutes.
+//
+// This file holds the options and main; quality_inputs.cc the meshes and noise, quality_runs.cc
+// the jobs and oracle sweeps, quality_tables.cc the tables, quality_paper.cc the paper's setting.
 #include <sys/resource.h>
 
 #include <algorithm>
 #include <cerrno>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
-#include <memory>
 #include <string>
 #include <thread>
 #include <vector>
@@ -27,59 +29,28 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_join.h"
-#include "absl/strings/str_replace.h"
 #include "absl/strings/str_split.h"
-#include "core/measure/evaluation.h"
-#include "core/flows/flow.h"
-#include "core/flows/flow_table.h"
 #include "base/huge_pages.h"
+#include "bench/bench_common.h"
+#include "bench/quality_inputs.h"
+#include "bench/quality_paper.h"
+#include "bench/quality_runs.h"
+#include "bench/quality_tables.h"
+#include "core/flows/flow.h"
 #include "core/io/mesh_io.h"
-#include "core/measure/metrics.h"
-#include "core/shapes/parametric.h"
-#include "core/shapes/marching_tetrahedra.h"
-#include "core/shapes/added_noise.h"
-#include "core/topology.h"
-#include "google/protobuf/text_format.h"
-#include "server/convert.h"
+#include "core/measure/evaluation.h"
 
 namespace meshsmooth::bench {
 namespace {
 
-using Clock = std::chrono::steady_clock;
-
-double Seconds(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
-
-// The real meshes that serve as ground truth (docs/quality.md says why these and not the
-// beetle), then the synthetic shapes: the paper's, iso-surface output and a sphere with many
-// holes (LoadSubject).
-const std::vector<std::string> kDefaultMeshes = {"fandisk",  "bunny-small",    "max-planck",      "camelhead",
-                                                 "turbine",  "nefertiti",      "stanford-bunny",  "stanford-dragon",
-                                                 "sphere",   "two-rate-torus", "mt-torus",        "mt-cylinder",
-                                                 "holey-sphere"};
-// Iteration counts the oracle tries, about x1.6 apart.
-const std::vector<int> kOracleCounts = {1, 2, 3, 5, 8, 12, 20, 32, 50, 80, 125, 200, 320, 500, 800, 1250, 2000};
-// Meshes from this many vertices get `large_seeds` seeds (unless it is 0).
-constexpr int32_t kLargeMesh = 200000;
-
-enum class Noise { kNormal, kRandom };
-
-struct Case {
-  Noise noise;
-  double sigma;
-  std::string Name() const {
-    if (sigma == 0.0) return "clean input (sigma = 0)";
-    return absl::StrFormat("%s, sigma = %g h", noise == Noise::kNormal ? "normal noise" : "random-direction noise",
-                           sigma);
-  }
-};
-
+// What the command line asks for (kUsage).
 struct Options {
   std::filesystem::path shared = std::filesystem::path(MESHSMOOTH_SOURCE_DIR) / ".." / "shared";
   std::vector<std::string> meshes = kDefaultMeshes;
   std::vector<double> sigmas = {0.0, 0.1, 0.2, 0.3};
   std::vector<double> random_sigmas = {0.1, 0.2, 0.3};
   int seeds = 3;
-  int large_seeds = 1;  // 0: as many as `seeds`
+  int large_seeds = 1;             // 0: as many as `seeds`
   std::vector<std::string> flows;  // empty: every flow of the table, unless no_flows
   bool no_flows = false;
   std::vector<std::string> jobs, oracle_jobs;  // JobSpecs in protobuf text format
@@ -87,660 +58,30 @@ struct Options {
   int paper_iterations = 20;
 };
 
-// A job as rows name it: a label and the spec the service would get.
-struct Job {
-  std::string label;
-  v1::JobSpec spec;
-  bool oracle = false;  // swept over kOracleCounts
-};
-
-// One run of a job on one noisy mesh.
-struct Run {
-  absl::Status status;
-  Quality q;
-  double seconds = 0.0;
-  int iterations = 0;  // run by the flow
-  double noise_h = 0.0;  // automatic stopping: the input's noise estimate, in h
-  std::string stop;      // why the flow stopped (StopReasonName)
-};
-
-// A row of a table: the runs of one job (one per seed) at one iteration count.
-struct Row {
-  std::string label;
-  int iterations = 0;  // 0: not a sweep (the noisy input, or a job's own count)
-  std::vector<Run> runs;
-};
-
-struct MeshCase {
-  std::string mesh;
-  Row noisy;
-  std::vector<Row> rows;  // rows[0] is the default job
-};
-
-// The clean mesh of a benchmark input and what it is.
-struct Subject {
-  std::string name, what;
-  std::unique_ptr<GroundTruth> truth;
-  double truth_seconds = 0.0;  // to build `truth`, on one thread
-};
-
-absl::StatusOr<Subject> LoadSubject(const std::string& name, const std::filesystem::path& meshes) {
-  Subject s;
-  s.name = name;
-  Mesh clean;
-  if (name == "sphere") {
-    clean = Icosphere(4);
-    s.what = "icosphere, level 4";
-  } else if (name == "two-rate-torus") {
-    clean = TwoRateTorus(32);
-    s.what = "the paper's Fig. 4 torus, two sampling rates";
-  } else if (name == "mt-torus") {
-    // A tilted torus (R = 1, r = 0.4) through marching tetrahedra: iso-surface output. sqrt,
-    // not hypot, in the shapes' functions: the same bits on every machine.
-    clean = MarchingTetrahedra(
-        [](const Vec3& p) {
-          const Vec3 q{p.x, 0.8 * p.y - 0.6 * p.z, 0.6 * p.y + 0.8 * p.z};
-          const double ring = std::sqrt(q.x * q.x + q.y * q.y) - 1.0;
-          return std::sqrt(ring * ring + q.z * q.z) - 0.4;
-        },
-        Vec3{-1.5, -1.5, -1.5}, Vec3{1.5, 1.5, 1.5}, 0.045);
-    s.what = "torus R 1, r 0.4, marching tetrahedra, step 0.045";
-  } else if (name == "mt-cylinder") {
-    // A capped cylinder (radius 0.6, height 1.6) through marching tetrahedra: a machined part
-    // as iso-surface output, its rims cut into jagged chamfers.
-    clean = MarchingTetrahedra(
-        [](const Vec3& p) { return std::max(std::sqrt(p.x * p.x + p.y * p.y) - 0.6, std::abs(p.z) - 0.8); },
-        Vec3{-0.9, -0.9, -1.1}, Vec3{0.9, 0.9, 1.1}, 0.037);
-    s.what = "capped cylinder, marching tetrahedra, step 0.037";
-  } else if (name == "holey-sphere") {
-    clean = HoleySphere(5, 60, 0.07, 7);
-    s.what = "icosphere level 5, 60 round holes";
-  } else {
-    std::filesystem::path path = meshes / (name + ".obj");
-    if (!std::filesystem::exists(path)) path = meshes / (name + ".ply");
-    absl::StatusOr<Mesh> read = ReadMesh(path.string());
-    if (!read.ok()) return read.status();
-    clean = *std::move(read);
-    s.what = path.filename().string();
-  }
-  // On one thread: the figure the Inputs table gives is the cost of the measure alone.
-  const int threads = omp_get_max_threads();
-  omp_set_num_threads(1);
-  const Clock::time_point t0 = Clock::now();
-  s.truth = std::make_unique<GroundTruth>(std::move(clean));
-  s.truth_seconds = Seconds(t0, Clock::now());
-  omp_set_num_threads(threads);
-  return s;
-}
-
-// The seconds one evaluation takes on one thread.
-double OneThreadEvaluationSeconds(const GroundTruth& truth, const Mesh& mesh) {
-  const int threads = omp_get_max_threads();
-  omp_set_num_threads(1);
-  const Clock::time_point t0 = Clock::now();
-  const absl::StatusOr<Quality> q = truth.Evaluate(mesh);
-  const double seconds = Seconds(t0, Clock::now());
-  omp_set_num_threads(threads);
-  return q.ok() ? seconds : std::nan("");
-}
-
-Mesh MakeNoisy(const Mesh& clean, const Case& c, uint64_t seed) {
-  Mesh m = clean;
-  if (c.sigma == 0.0) return m;
-  if (c.noise == Noise::kNormal) {
-    AddNormalNoise(m, c.sigma, seed);
-  } else {
-    AddRandomDirectionNoise(m, c.sigma, seed);
-  }
-  return m;
-}
-
-Run RunJob(const GroundTruth& truth, const Mesh& noisy, const FlowParams& p) {
-  Run run;
-  Mesh m = noisy;
-  const Clock::time_point t0 = Clock::now();
-  absl::StatusOr<FlowResult> r = Smooth(m, truth.topology(), p);
-  run.seconds = Seconds(t0, Clock::now());
-  if (!r.ok()) {
-    run.status = r.status();
-    return run;
-  }
-  run.iterations = r->iterations_run;
-  run.stop = std::string(StopReasonName(r->stop_reason));
-  if (r->auto_stop) run.noise_h = r->auto_stop->noise_sigma_h;
-  absl::StatusOr<Quality> q = truth.Evaluate(m);
-  run.status = q.status();
-  if (q.ok()) run.q = *q;
-  return run;
-}
-
-FlowParams ParamsOf(const v1::JobSpec& spec) {
-  absl::StatusOr<server::JobParams> params = server::FromProto(spec, kMaxIterations);
-  if (!params.ok()) {
-    std::fprintf(stderr, "bad job spec {%s}: %s\n", spec.ShortDebugString().c_str(), params.status().ToString().c_str());
-    std::exit(2);
-  }
-  return params->flow;
-}
-
-Row RunRow(const std::string& label, int iterations, const GroundTruth& truth, const std::vector<Mesh>& noisy,
-           const FlowParams& p) {
-  Row row{label, iterations, {}};
-  for (const Mesh& m : noisy) row.runs.push_back(RunJob(truth, m, p));
-  return row;
-}
-
-bool AllOk(const Row& row) {
-  for (const Run& r : row.runs) {
-    if (!r.status.ok() || r.q.non_finite_vertices > 0) return false;
-  }
-  return !row.runs.empty();
-}
-
-// Mean over the runs that succeeded (NaN where none did, or where a figure is NaN); their
-// count and mean time go to `ok` and `seconds` when given.
-Quality MeanQuality(const Row& row, int* ok = nullptr, double* seconds = nullptr) {
-  Quality m;
-  double flipped = 0.0, flipped_fine = 0.0, secs = 0.0;
-  int n = 0;
-  for (const Run& r : row.runs) {
-    if (!r.status.ok()) continue;
-    m.rms_distance += r.q.rms_distance;
-    m.max_distance += r.q.max_distance;
-    m.normal_error_deg += r.q.normal_error_deg;
-    m.crease_normal_error_deg += r.q.crease_normal_error_deg;
-    m.volume_change_percent += r.q.volume_change_percent;
-    flipped += static_cast<double>(r.q.flipped_faces);
-    flipped_fine += static_cast<double>(r.q.flipped_in_fine_detail);
-    m.edge_length_cv += r.q.edge_length_cv;
-    m.min_angle_deg += r.q.min_angle_deg;
-    m.non_finite_vertices += r.q.non_finite_vertices;
-    secs += r.seconds;
-    ++n;
-  }
-  const double k = n > 0 ? 1.0 / n : std::nan("");
-  m.rms_distance *= k;
-  m.max_distance *= k;
-  m.normal_error_deg *= k;
-  m.crease_normal_error_deg *= k;
-  m.volume_change_percent *= k;
-  m.flipped_faces = n > 0 ? std::llround(flipped * k) : 0;
-  m.flipped_in_fine_detail = n > 0 ? std::llround(flipped_fine * k) : 0;
-  m.edge_length_cv *= k;
-  m.min_angle_deg *= k;
-  if (seconds != nullptr) *seconds = secs * k;
-  if (ok != nullptr) *ok = n;
-  return m;
-}
-
-// The oracle: the job at each count of kOracleCounts, keeping the count with the smallest mean
-// RMS distance over the seeds. The sweep stops two counts after the best so far (the error
-// of every flow here falls, then rises) and at the first count that fails on any seed.
-Row OracleRow(const Job& job, const GroundTruth& truth, const std::vector<Mesh>& noisy) {
-  Row best;
-  double best_rms = HUGE_VAL;
-  int worse = 0;
-  for (int count : kOracleCounts) {
-    v1::JobSpec spec = job.spec;
-    spec.set_iterations(static_cast<uint32_t>(count));
-    Row row = RunRow(job.label, count, truth, noisy, ParamsOf(spec));
-    if (!AllOk(row)) {
-      if (best.runs.empty()) best = std::move(row);
-      break;
-    }
-    const double rms = MeanQuality(row).rms_distance;
-    if (rms < best_rms) {
-      best_rms = rms;
-      best = std::move(row);
-      worse = 0;
-    } else if (++worse == 2) {
-      break;
-    }
-  }
-  return best;
-}
-
-std::string Fmt(double v, int digits) {
-  if (std::isnan(v)) return "—";
-  return absl::StrFormat("%.*f", digits, v);
-}
-
-// "v (v/ref ×)", v with `digits` decimals.
-std::string Ratio(double v, double ref, int digits) {
-  if (std::isnan(v) || !(ref > 0.0)) return Fmt(v, digits);
-  return absl::StrFormat("%.*f (%.2f×)", digits, v, v / ref);
-}
-
-std::string Status(const Row& row) {
-  int failed = 0, nan = 0;
-  std::string first;
-  for (const Run& r : row.runs) {
-    if (!r.status.ok()) {
-      if (failed++ == 0) first = r.status.ToString();
-    } else if (r.q.non_finite_vertices > 0) {
-      ++nan;
-    }
-  }
-  std::string s = "ok";
-  if (failed > 0) s = absl::StrFormat("failed on %d of %d: %s", failed, row.runs.size(), first);
-  if (nan > 0) s = absl::StrCat(s, absl::StrFormat("; NaN on %d of %d", nan, row.runs.size()));
-  return absl::StrReplaceAll(s, {{"|", "/"}});
-}
-
-// The iterations a row's runs made: the swept count, or what the flow ran (a range when the
-// seeds differ); "—" for the noisy input.
-std::string Iterations(const Row& row, bool smoothed) {
-  if (!smoothed) return "—";
-  if (row.iterations > 0) return absl::StrCat(row.iterations);
-  int lo = kMaxIterations + 1, hi = 0;
-  for (const Run& r : row.runs) {
-    if (!r.status.ok()) continue;
-    lo = std::min(lo, r.iterations);
-    hi = std::max(hi, r.iterations);
-  }
-  if (hi == 0) return "—";
-  return lo == hi ? absl::StrCat(lo) : absl::StrCat(lo, "–", hi);
-}
-
-// Flipped faces, and in brackets how many of them lie in fine detail (core/measure/evaluation.h).
-std::string Flipped(const Quality& q) {
-  return q.flipped_faces > 0 ? absl::StrCat(q.flipped_faces, " (", q.flipped_in_fine_detail, ")") : "0";
-}
-
-void DetailRow(std::string& out, const Row& row, bool smoothed) {
-  double seconds = 0.0;
-  int ok = 0;
-  const Quality q = MeanQuality(row, &ok, &seconds);
-  absl::StrAppendFormat(&out, "| %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |\n", row.label,
-                        Iterations(row, smoothed), Fmt(q.rms_distance, 4),
-                        Fmt(q.max_distance, 3), Fmt(q.normal_error_deg, 2), Fmt(q.crease_normal_error_deg, 2),
-                        Fmt(q.volume_change_percent, 2), ok > 0 ? Flipped(q) : "—",
-                        Fmt(q.edge_length_cv, 3), Fmt(q.min_angle_deg, 2),
-                        smoothed && ok > 0 ? Fmt(1000.0 * seconds, 1) : "—", Status(row));
-}
-
-void DetailTable(std::string& out, const Case& c, const MeshCase& mc, int seeds) {
-  absl::StrAppendFormat(&out, "\n#### %s — %s (%d seed%s)\n\n", mc.mesh, c.Name(), seeds, seeds == 1 ? "" : "s");
-  out +=
-      "| row | iterations | RMS dist (h) | max dist (h) | normal err (°) | crease normal err (°) | volume (%) | "
-      "flipped | edge CV | min angle (°) | time (ms) | status |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n";
-  DetailRow(out, mc.noisy, false);
-  for (const Row& row : mc.rows) DetailRow(out, row, true);
-}
-
-// The oracle row with the smallest mean RMS distance (nullptr when every one failed).
-const Row* BestOracle(const MeshCase& mc, const std::vector<Job>& jobs) {
-  const Row* best = nullptr;
-  double best_rms = HUGE_VAL;
-  for (size_t i = 0; i < mc.rows.size(); ++i) {
-    if (!jobs[i].oracle || !AllOk(mc.rows[i])) continue;
-    const double rms = MeanQuality(mc.rows[i]).rms_distance;
-    if (rms < best_rms) {
-      best_rms = rms;
-      best = &mc.rows[i];
-    }
-  }
-  return best;
-}
-
-// The targets a default job is held to (docs/quality.md, "How to read"): the ones `d` misses,
-// or "none".
-std::string MissedTargets(const Case& c, const Quality& noisy, const Row& def, const Quality& d, const Row* best) {
-  if (!AllOk(def)) return "no failure";
-  std::vector<std::string> missed;
-  if (c.sigma == 0.0) {
-    if (!(d.rms_distance <= 0.02)) missed.push_back("RMS ≤ 0.02 h");
-    if (!(d.normal_error_deg <= 2.0)) missed.push_back("normal ≤ 2°");
-  } else {
-    const double ratio = c.sigma >= 0.2 ? 0.6 : 0.9;
-    if (!(d.rms_distance <= ratio * noisy.rms_distance)) missed.push_back(absl::StrFormat("RMS ≤ %g×", ratio));
-    if (!(d.normal_error_deg <= ratio * noisy.normal_error_deg)) {
-      missed.push_back(absl::StrFormat("normal ≤ %g×", ratio));
-    }
-  }
-  if (std::abs(d.volume_change_percent) > 1.0) missed.push_back("volume ±1%");
-  for (const Run& r : def.runs) {
-    if (r.q.flipped_faces > 0) {
-      missed.push_back("no flip");
-      break;
-    }
-  }
-  if (best != nullptr && !(d.rms_distance <= 1.25 * MeanQuality(*best).rms_distance)) {
-    missed.push_back("≤ 1.25× best");
-  }
-  return missed.empty() ? "none" : absl::StrJoin(missed, ", ");
-}
-
-// The default job's iterations (mean over the seeds), its first seed's stop reason and the
-// mean noise estimate.
-std::string StopCell(const Row& row) {
-  if (row.runs.empty() || !AllOk(row)) return "—";
-  double iterations = 0.0, noise = 0.0;
-  for (const Run& r : row.runs) {
-    iterations += r.iterations;
-    noise += r.noise_h;
-  }
-  const auto n = static_cast<double>(row.runs.size());
-  return absl::StrFormat("%.0f, %s (%.3f)", iterations / n, row.runs[0].stop, noise / n);
-}
-
-void SummaryTable(std::string& out, const Case& c, const std::vector<MeshCase>& meshes, const std::vector<Job>& jobs) {
-  absl::StrAppendFormat(&out, "\n### %s\n\n", c.Name());
-  const bool clean = c.sigma == 0.0;
-  const char* per = clean ? "" : ", × noisy";
-  if (clean) {
-    out += "| mesh | default: RMS dist (h) | normal err (°) |";
-  } else {
-    out += "| mesh | noisy: RMS dist (h) | normal err (°) | default: RMS dist (h, × noisy) | normal err (°, × noisy) |";
-  }
-  absl::StrAppendFormat(&out,
-                        " default: iterations, stop (noise estimate, h) | volume (%%) | flipped | status | best oracle | its RMS dist (h%s) | its normal err (°%s) | "
-                        "default / best RMS | targets missed |\n",
-                        per, per);
-  out += clean ? "|---|---|---|---|---|---|---|---|---|---|---|---|\n"
-               : "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
-  for (const MeshCase& mc : meshes) {
-    const Quality noisy = MeanQuality(mc.noisy);
-    const Row& def = mc.rows[0];
-    const Quality d = MeanQuality(def);
-    const Row* best = BestOracle(mc, jobs);
-    std::vector<std::string> cells = {mc.mesh};
-    if (clean) {
-      cells.insert(cells.end(), {Fmt(d.rms_distance, 4), Fmt(d.normal_error_deg, 2)});
-    } else {
-      cells.insert(cells.end(), {Fmt(noisy.rms_distance, 3), Fmt(noisy.normal_error_deg, 2),
-                                 Ratio(d.rms_distance, noisy.rms_distance, 3),
-                                 Ratio(d.normal_error_deg, noisy.normal_error_deg, 2)});
-    }
-    cells.push_back(StopCell(def));
-    cells.insert(cells.end(), {Fmt(d.volume_change_percent, 2), AllOk(def) ? Flipped(d) : "—",
-                               Status(def)});
-    if (best == nullptr) {
-      cells.insert(cells.end(), {"—", "—", "—", "—"});
-    } else {
-      const Quality b = MeanQuality(*best);
-      cells.insert(cells.end(),
-                   {absl::StrFormat("%s @ %d", best->label, best->iterations),
-                    clean ? Fmt(b.rms_distance, 4) : Ratio(b.rms_distance, noisy.rms_distance, 3),
-                    clean ? Fmt(b.normal_error_deg, 2) : Ratio(b.normal_error_deg, noisy.normal_error_deg, 2),
-                    AllOk(def) && b.rms_distance > 0.0 ? absl::StrFormat("%.2f", d.rms_distance / b.rms_distance)
-                                                       : "—"});
-    }
-    cells.push_back(MissedTargets(c, noisy, def, d, best));
-    out += "| " + absl::StrJoin(cells, " | ") + " |\n";
-  }
-}
-
-std::vector<Job> MakeJobs(const Options& opt) {
-  std::vector<Job> jobs = {{"default job", v1::JobSpec(), false}};
-  for (const FlowRow& flow : FlowTable()) {
-    if (opt.no_flows) break;
-    if (!opt.flows.empty() && std::find(opt.flows.begin(), opt.flows.end(), flow.name) == opt.flows.end()) continue;
-    Job j{std::string(flow.name), v1::JobSpec(), true};
-    j.spec.set_flow(std::string(flow.name));
-    jobs.push_back(j);
-  }
-  auto parse = [](const std::string& text, bool oracle) {
-    Job j{absl::StrCat("`", text, "`"), v1::JobSpec(), oracle};
-    if (!google::protobuf::TextFormat::ParseFromString(text, &j.spec)) {
-      std::fprintf(stderr, "cannot parse the JobSpec {%s}\n", text.c_str());
-      std::exit(2);
-    }
-    ParamsOf(j.spec);  // refuses a bad spec before any work
-    return j;
-  };
-  for (const std::string& t : opt.jobs) jobs.push_back(parse(t, false));
-  for (const std::string& t : opt.oracle_jobs) jobs.push_back(parse(t, true));
-  return jobs;
-}
-
-std::vector<Case> MakeCases(const Options& opt) {
-  std::vector<Case> cases;
-  for (double s : opt.sigmas) cases.push_back({Noise::kNormal, s});
-  for (double s : opt.random_sigmas) {
-    if (s > 0.0) cases.push_back({Noise::kRandom, s});
-  }
-  return cases;
-}
-
-// --- The paper's setting: fixed iteration counts, uniform noise (kept from the first table).
-
-void PaperRow(std::string& out, const std::string& label, const GroundTruth& truth, const Mesh& mesh) {
-  const Quality q = *truth.Evaluate(mesh);
-  const Topology& topo = truth.topology();
-  double sq = 0.0;
-  int64_t count = 0;
-  for (int32_t v = 0; v < topo.num_vertices(); ++v) {
-    if (topo.kind[v] == VertexKind::kIsolated) continue;
-    sq += SquaredNorm(mesh.positions[v] - truth.mesh().positions[v]);
-    ++count;
-  }
-  const MeshMetrics m = ComputeMetrics(mesh, topo);
-  absl::StrAppendFormat(&out, "| %s | %.4f | %+.2f%% | %.3f | %.2f | %d | %.4f | %.2f |\n", label,
-                        std::sqrt(sq / count) / truth.mean_edge_length(),
-                        100.0 * (m.signed_volume / truth.signed_volume() - 1.0), m.edge_length_cv, m.min_angle_deg,
-                        q.flipped_faces, q.rms_distance, q.normal_error_deg);
-}
-
-void PaperTable(std::string& out, const std::string& title, const GroundTruth& truth, int iterations) {
-  const Mesh& clean = truth.mesh();
-  Mesh noisy = clean;
-  AddUniformNoise(noisy, 0.3, 1);
-  absl::StrAppendFormat(&out, "\n### %s\n\n%d vertices, %d faces; uniform noise 0.30 x mean edge (seed 1); %d "
-                        "iterations each.\n\n", title, clean.num_vertices(), clean.num_triangles(), iterations);
-  out += "| flow | RMS distance to clean / h | volume change | edge-length CV | min angle (deg) | flipped normals | "
-         "RMS distance to the clean surface / h | normal error (deg) |\n|---|---|---|---|---|---|---|---|\n";
-  PaperRow(out, "clean mesh", truth, clean);
-  PaperRow(out, "noisy input", truth, noisy);
-  auto make = [iterations](const char* flow) {
-    FlowParams p;
-    p.flow = ParseFlowName(flow).value();
-    p.iterations = iterations;
-    return p;
-  };
-  FlowParams u1 = make("laplacian");
-  u1.weights = UmbrellaWeights::kInverseDistance;
-  FlowParams adaptive = make("median");
-  adaptive.adaptive = AdaptiveMode::kRing2;
-  const std::vector<std::pair<std::string, FlowParams>> variants = {
-      {"laplacian U0 (step 0.5)", make("laplacian")},
-      {"laplacian U1 (step 0.5)", u1},
-      {"taubin U0 (0.5, k_PB 0.1)", make("taubin")},
-      {"bilaplacian (step 0.2)", make("bilaplacian")},
-      {"mcf (step 0.1 h^2)", make("mcf")},
-      {"mcf_tangential (step 0.1 h^2, C 5)", make("mcf_tangential")},
-      {"median (step 0.1 h^2, eps 0.1)", make("median")},
-      {"median + adaptive T(P) 1+2 rings", adaptive}};
-  for (const auto& [label, params] : variants) {
-    Mesh m = noisy;
-    absl::StatusOr<FlowResult> r = Smooth(m, truth.topology(), params);
-    if (!r.ok()) {
-      absl::StrAppendFormat(&out, "| %s | failed: %s | | | | | | |\n", label, r.status().message());
-      continue;
-    }
-    PaperRow(out, label, truth, m);
-  }
-}
-
+// The machine the header names.
 std::string CpuModel() {
   std::ifstream in("/proc/cpuinfo");
   for (std::string line; std::getline(in, line);) {
-    if (line.rfind("model name", 0) == 0) return std::string(absl::StripAsciiWhitespace(line.substr(line.find(':') + 1)));
+    if (line.rfind("model name", 0) == 0) {
+      return std::string(absl::StripAsciiWhitespace(line.substr(line.find(':') + 1)));
+    }
   }
   return "unknown CPU";
 }
 
+// The numbers of a comma-separated list.
 std::vector<double> ParseDoubles(const std::string& s) {
   std::vector<double> v;
-  for (absl::string_view part : absl::StrSplit(s, ',', absl::SkipEmpty())) v.push_back(std::atof(std::string(part).c_str()));
+  for (absl::string_view part : absl::StrSplit(s, ',', absl::SkipEmpty())) {
+    v.push_back(std::atof(std::string(part).c_str()));
+  }
   return v;
 }
 
-constexpr char kHowToRead[] = R"(
-## How to read
-
-**Protocol.** Each clean mesh gets Gaussian noise along its area-weighted vertex normals with a
-standard deviation of sigma x h (h: the clean mesh's mean edge length), one noisy copy per seed,
-and Gaussian noise of the same size in random directions (`AddNormalNoise`,
-`AddRandomDirectionNoise` in core/shapes/added_noise.h: seeded, the same bytes on every machine). sigma = 0
-is the clean mesh itself: a job should give it back unchanged. Every figure is the mean over the
-seeds (the "Inputs" table gives their number per mesh).
-
-**Measures** (core/measure/evaluation.h), each against the clean mesh:
-- *RMS / max dist*: distance from each vertex of the result to the clean *surface* (exact
-  point-to-triangle distance over all its triangles), in h. Vertex-to-vertex distance would
-  punish the tangential regularisation the paper wants; this does not.
-- *normal err*: mean angle in degrees between each face's normal and the same face's clean
-  normal (faces of zero area in either mesh are skipped); *crease normal err*: the same over the
-  faces with an edge whose clean dihedral angle (between the two faces' normals) is above 30
-  degrees ("crease faces" in the Inputs table; — where there are none).
-- *volume*: change of the enclosed volume in %, closed meshes only (— for open ones).
-- *flipped*: faces whose normal points against the clean one (dot product < 0), among the faces
-  that are not folded in the clean mesh ("folded faces" in the Inputs table: across one of their
-  edges the other face's normal points more than 90 degrees away). A scan's folds are defects a
-  smoothing should remove; unfolding one would otherwise count as turning it over. In brackets:
-  how many of them lie in fine detail ("fine-detail faces" in the Inputs table: the clean
-  area-weighted normals at two of the face's corners are more than 20 degrees apart, a turn at
-  the scale of the sampling as large as the one noise of 0.1-0.2 h gives a face).
-- *edge CV*, *min angle*: the paper's regularity (edge-length coefficient of variation, smallest
-  triangle angle), as core/measure/metrics.h computes them.
-- *time*: wall time of `Smooth()` alone (not the evaluation), on all threads, mean over seeds.
-- *status*: ok, or how many seeds failed and the first error, as the service would report it.
-
-**Rows.**
-- *noisy input* (*clean input* at sigma = 0): the measures of the input itself, the reference
-  every ratio (×) is taken against.
-- *default job*: what a user gets without parameters (`meshsmooth smooth IN -o OUT`): a default
-  `meshsmooth.v1.JobSpec` through the service's `FromProto` (server/convert.cc), then `Smooth()`:
-  `bilaplacian` or `bilateral_normal`, whichever the estimated error prefers, with automatic
-  stopping (its iterations, stop reason and noise estimate are in the summary tables; "How the
-  defaults were chosen" below). Unlike the service, the benchmark neither rounds the input to float32 (Draco) nor welds
-  coincident vertices (only the clean dragon has any).
-- one row per flow of the flow table, with its default parameters (a JobSpec naming only the
-  flow), at its best iteration count (the *oracle*): the counts 1, 2, 3, 5, 8, 12, 20, 32, 50,
-  80, 125, 200, 320, 500, 800, 1250, 2000 are tried in turn and the one with the smallest mean
-  RMS distance is kept (at 2000 the best may lie beyond); the sweep stops two counts past the
-  best and at the first count that fails on any seed.
-  A flow added to the table gets its row by itself; `--job` and `--oracle-job` add rows for any
-  JobSpec.
-
-**Summary tables.** For each noise case and mesh: the noisy input, the default job with its ratios
-to the noisy input (×; below 1 is better), its iterations (mean over the seeds), why its first seed
-stopped and its noise estimate (mean, in h), and the oracle row with the smallest RMS distance, with
-the default job's RMS distance over it ("default / best RMS"; 1 = the default is as good as the
-best flow at its best count). *targets missed* lists what the default job falls short of among
-the targets it is held to: at sigma >= 0.2 an RMS distance and a normal error at most 0.6× the
-noisy input's, at sigma = 0.1 at most 0.9×; on the clean input an RMS distance within 0.02 h and a
-normal error within 2 degrees; at every sigma a volume change within ±1% (closed meshes), no
-flipped face on any seed, no failure or NaN, and an RMS distance within 1.25× the best oracle
-row's.
-
-**Meshes.** Every mesh of `../shared/data/meshes` except `beetle.obj`: a coarse hand-measured
-model, not a scan, with 47 edges of more than two faces, 23 holes and two components; its
-non-manifold vertices stay fixed in every flow, so it measures nothing about denoising. The
-others are manifold with consistent orientation. The Stanford bunny has 1,113 unreferenced
-vertices (no noise, not measured) and five holes; the dragon is a raw scan (151 components, 407
-holes, 367 zero-area faces, whose normal error is not measured). Then the synthetic icosphere
-(level 4) and the paper's two-rate torus, and three shapes of kinds the real meshes lack (core/shapes/,
-bench/quality.cc `LoadSubject`): iso-surface output, a tilted torus (`mt-torus`) and a capped
-cylinder (`mt-cylinder`, a machined part with sharp rims) through marching tetrahedra, with
-valences from 3 up, needles and slivers (smallest angles under 0.1°); and an icosphere of
-level 5 with 60 round holes (`holey-sphere`): 11% of its vertices on a rim, 42% within two rings of a
-rim. The dragon gets one seed: over 437k vertices another
-seed moves its figures by about 0.1% (the relative standard error of an RMS over N samples is
-near 1/sqrt(2N)), and each of its seeds adds several minutes to the run.
-
-## How the defaults were chosen
-
-- **Automatic stopping** (core/measure/noise.h, core/flows/auto_stop.h). The noise estimate reads
-  Gaussian noise along the normals within a few percent on every mesh (the default job's column
-  in the summary tables against the sigma of the case) and 0.00–0.04 h on the clean meshes,
-  where the cubic fit cannot follow coarse, strongly curved regions; that much is removed in
-  quadrature, and below 0.02 h the job does nothing: every clean input comes back unchanged
-  (the sigma = 0 table). Otherwise the run returns the iteration with the least estimated mean
-  squared distance to the noise-free surface: Stein's unbiased risk estimate, its divergence
-  from a probe copy of the input moved by ±0.05 sigma along the normals and run beside the job
-  (Monte-Carlo SURE, Ramani, Blu, Unser 2008), sigma the root mean square of the fit residuals
-  within three robust scales, taken 10% high. The same figure tells flows apart, so it needs no
-  constant per flow. Over the 35 noisy cases of fandisk, bunny-small, max-planck, camelhead,
-  turbine, sphere and two-rate-torus at sigma = 0.1, 0.2, 0.3 and random sigma = 0.1, 0.3 the
-  default job's RMS distance is 0.96–2.08× the best oracle row's in the summary tables, mean
-  1.14, above 1.25× only on the sphere, whose best row is bilateral_normal at 2000 iterations
-  (the discrepancy principle it replaces, stopping once the vertices had moved as far as the
-  noise, measured over the same cases on three seeds: 1.00–3.95×, mean 1.70).
-  Tried: the discrepancy principle at factors 0.85 and 1 (bilaplacian; mean 1.99 / 1.78 over
-  those cases) and 0.6 / 0.75 / 0.9 for bilateral_normal (2.61 / 2.16 / 1.82: its displacement
-  does not track the noise it removes); SURE with sigma not taken high (`kRiskSigmaMargin` 1 in
-  auto_stop.h): the robust scale reads noise in random directions low, and the torus at random
-  sigma = 0.2 stops bilateral_normal at 4 iterations, 1.7× its best count's distance (20
-  iterations with the margin); SURE on the robust scale less the floor: random sigma = 0.2 stops
-  after 1–3 iterations on the sphere, the torus, camelhead and turbine; the root mean square less
-  the floor: random sigma = 0.1 stops after one iteration on four meshes: all dropped.
-- **Flow: chosen per mesh** between `bilaplacian` and `bilateral_normal` by that estimate (a
-  JobSpec that names no flow, no count and no step; `--flow auto`, the CLI's default). At their
-  best counts `bilaplacian` is the best flow, or within 1.1× of it, on every scan, and
-  `bilateral_normal` on the CAD parts (fandisk, turbine; within 1.02× of the best with creases
-  kept) and the smooth synthetic shapes; each is up to 2× (bilaplacian on CAD) or 1.3×
-  (bilateral on scans) off where the other wins. The estimate picks the better one in most
-  cases; the misses cost 1.1–1.65× (sphere and torus at sigma = 0.3 pick bilaplacian).
-  Tried: `guided_normal` as a third candidate (same 35 cases, one seed): turbine 0.092 → 0.090 h
-  at sigma = 0.2, 0.123 → 0.122 at 0.3, but fandisk 0.056 → 0.061 and camelhead at random
-  sigma = 0.3 0.050 → 0.060 h with 34 → 116 flipped faces, for a third run per job: dropped.
-  Tried on the iso-surface meshes, where the estimate picks `bilateral_normal` in cases that
-  `bilaplacian` does better (the marching-tetrahedra torus at sigma = 0.1: 0.0274 h and 8
-  flipped faces against 0.0240 h and none, edge CV 0.56 against 0.25): keeping
-  bilaplacian unless bilateral_normal's estimate is lower by 0.05 sigma^2 (over 60 cases: the
-  torus 45 → 37 flipped faces, nefertiti 22 → 10, but the sphere up to 1.26× and the two-rate
-  torus up to 1.23× worse); the estimate's offsets taken along normals averaged over the 1-ring,
-  so that tangential moves on an irregular mesh count less (two-rate torus at sigma = 0.2 0.059
-  → 0.046 h, but nefertiti at sigma = 0.1 0.047 → 0.052 h with 1 → 11 flipped faces): dropped.
-  The tangential moves are the likely cause: the estimate measures offsets along the noisy
-  input's normals, which tilt on slivers, so bilaplacian's regularising moves read partly as
-  error.
-  Meshes above 100,000 vertices choose flow and count on eight breadth-first patches of 20,000
-  vertices in all and run once: the two candidates with their probes would cost several times
-  the run (the noisy dragon's default job: 45 iterations, 1.4 s through the service, against
-  3.5 s with the probe on the whole mesh; `meshsmooth_bench --default-job-only`). `median` (the
-  former default, 20 iterations, step 0.1 h^2) moved clean meshes by 0.15–0.38 h and lost up to
-  16% of the volume: dropped.
-- **Volume.** On a closed mesh the automatic job moves the free vertices along their normals
-  by the common distance that gives back the input's enclosed volume (auto_stop.h): turbine at
-  sigma = 0.2, 8 iterations, -4.56% without it, -0.65% with it (the noisy input itself is -0.65%
-  from the clean part).
-- **Fold repair, within 0.2 h.** After the run the free vertices of edges whose two faces meet
-  at more than 120° move half-way to their ring's centroid, a few rounds, and no vertex further
-  than 0.2 h in all (`kFoldRepairReachH`, auto_stop.h). Unbounded, the repair flattened the
-  turbine's strips narrower than the noise, whose faces also meet at more than 120° after a run:
-  at sigma = 0.1 / 0.2 / 0.3 RMS 0.061 / 0.092 / 0.123 h and 72 / 141 / 188 flipped faces,
-  against 0.052 / 0.081 / 0.113 h and 41 / 110 / 166 within the bound (0.051 / 0.079 / 0.112 h
-  and 37 / 113 / 185 without any repair). The dragon keeps the repair's gain along the normals
-  (sigma = 0.2: 871 flipped faces, 927 without the repair) and half of it at random sigma = 0.3
-  (2,149; 1,763 unbounded, 2,652 without). Tried: bounds of 0.1 / 0.3 h (dragon at random
-  sigma = 0.3: 2,360 / 2,000 flipped; turbine at sigma = 0.2: 0.080 / 0.082 h); moving only the
-  tangential part of the step (turbine at sigma = 0.2: 185 flipped); repairing only folds with a
-  face under 10% / 25% of its ring's mean (dragon at random sigma = 0.3: 2,490 / 2,225); the
-  fold angle at 90° or 100° instead of 120° (`kFoldAngleDeg`; unbounded repair): camelhead at
-  sigma = 0.1 ends with 10 / 7 flipped faces instead of 5, and at 90° fandisk's normal error goes
-  1.28° → 2.30° (its creases read as folds): all dropped.
-- **What still flips.** Every flow at every count leaves flipped faces on the scans with
-  needles and on the turbine (the tables mesh by mesh: on the dragon at sigma = 0.2 the flows'
-  best counts leave 742 to 3,112). They lie where the noise hides the surface: most in fine
-  detail (the brackets: the dragon's default job at sigma = 0.2 684 of 871, the turbine's 75 of
-  110), the turbine's others on strips about 0.25 h wide between right-angled creases, narrower
-  than the noise. On the dragon 783 of 882 flipped faces (a numpy count on the same noisy copy)
-  touch a boundary vertex, which stays fixed and keeps its noise; moving the boundary vertices
-  along their interior neighbours' mean normal on to those neighbours' mean (three passes, a
-  prototype) left 882: the noise along a rim's tilted normals moves its vertices sideways too.
-  On the iso-surface meshes the flips sit on the extraction's slivers, which
-  `bilateral_normal` keeps (smallest angle 0.02° after a run) while `bilaplacian` evens them out
-  and flips none. Tried: tangential relaxation in bilateral_normal's vertex update (0.3 of the
-  umbrella on vertices whose filtered normals agree within 10°), on an earlier extraction of the
-  torus: edge CV 0.57 → 0.28, but 6 → 10 flipped faces at sigma = 0.1, 53 → 75 at random
-  sigma = 0.3, and automatic stopping ended earlier (sigma = 0.3: 0.048 → 0.062 h): dropped.
-- **Boundary: fixed.** Smoothing boundary loops as curves by default was tried: camelhead at
-  sigma = 0.2 ends at RMS 0.125 h (max 1.9 h) against 0.055 h with fixed boundaries, the loop
-  shrinking inwards over the run: dropped.
-)";
+// The line under the header: the method is hand-written, not generated.
+constexpr char kMethodPointer[] =
+    "\nHow the inputs, noise, measures, rows and targets are defined, and how the defaults were chosen: "
+    "[docs/quality-method.md](quality-method.md).\n";
 
 constexpr char kUsage[] =
     "usage: meshsmooth_quality [--meshes a,b,...] [--sigmas 0,0.1,0.2,0.3] [--random-sigmas 0.1,0.2,0.3]\n"
@@ -840,8 +181,8 @@ int main(int argc, char** argv) {
       return a == "--help" ? 0 : 2;
     }
   }
-  const std::vector<Job> jobs = MakeJobs(opt);
-  const std::vector<Case> cases = MakeCases(opt);
+  const std::vector<Job> jobs = MakeJobs(opt.flows, opt.no_flows, opt.jobs, opt.oracle_jobs);
+  const std::vector<Case> cases = MakeCases(opt.sigmas, opt.random_sigmas);
   const std::filesystem::path mesh_dir = opt.shared / "data" / "meshes";
 
   std::string body, inputs;
@@ -850,7 +191,7 @@ int main(int argc, char** argv) {
   for (const std::string& name : opt.meshes) {
     absl::StatusOr<Subject> subject = LoadSubject(name, mesh_dir);
     if (!subject.ok()) {
-      absl::StrAppendFormat(&inputs, "| %s | skipped: %s | | | | | | | |\n", name, subject.status().ToString());
+      SkippedInputRow(inputs, name, subject.status());
       continue;
     }
     const GroundTruth& truth = *subject->truth;
@@ -862,15 +203,8 @@ int main(int argc, char** argv) {
       const int n = c.sigma == 0.0 ? 1 : seeds;  // the clean input has no seed
       std::vector<Mesh> noisy;
       for (int s = 1; s <= n; ++s) noisy.push_back(MakeNoisy(truth.mesh(), c, static_cast<uint64_t>(s)));
-      MeshCase mc{name, Row{c.sigma == 0.0 ? "clean input" : "noisy input", 0, {}}, {}};
+      MeshCase mc{name, InputRow(c.sigma == 0.0 ? "clean input" : "noisy input", truth, noisy), {}};
       if (c.sigma > 0.0 && eval_seconds == 0.0) eval_seconds = OneThreadEvaluationSeconds(truth, noisy[0]);
-      for (const Mesh& m : noisy) {
-        Run r;
-        absl::StatusOr<Quality> q = truth.Evaluate(m);
-        r.status = q.status();
-        if (q.ok()) r.q = *q;
-        mc.noisy.runs.push_back(r);
-      }
       for (const Job& job : jobs) {
         mc.rows.push_back(job.oracle ? OracleRow(job, truth, noisy)
                                      : RunRow(job.label, job.spec.iterations(), truth, noisy, ParamsOf(job.spec)));
@@ -880,39 +214,16 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "%s, %s: done at %.0f s\n", name.c_str(), c.Name().c_str(), Seconds(start, Clock::now()));
     }
     details.push_back(detail);
-    const ValidationReport& r = truth.report();
-    absl::StrAppendFormat(&inputs, "| %s | %s | %d | %d | %s | %d | %d | %d | %d | %d | %.2f / %.2f s |\n", name,
-                          subject->what, truth.mesh().num_vertices(), truth.mesh().num_triangles(),
-                          r.closed() ? "yes" : "no", r.boundary_loops, truth.crease_faces(), truth.folded_faces(),
-                          truth.fine_detail_faces(), seeds, subject->truth_seconds, eval_seconds);
+    InputsRow(inputs, *subject, seeds, eval_seconds);
   }
 
-  body += "\n## Inputs\n\n| mesh | source | vertices | faces | closed | boundary loops | crease faces | folded faces | "
-          "fine-detail faces | seeds | ground truth / one evaluation (1 thread) |\n|---|---|---|---|---|---|---|---|---|---|---|\n" + inputs;
+  InputsTable(body, inputs);
   body += "\n## Summary: the default job against the noisy input and the best oracle row\n";
   for (size_t ci = 0; ci < cases.size(); ++ci) SummaryTable(body, cases[ci], results[ci], jobs);
   body += "\n## Every row, mesh by mesh\n";
   for (const std::string& d : details) body += d;
 
-  if (opt.paper) {
-    body += absl::StrFormat(
-        "\n## The paper's setting: %d iterations of each flow, uniform noise\n\n"
-        "Each coordinate gets uniform noise in [-0.3 h, 0.3 h]; every flow runs its default step for %d "
-        "iterations. The first distance column is from each vertex to its own clean position, so tangential "
-        "motion (the regularisation of mcf_tangential and median) counts against it; the last two columns "
-        "measure as the tables above do. The edge-length CV of the two-rate torus is dominated by its designed "
-        "2:1 sampling (clean: 0.36).\n",
-        opt.paper_iterations, opt.paper_iterations);
-    PaperTable(body, "Noisy sphere (icosphere level 4)", GroundTruth(Icosphere(4)), opt.paper_iterations);
-    PaperTable(body, "Noisy two-rate torus (Fig. 4)", GroundTruth(TwoRateTorus(32)), opt.paper_iterations);
-    absl::StatusOr<Mesh> bunny = ReadMesh((mesh_dir / "stanford-bunny.ply").string());
-    if (bunny.ok()) {
-      PaperTable(body, "Noisy Stanford bunny (35,947 vertices, open, 5 holes)", GroundTruth(*std::move(bunny)),
-                 opt.paper_iterations);
-    } else {
-      absl::StrAppendFormat(&body, "\n### Noisy Stanford bunny\n\nskipped: %s\n", bunny.status().message());
-    }
-  }
+  if (opt.paper) PaperSection(body, mesh_dir, opt.paper_iterations);
 
   const double wall = Seconds(start, Clock::now());
   errno = 0;
@@ -923,12 +234,12 @@ int main(int argc, char** argv) {
     if (std::fscanf(f, "%*f %*f %lf", &load) != 1) load = std::nan("");
     std::fclose(f);
   }
-  std::printf("# Smoothing quality\n\nGenerated by `%s > docs/quality.md` (bench/quality.cc) on %s, %u CPUs; "
-              "wall time %.1f min; the machine's load average over the 15 minutes before it ended was %.1f (times "
-              "grow with other work on the machine).\n",
-              absl::StrJoin(command, " ").c_str(), CpuModel().c_str(), std::thread::hardware_concurrency(),
-              wall / 60.0, load);
-  std::fputs(kHowToRead, stdout);
+  std::printf(
+      "# Smoothing quality\n\nGenerated by `%s > docs/quality.md` (bench/quality.cc) on %s, %u CPUs; "
+      "wall time %.1f min; the machine's load average over the 15 minutes before it ended was %.1f (times "
+      "grow with other work on the machine).\n",
+      absl::StrJoin(command, " ").c_str(), CpuModel().c_str(), std::thread::hardware_concurrency(), wall / 60.0, load);
+  std::fputs(kMethodPointer, stdout);
   std::fputs(body.c_str(), stdout);
   return 0;
 }

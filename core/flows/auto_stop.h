@@ -1,5 +1,5 @@
 // Automatic stopping (FlowParams::iterations == kAutoIterations): the run keeps the iteration
-// whose estimated error to the noise-free surface is least. docs/quality.md has the figures that
+// whose estimated error to the noise-free surface is least. docs/quality-method.md and docs/decisions.md have the figures that
 // chose the constants.
 //
 // Before the run, EstimateNoise() (core/measure/noise.h) reads the input's noise. Part of that reading is

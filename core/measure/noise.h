@@ -1,6 +1,6 @@
 // How noisy is a mesh? A robust estimate of the standard deviation of its vertices' offsets
 // from the surface they sample, along the surface normal: what automatic stopping
-// (FlowParams::iterations == 0, docs/quality.md) compares the flow's displacement with.
+// (FlowParams::iterations == 0, docs/quality-method.md) compares the flow's displacement with.
 //
 // For each interior vertex v, a quadric height field z = a x^2 + b xy + c y^2 + d x + e y + f
 // is fitted by least squares to v's second ring (v left out), in a frame whose z axis is v's

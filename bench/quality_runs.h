@@ -1,0 +1,85 @@
+// The quality benchmark's runs: jobs (the default job, every flow's oracle sweep over iteration
+// counts, and JobSpecs from the command line) on the noisy copies of a mesh, measured against
+// the clean mesh, and their means over the seeds.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "absl/status/status.h"
+#include "core/flows/flow.h"
+#include "core/measure/evaluation.h"
+#include "core/mesh.h"
+#include "meshsmooth/v1/smoothing.pb.h"
+
+namespace meshsmooth::bench {
+
+// Iteration counts the oracle tries, about x1.6 apart.
+inline const std::vector<int> kOracleCounts = {1, 2, 3, 5, 8, 12, 20, 32, 50, 80, 125, 200, 320, 500, 800, 1250, 2000};
+
+// A job as rows name it: a label and the spec the service would get.
+struct Job {
+  std::string label;
+  v1::JobSpec spec;
+  bool oracle = false;  // swept over kOracleCounts
+};
+
+// One run of a job on one noisy mesh.
+struct Run {
+  absl::Status status;
+  Quality q;
+  double seconds = 0.0;
+  int iterations = 0;    // run by the flow
+  double noise_h = 0.0;  // automatic stopping: the input's noise estimate, in h
+  std::string stop;      // why the flow stopped (StopReasonName)
+};
+
+// A row of a table: the runs of one job (one per seed) at one iteration count.
+struct Row {
+  std::string label;
+  int iterations = 0;  // 0: not a sweep (the noisy input, or a job's own count)
+  std::vector<Run> runs;
+};
+
+// The rows of one mesh in one noise case.
+struct MeshCase {
+  std::string mesh;
+  Row noisy;
+  std::vector<Row> rows;  // rows[0] is the default job
+};
+
+// The rows of a run, in order: the default job, an oracle row for each flow of the flow table
+// in `flows` (all when empty, none when `no_flows`), then `jobs` as given and `oracle_jobs`
+// swept (JobSpecs in protobuf text format). Exits with status 2 on a spec that does not parse
+// or that the service would refuse.
+std::vector<Job> MakeJobs(const std::vector<std::string>& flows, bool no_flows, const std::vector<std::string>& jobs,
+                          const std::vector<std::string>& oracle_jobs);
+
+// The flow parameters the service's FromProto makes of `spec`; exits with status 2 on a spec
+// it refuses.
+FlowParams ParamsOf(const v1::JobSpec& spec);
+
+// The measures of the inputs themselves (one run per noisy copy), labelled `label`.
+Row InputRow(const std::string& label, const GroundTruth& truth, const std::vector<Mesh>& noisy);
+
+// `p` run on each of `noisy`, as row `label` at `iterations` (0: not a sweep).
+Row RunRow(const std::string& label, int iterations, const GroundTruth& truth, const std::vector<Mesh>& noisy,
+           const FlowParams& p);
+
+// The oracle: `job` at each count of kOracleCounts, keeping the count with the smallest mean
+// RMS distance over the seeds. The sweep stops two counts after the best so far (the error
+// of every flow here falls, then rises) and at the first count that fails on any seed.
+Row OracleRow(const Job& job, const GroundTruth& truth, const std::vector<Mesh>& noisy);
+
+// Whether every run of `row` succeeded with finite positions (false for no runs).
+bool AllOk(const Row& row);
+
+// Mean over the runs that succeeded (NaN where none did, or where a figure is NaN); their
+// count and mean time go to `ok` and `seconds` when given.
+Quality MeanQuality(const Row& row, int* ok = nullptr, double* seconds = nullptr);
+
+// The oracle row of `mc` (its jobs are `jobs`) with the smallest mean RMS distance; nullptr
+// when every one failed.
+const Row* BestOracle(const MeshCase& mc, const std::vector<Job>& jobs);
+
+}  // namespace meshsmooth::bench
