@@ -43,8 +43,7 @@ int WaitForShutdownSignal(std::chrono::milliseconds timeout) {
   return sig > 0 ? sig : 0;
 }
 
-ShutdownSignalWatcher::ShutdownSignalWatcher(std::function<void(int)> on_signal)
-    : on_signal_(std::move(on_signal)) {
+ShutdownSignalWatcher::ShutdownSignalWatcher(std::function<void(int)> on_signal) : on_signal_(std::move(on_signal)) {
   const sigset_t set = ShutdownSignals();
   signal_fd_ = signalfd(-1, &set, SFD_CLOEXEC);
   wake_fd_ = eventfd(0, EFD_CLOEXEC);

@@ -55,10 +55,10 @@ int main(int argc, char** argv) {
     labelled = f.ridges + f.ravines;
     classified = f.classified;
   });
-  std::printf("%s: %d vertices, %d threads, %d runs (fastest / median): EstimateCurvature %.1f / %.1f ms, "
-              "DetectFeatures %.1f / %.1f ms (%lld labelled of %lld classified)\n",
-              argv[1], mesh->num_vertices(), omp_get_max_threads(), runs, 1e3 * estimate.fastest, 1e3 * estimate.median,
-              1e3 * detect.fastest, 1e3 * detect.median,
-              static_cast<long long>(labelled), static_cast<long long>(classified));
+  std::printf(
+      "%s: %d vertices, %d threads, %d runs (fastest / median): EstimateCurvature %.1f / %.1f ms, "
+      "DetectFeatures %.1f / %.1f ms (%lld labelled of %lld classified)\n",
+      argv[1], mesh->num_vertices(), omp_get_max_threads(), runs, 1e3 * estimate.fastest, 1e3 * estimate.median,
+      1e3 * detect.fastest, 1e3 * detect.median, static_cast<long long>(labelled), static_cast<long long>(classified));
   return 0;
 }

@@ -21,10 +21,10 @@
 #include <thread>
 #include <vector>
 
+#include "base/huge_pages.h"
 #include "client/inputs.h"
 #include "client/smooth_client.h"
 #include "core/io/draco_codec.h"
-#include "base/huge_pages.h"
 #include "core/vec3.h"
 #include "grpcpp/grpcpp.h"
 
@@ -66,14 +66,22 @@ int main(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     const bool has_value = i + 1 < argc;
-    if (a == "--target" && has_value) o.target = argv[++i];
-    else if (a == "--clients" && has_value) o.clients = std::max(1, std::atoi(argv[++i]));
-    else if (a == "--jobs" && has_value) o.jobs = std::max(1, std::atoi(argv[++i]));
-    else if (a == "--warmup" && has_value) o.warmup = std::max(0, std::atoi(argv[++i]));
-    else if (a == "--input" && has_value) o.input = argv[++i];
-    else if (a == "--flow" && has_value) o.flow = argv[++i];
-    else if (a == "--iterations" && has_value) o.iterations = std::max(0, std::atoi(argv[++i]));
-    else return Usage(argv[0]);
+    if (a == "--target" && has_value)
+      o.target = argv[++i];
+    else if (a == "--clients" && has_value)
+      o.clients = std::max(1, std::atoi(argv[++i]));
+    else if (a == "--jobs" && has_value)
+      o.jobs = std::max(1, std::atoi(argv[++i]));
+    else if (a == "--warmup" && has_value)
+      o.warmup = std::max(0, std::atoi(argv[++i]));
+    else if (a == "--input" && has_value)
+      o.input = argv[++i];
+    else if (a == "--flow" && has_value)
+      o.flow = argv[++i];
+    else if (a == "--iterations" && has_value)
+      o.iterations = std::max(0, std::atoi(argv[++i]));
+    else
+      return Usage(argv[0]);
   }
   if (o.target.empty()) return Usage(argv[0]);
 
@@ -101,7 +109,8 @@ int main(int argc, char** argv) {
     grpc::ChannelArguments args;
     args.SetLoadBalancingPolicyName("round_robin");
     args.SetInt("meshsmooth_load.client", id);  // a distinct argument: a connection of its own
-    auto stub = v1::MeshSmoother::NewStub(grpc::CreateCustomChannel(o.target, grpc::InsecureChannelCredentials(), args));
+    auto stub =
+        v1::MeshSmoother::NewStub(grpc::CreateCustomChannel(o.target, grpc::InsecureChannelCredentials(), args));
     for (int done = 0;; ++done) {
       const bool counted = done >= o.warmup;
       if (counted && next.fetch_add(1) >= o.jobs) return;

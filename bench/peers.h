@@ -11,8 +11,8 @@
 namespace meshsmooth::bench {
 
 struct Peer {
-  std::string name;   // e.g. "OpenMesh JacobiLaplace uniform C0"
-  std::string ours;   // the flow it is compared with, e.g. "laplacian U0"
+  std::string name;  // e.g. "OpenMesh JacobiLaplace uniform C0"
+  std::string ours;  // the flow it is compared with, e.g. "laplacian U0"
   // Runs `iterations` iterations on a copy of `mesh` (set-up excluded when the library allows)
   // and returns the milliseconds spent smoothing.
   std::function<double(const Mesh& mesh, int iterations)> run;

@@ -17,7 +17,7 @@ inline constexpr int kExitInterrupted = 130;  // Ctrl-C (the job was cancelled o
 // `meshsmooth smooth`; the flow options map onto JobSpec fields (0 or negative = unset).
 struct SmoothOptions {
   std::string input, output;
-  std::string flow;  // a name from FlowNames()
+  std::string flow;         // a name from FlowNames()
   unsigned iterations = 0;  // 0 = automatic (`--iterations auto`)
   double step = 0.0;
   std::string weights = "u0";

@@ -34,14 +34,15 @@ struct ListEntry {
 // One "IP:PORT" of a --server list.
 absl::StatusOr<ListEntry> ParseListEntry(const std::string& entry) {
   const auto bad = [&](const char* why) {
-    return absl::InvalidArgumentError(absl::StrCat(
-        "'", entry, "' ", why,
-        "; a list is IP:PORT,IP:PORT (IPv4, localhost or [IPv6]); for host names use dns:///NAME:PORT"));
+    return absl::InvalidArgumentError(
+        absl::StrCat("'", entry, "' ", why,
+                     "; a list is IP:PORT,IP:PORT (IPv4, localhost or [IPv6]); for host names use dns:///NAME:PORT"));
   };
   const size_t colon = entry.rfind(':');
   if (colon == std::string::npos) return bad("has no port");
   int port = 0;
-  if (!absl::SimpleAtoi(absl::string_view(entry).substr(colon + 1), &port) || port < 1 || port > 65535) return bad("has no valid port");
+  if (!absl::SimpleAtoi(absl::string_view(entry).substr(colon + 1), &port) || port < 1 || port > 65535)
+    return bad("has no valid port");
   std::string host(entry.substr(0, colon));
   unsigned char ip[16];
   if (host.size() > 2 && host.front() == '[' && host.back() == ']') {

@@ -3,8 +3,8 @@
 #include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
 #include "core/io/mesh_io.h"
-#include "core/shapes/parametric.h"
 #include "core/shapes/added_noise.h"
+#include "core/shapes/parametric.h"
 
 namespace meshsmooth::client {
 

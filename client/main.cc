@@ -27,13 +27,13 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_join.h"
-#include "client/commands.h"
-#include "client/inputs.h"
-#include "core/io/draco_codec.h"
-#include "core/flows/flow.h"
-#include "core/flows/catalogue.h"
 #include "base/huge_pages.h"
 #include "base/shutdown_signals.h"
+#include "client/commands.h"
+#include "client/inputs.h"
+#include "core/flows/catalogue.h"
+#include "core/flows/flow.h"
+#include "core/io/draco_codec.h"
 
 namespace meshsmooth::client {
 namespace {
@@ -84,83 +84,100 @@ void AddSmoothOptions(CLI::App* smooth, SmoothOptions& so) {
   smooth->add_option("-o,--output", so.output, "output file; its extension picks the format")->required();
   std::vector<std::string> flow_choices = FlowNames();
   flow_choices.insert(flow_choices.begin(), "auto");
-  smooth->add_option("--flow", so.flow,
-                     absl::StrCat(absl::StrJoin(flow_choices, " | "),
-                                  ". auto (with --iterations auto and no --step): run ", ChoiceFlowNames(),
-                                  " and keep the result with the smaller estimated error (meshes above ",
-                                  kMaxChoiceVertices / 1000, absl::StrFormat(",%03d", kMaxChoiceVertices % 1000),
-                                  " vertices choose on patches of themselves); otherwise ", std::string(FlowName(kDefaultFlow))))
+  smooth
+      ->add_option(
+          "--flow", so.flow,
+          absl::StrCat(absl::StrJoin(flow_choices, " | "), ". auto (with --iterations auto and no --step): run ",
+                       ChoiceFlowNames(), " and keep the result with the smaller estimated error (meshes above ",
+                       kMaxChoiceVertices / 1000, absl::StrFormat(",%03d", kMaxChoiceVertices % 1000),
+                       " vertices choose on patches of themselves); otherwise ", std::string(FlowName(kDefaultFlow))))
       ->capture_default_str()
       ->check(CLI::IsMember(flow_choices));
-  smooth->add_option("--iterations", so.iterations,
-                     "auto, or a number of iterations to run exactly. auto: estimate the input's noise, "
-                     "estimate every iteration's error to the noise-free surface from it (SURE) and keep "
-                     "the best iteration (a clean mesh comes back unchanged; closed meshes keep their "
-                     "volume); the summary prints the estimate and why it stopped")
+  smooth
+      ->add_option("--iterations", so.iterations,
+                   "auto, or a number of iterations to run exactly. auto: estimate the input's noise, "
+                   "estimate every iteration's error to the noise-free surface from it (SURE) and keep "
+                   "the best iteration (a clean mesh comes back unchanged; closed meshes keep their "
+                   "volume); the summary prints the estimate and why it stopped")
       ->transform(CLI::Transformer(std::map<std::string, std::string>{{"auto", "0"}}))
       ->default_str("auto");
-  smooth->add_option("--step", so.step,
-                     absl::StrCat("lambda: ", StepUnits(flows),
-                                  "; 0 = the flow's default (see `meshsmooth flows`)"))
+  smooth
+      ->add_option("--step", so.step,
+                   absl::StrCat("lambda: ", StepUnits(flows), "; 0 = the flow's default (see `meshsmooth flows`)"))
       ->capture_default_str();
-  smooth->add_option("--weights", so.weights,
-                     absl::StrCat("umbrella weights of ", FlowsTaking(flows, "weights"),
-                                  ": u0 uniform, u1 inverse distance"))
-      ->capture_default_str()->check(CLI::IsMember({"u0", "u1"}));
-  smooth->add_option("--mu", so.mu, absl::StrCat(FlowsTaking(flows, "taubin_mu"), ": mu (> step); 0 = from --pass-band"))
+  smooth
+      ->add_option(
+          "--weights", so.weights,
+          absl::StrCat("umbrella weights of ", FlowsTaking(flows, "weights"), ": u0 uniform, u1 inverse distance"))
+      ->capture_default_str()
+      ->check(CLI::IsMember({"u0", "u1"}));
+  smooth
+      ->add_option("--mu", so.mu, absl::StrCat(FlowsTaking(flows, "taubin_mu"), ": mu (> step); 0 = from --pass-band"))
       ->capture_default_str();
-  smooth->add_option("--pass-band", so.pass_band,
-                     absl::StrCat(FlowsTaking(flows, "taubin_pass_band"), ": k_PB = 1/lambda - 1/mu; 0 = ",
-                                  DefaultOf(flows, "taubin_pass_band")))
+  smooth
+      ->add_option("--pass-band", so.pass_band,
+                   absl::StrCat(FlowsTaking(flows, "taubin_pass_band"),
+                                ": k_PB = 1/lambda - 1/mu; 0 = ", DefaultOf(flows, "taubin_pass_band")))
       ->capture_default_str();
-  smooth->add_option("--tangential-weight", so.tangential_weight,
-                     absl::StrCat(FlowsTaking(flows, "tangential_weight"), ": C; negative = default ",
-                                  DefaultOf(flows, "tangential_weight")))
+  smooth
+      ->add_option("--tangential-weight", so.tangential_weight,
+                   absl::StrCat(FlowsTaking(flows, "tangential_weight"), ": C; negative = default ",
+                                DefaultOf(flows, "tangential_weight")))
       ->capture_default_str();
-  smooth->add_option("--epsilon", so.epsilon,
-                     absl::StrCat(FlowsTaking(flows, "epsilon"), ": epsilon in (0, 1); 0 = default ",
-                                  DefaultOf(flows, "epsilon")))
+  smooth
+      ->add_option(
+          "--epsilon", so.epsilon,
+          absl::StrCat(FlowsTaking(flows, "epsilon"), ": epsilon in (0, 1); 0 = default ", DefaultOf(flows, "epsilon")))
       ->capture_default_str();
-  smooth->add_option("--normal-iterations", so.normal_iterations,
-                     absl::StrCat(FlowsTaking(flows, "normal_filter.normal_iterations"),
-                                  ": filter passes over the face normals per iteration, 1..100; 0 = ",
-                                  DefaultOf(flows, "normal_filter.normal_iterations")))
+  smooth
+      ->add_option("--normal-iterations", so.normal_iterations,
+                   absl::StrCat(FlowsTaking(flows, "normal_filter.normal_iterations"),
+                                ": filter passes over the face normals per iteration, 1..100; 0 = ",
+                                DefaultOf(flows, "normal_filter.normal_iterations")))
       ->capture_default_str();
-  smooth->add_option("--vertex-iterations", so.vertex_iterations,
-                     absl::StrCat(FlowsTaking(flows, "normal_filter.vertex_iterations"),
-                                  ": vertex updates per iteration, 1..100; 0 = ",
-                                  DefaultOf(flows, "normal_filter.vertex_iterations")))
+  smooth
+      ->add_option("--vertex-iterations", so.vertex_iterations,
+                   absl::StrCat(FlowsTaking(flows, "normal_filter.vertex_iterations"),
+                                ": vertex updates per iteration, 1..100; 0 = ",
+                                DefaultOf(flows, "normal_filter.vertex_iterations")))
       ->capture_default_str();
-  smooth->add_option("--sigma-spatial", so.sigma_spatial,
-                     absl::StrCat(FlowsTaking(flows, "normal_filter.sigma_spatial"),
-                                  ": spatial sigma relative to the mean distance between adjacent face centroids; 0 = ",
-                                  DefaultOf(flows, "normal_filter.sigma_spatial")))
+  smooth
+      ->add_option("--sigma-spatial", so.sigma_spatial,
+                   absl::StrCat(FlowsTaking(flows, "normal_filter.sigma_spatial"),
+                                ": spatial sigma relative to the mean distance between adjacent face centroids; 0 = ",
+                                DefaultOf(flows, "normal_filter.sigma_spatial")))
       ->capture_default_str();
-  smooth->add_option("--sigma-range", so.sigma_range,
-                     absl::StrCat(FlowsTaking(flows, "normal_filter.sigma_range"),
-                                  ": range sigma on |n_i - n_j| of unit normals, (0, 2]; 0 = ",
-                                  DefaultOf(flows, "normal_filter.sigma_range")))
+  smooth
+      ->add_option("--sigma-range", so.sigma_range,
+                   absl::StrCat(FlowsTaking(flows, "normal_filter.sigma_range"),
+                                ": range sigma on |n_i - n_j| of unit normals, (0, 2]; 0 = ",
+                                DefaultOf(flows, "normal_filter.sigma_range")))
       ->capture_default_str();
   smooth->add_option("--adaptive", so.adaptive, "eq. (14): none | constant | ring1 | ring2")
-      ->capture_default_str()->check(CLI::IsMember({"none", "constant", "ring1", "ring2"}));
+      ->capture_default_str()
+      ->check(CLI::IsMember({"none", "constant", "ring1", "ring2"}));
   smooth->add_option("--threshold", so.threshold, "T for --adaptive constant")->capture_default_str();
   smooth->add_option("--recompute-every", so.recompute_every, "T(P) recomputed every K iterations")
       ->capture_default_str();
   smooth->add_option("--boundary", so.boundary, "fixed | curve (smooth boundary loops as curves)")
-      ->capture_default_str()->check(CLI::IsMember({"fixed", "curve"}));
+      ->capture_default_str()
+      ->check(CLI::IsMember({"fixed", "curve"}));
   smooth->add_option("--tolerance", so.tolerance, "stop when the largest move < tolerance x mean edge; 0 = off")
       ->capture_default_str();
-  smooth->add_option("--quantization-bits", so.quantization_bits,
-                     "result positions: 0 = lossless (exact float32), 1..24 = quantized")
-      ->capture_default_str()->check(CLI::Range(0, meshsmooth::kMaxQuantizationBits));
+  smooth
+      ->add_option("--quantization-bits", so.quantization_bits,
+                   "result positions: 0 = lossless (exact float32), 1..24 = quantized")
+      ->capture_default_str()
+      ->check(CLI::Range(0, meshsmooth::kMaxQuantizationBits));
   smooth->add_flag("--edgebreaker", so.edgebreaker, "encode the result with Edgebreaker (reorders vertices)");
   smooth->add_flag("-q,--quiet", so.quiet, "print nothing but errors");
   smooth->add_flag("--json", so.json, "print the job summary as JSON on stdout (no progress)");
   smooth->add_flag("--ridges", so.ridges,
                    "detect ridge and ravine vertices after smoothing (paper Section 5); PLY output gets them as "
                    "vertex colours (ridges black, ravines white, others grey), .drc output as attributes");
-  smooth->add_option("--ridge-threshold", so.ridge_threshold,
-                     "with --ridges: ignore features with |curvature| at or below this (1/mesh units)")
+  smooth
+      ->add_option("--ridge-threshold", so.ridge_threshold,
+                   "with --ridges: ignore features with |curvature| at or below this (1/mesh units)")
       ->capture_default_str();
   smooth->add_option("--job-id", so.job_id,
                      "the job's id in the server's log and the summary (1-128 printable ASCII characters, no "
@@ -239,15 +256,17 @@ int main(int argc, char** argv) {
       "ridges", "Detect ridge (black) and ravine (white) vertices of a mesh as it is, locally, into a PLY");
   ridges->add_option("input", ridges_input, "mesh file or builtin:NAME")->required();
   ridges->add_option("-o,--output", ridges_output, "output .ply (labels as vertex colours)")->required();
-  ridges->add_option("--threshold", ridges_threshold, "ignore features with |curvature| at or below this (1/mesh units)")
+  ridges
+      ->add_option("--threshold", ridges_threshold, "ignore features with |curvature| at or below this (1/mesh units)")
       ->capture_default_str();
 
   RenderCommand rc;
   CLI::App* render = app.add_subcommand("render", "Render a mesh to a PNG picture (locally; vertex colours shown)");
   render->add_option("input", rc.input, "mesh file or builtin:NAME")->capture_default_str();
   render->add_option("-o,--output", rc.output, "output .png")->required();
-  render->add_option("--view", rc.view,
-                     "front | back | left | right | top | bottom | iso, or AZIMUTH,ELEVATION in degrees")
+  render
+      ->add_option("--view", rc.view,
+                   "front | back | left | right | top | bottom | iso, or AZIMUTH,ELEVATION in degrees")
       ->capture_default_str();
   render->add_option("--size", rc.size, "WIDTHxHEIGHT in pixels (16..8192 each)")->capture_default_str();
   render->add_option("--shading", rc.shading, "gouraud (smooth) | flat (one shade per face)")
@@ -261,8 +280,8 @@ int main(int argc, char** argv) {
   }
   // Still no thread: the huge-page re-exec (base/huge_pages.h) where the input is large enough
   // to repay a second start of the program.
-  const std::string& input = smooth->parsed() ? so.input
-                             : info->parsed() ? info_input
+  const std::string& input = smooth->parsed()   ? so.input
+                             : info->parsed()   ? info_input
                              : ridges->parsed() ? ridges_input
                                                 : rc.input;
   if (HugePagesPay(input)) meshsmooth::UseHugePagesForLargeBuffers(argv);

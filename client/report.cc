@@ -29,8 +29,9 @@ ProgressPrinter::ProgressPrinter(bool quiet) : quiet_(quiet), tty_(isatty(STDERR
 void ProgressPrinter::operator()(const v1::Progress& p) {
   if (quiet_) return;
   if (p.total() == 0) {  // automatic stopping: no total to count down to
-    std::fprintf(stderr, tty_ ? "\riteration %u (automatic stop)  max move %.3g  mean %.3g  elapsed %.1fs "
-                              : "iteration %u (automatic stop) max move %.6g mean %.6g elapsed %.2fs\n",
+    std::fprintf(stderr,
+                 tty_ ? "\riteration %u (automatic stop)  max move %.3g  mean %.3g  elapsed %.1fs "
+                      : "iteration %u (automatic stop) max move %.6g mean %.6g elapsed %.2fs\n",
                  p.iteration(), p.max_displacement(), p.mean_displacement(), p.elapsed_seconds());
     bar_shown_ = bar_shown_ || tty_;
     return;
@@ -46,8 +47,7 @@ void ProgressPrinter::operator()(const v1::Progress& p) {
     bar_shown_ = true;
   } else {
     std::fprintf(stderr, "iteration %u/%u max move %.6g mean %.6g moved %.1f%% elapsed %.2fs\n", p.iteration(),
-                 p.total(), p.max_displacement(), p.mean_displacement(), 100.0 * p.moved_share(),
-                 p.elapsed_seconds());
+                 p.total(), p.max_displacement(), p.mean_displacement(), 100.0 * p.moved_share(), p.elapsed_seconds());
   }
 }
 

@@ -6,15 +6,15 @@
 namespace meshsmooth::client {
 
 bool Retryable(const absl::Status& status, const CallState& state) {
-  const bool code = status.code() == absl::StatusCode::kUnavailable ||
-                    status.code() == absl::StatusCode::kResourceExhausted;
+  const bool code =
+      status.code() == absl::StatusCode::kUnavailable || status.code() == absl::StatusCode::kResourceExhausted;
   return code && !state.result_started;
 }
 
 std::chrono::milliseconds BackoffDelay(const RetryPolicy& policy, int retry, std::mt19937_64& rng) {
-  const double cap = std::min<double>(
-      static_cast<double>(policy.max_backoff.count()),
-      static_cast<double>(policy.initial_backoff.count()) * std::pow(policy.backoff_multiplier, std::max(0, retry - 1)));
+  const double cap = std::min<double>(static_cast<double>(policy.max_backoff.count()),
+                                      static_cast<double>(policy.initial_backoff.count()) *
+                                          std::pow(policy.backoff_multiplier, std::max(0, retry - 1)));
   std::uniform_real_distribution<double> jitter(0.0, std::max(0.0, cap));
   return std::chrono::milliseconds(static_cast<int64_t>(jitter(rng)));
 }

@@ -9,9 +9,24 @@ namespace meshsmooth {
 struct Vec3 {
   double x = 0.0, y = 0.0, z = 0.0;
 
-  constexpr Vec3& operator+=(const Vec3& o) { x += o.x; y += o.y; z += o.z; return *this; }
-  constexpr Vec3& operator-=(const Vec3& o) { x -= o.x; y -= o.y; z -= o.z; return *this; }
-  constexpr Vec3& operator*=(double s) { x *= s; y *= s; z *= s; return *this; }
+  constexpr Vec3& operator+=(const Vec3& o) {
+    x += o.x;
+    y += o.y;
+    z += o.z;
+    return *this;
+  }
+  constexpr Vec3& operator-=(const Vec3& o) {
+    x -= o.x;
+    y -= o.y;
+    z -= o.z;
+    return *this;
+  }
+  constexpr Vec3& operator*=(double s) {
+    x *= s;
+    y *= s;
+    z *= s;
+    return *this;
+  }
   friend constexpr Vec3 operator+(Vec3 a, const Vec3& b) { return a += b; }
   friend constexpr Vec3 operator-(Vec3 a, const Vec3& b) { return a -= b; }
   friend constexpr Vec3 operator-(const Vec3& a) { return {-a.x, -a.y, -a.z}; }
@@ -28,9 +43,7 @@ inline double Norm(const Vec3& a) { return std::sqrt(Dot(a, a)); }
 constexpr double SquaredNorm(const Vec3& a) { return Dot(a, a); }
 // a / |a|; not finite for the zero vector (callers check the norm first, or IsFinite after).
 inline Vec3 Normalized(const Vec3& a) { return a * (1.0 / Norm(a)); }
-inline bool IsFinite(const Vec3& a) {
-  return std::isfinite(a.x) && std::isfinite(a.y) && std::isfinite(a.z);
-}
+inline bool IsFinite(const Vec3& a) { return std::isfinite(a.x) && std::isfinite(a.y) && std::isfinite(a.z); }
 
 // Axis-aligned bounding box of the points added to it; empty (lo > hi) until the first one.
 struct BoundingBox {

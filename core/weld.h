@@ -11,7 +11,7 @@
 namespace meshsmooth {
 
 struct Welded {
-  std::vector<Vec3> positions;          // one per distinct position, in order of first appearance
+  std::vector<Vec3> positions;           // one per distinct position, in order of first appearance
   std::vector<int32_t> point_to_vertex;  // for each input point, its vertex
   int64_t merged = 0;                    // points merged into an earlier one
 };

@@ -23,8 +23,8 @@
 #include <string_view>
 #include <vector>
 
-#include "core/io/draco_codec.h"
 #include "core/flows/flow_table.h"
+#include "core/io/draco_codec.h"
 #include "core/weld.h"
 #include "fuzz/job_input.h"
 #include "server/admission.h"
@@ -100,9 +100,14 @@ Box ResultBound(const Box& in, const server::JobParams& params, const v1::Summar
   const int passes = static_cast<int>(summary.parameters().iterations_run()) * PassesPerIteration(ran);
   Vec3 margin;
   switch (FlowOf(*ran.flow).reach) {
-    case PassReach::kConvex: break;
-    case PassReach::kExtent: margin = extent * ((std::pow(3.0, passes) - 1.0) / 2.0); break;
-    case PassReach::kMeanEdge: margin = Vec3{1, 1, 1} * (passes * h); break;
+    case PassReach::kConvex:
+      break;
+    case PassReach::kExtent:
+      margin = extent * ((std::pow(3.0, passes) - 1.0) / 2.0);
+      break;
+    case PassReach::kMeanEdge:
+      margin = Vec3{1, 1, 1} * (passes * h);
+      break;
   }
   Box bound = in.Grown(margin);
   const Vec3 grown = bound.hi - bound.lo;
@@ -195,8 +200,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   server::BudgetHold hold(&budget);
   fuzz::Check(hold.TryGrow(static_cast<int64_t>(upload.size())), "the budget refused a small upload");
   {
-    server::SmoothJob job("fuzz", *params, std::string(upload), std::move(hold), server::Clock::now(), options,
-                          &sink);
+    server::SmoothJob job("fuzz", *params, std::string(upload), std::move(hold), server::Clock::now(), options, &sink);
     job.Run();
   }
   fuzz::Check(budget.held() == 0, "the job kept its upload's share of the memory budget");

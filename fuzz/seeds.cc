@@ -18,8 +18,8 @@
 #include "absl/strings/str_cat.h"
 #include "core/io/file_bytes.h"
 #include "core/io/mesh_io.h"
-#include "core/shapes/parametric.h"
 #include "core/shapes/added_noise.h"
+#include "core/shapes/parametric.h"
 #include "fuzz/job_input.h"
 
 namespace meshsmooth::fuzz {
@@ -36,14 +36,14 @@ struct HeadTemplate {
   std::array<uint8_t, kSpecBytes> bytes;
 };
 constexpr HeadTemplate kTemplates[] = {
-    {FlowKind::kUmbrella, {0, 1, 0, 0, 2, 2, 0, 0, 0, 0, 0, 0, 0, 0}},              // U1, boundary as curves
-    {FlowKind::kUmbrella, {0, 2, 0, 0, 0, 0, 0, 0, 1, 200, 0, 0, 0, 0}},            // taubin's mu
-    {FlowKind::kUmbrella, {0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 1, 0, 0, 0}},              // features
-    {FlowKind::kCurvature, {0, 2, 0, 0, 0, 0, 0, 0, 0, 0, 0, 128 + 12, 0, 0}},      // Edgebreaker, 12 bits
-    {FlowKind::kCurvature, {0, 1, 0, 0, 0, 0, 2, 0x15, 0, 0, 0, 20, 0, 0}},         // ring1, 20 bits
-    {FlowKind::kCurvature, {0, 2, 0, 0, 0, 2, 3, 0x15, 0, 0, 3, 128, 0, 0}},        // ring2, features, Edgebreaker
-    {FlowKind::kCurvature, {0, 0, 0, 0, 0, 0, 1, 0x20, 0x18, 60, 0, 0, 0, 0}},      // constant T, epsilon, tolerance
-    {FlowKind::kNormalFilter, {0, 1, 0, 0, 0, 2, 0, 0, 0, 0, 0, 8, 15, 9}},         // every filter parameter
+    {FlowKind::kUmbrella, {0, 1, 0, 0, 2, 2, 0, 0, 0, 0, 0, 0, 0, 0}},          // U1, boundary as curves
+    {FlowKind::kUmbrella, {0, 2, 0, 0, 0, 0, 0, 0, 1, 200, 0, 0, 0, 0}},        // taubin's mu
+    {FlowKind::kUmbrella, {0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 1, 0, 0, 0}},          // features
+    {FlowKind::kCurvature, {0, 2, 0, 0, 0, 0, 0, 0, 0, 0, 0, 128 + 12, 0, 0}},  // Edgebreaker, 12 bits
+    {FlowKind::kCurvature, {0, 1, 0, 0, 0, 0, 2, 0x15, 0, 0, 0, 20, 0, 0}},     // ring1, 20 bits
+    {FlowKind::kCurvature, {0, 2, 0, 0, 0, 2, 3, 0x15, 0, 0, 3, 128, 0, 0}},    // ring2, features, Edgebreaker
+    {FlowKind::kCurvature, {0, 0, 0, 0, 0, 0, 1, 0x20, 0x18, 60, 0, 0, 0, 0}},  // constant T, epsilon, tolerance
+    {FlowKind::kNormalFilter, {0, 1, 0, 0, 0, 2, 0, 0, 0, 0, 0, 8, 15, 9}},     // every filter parameter
 };
 
 std::vector<std::array<uint8_t, kSpecBytes>> Heads() {
@@ -89,8 +89,10 @@ class SeedWriter {
       absl::StatusOr<std::string> bytes = SerializeMesh(mesh, format, options);
       if (bytes.ok()) Add(file.substr(file.rfind('.') + 1), file, *bytes);
     }
-    const DracoOptions encodings[] = {{0, DracoMethod::kSequential}, {0, DracoMethod::kEdgebreaker},
-                                      {11, DracoMethod::kSequential}, {8, DracoMethod::kEdgebreaker}};
+    const DracoOptions encodings[] = {{0, DracoMethod::kSequential},
+                                      {0, DracoMethod::kEdgebreaker},
+                                      {11, DracoMethod::kSequential},
+                                      {8, DracoMethod::kEdgebreaker}};
     for (const DracoOptions& o : encodings) {
       absl::StatusOr<std::string> bytes = EncodeDraco(mesh, o);
       if (!bytes.ok()) continue;

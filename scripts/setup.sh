@@ -27,7 +27,7 @@ if [ "$preset" != image ]; then
   packages+=(
     grpc-proto draco libopenmesh-dev libgtest-dev libgmock-dev libbenchmark-dev
     python3-grpcio python3-protobuf python3-numpy python3-scipy python3-yaml openssl
-    nginx
+    nginx clang-format
   )
 fi
 if [ "$preset" = fuzz ]; then packages+=(clang libfuzzer-14-dev libomp-dev); fi

@@ -53,15 +53,16 @@ void BudgetHold::Release() {
 absl::Status UploadBuffer::Append(std::string_view chunk) {
   const size_t size = bytes_.size() + chunk.size();
   if (static_cast<int64_t>(size) > max_bytes_) {
-    return absl::ResourceExhaustedError(absl::StrCat("the upload exceeds this server's limit of ", max_bytes_, " bytes"));
+    return absl::ResourceExhaustedError(
+        absl::StrCat("the upload exceeds this server's limit of ", max_bytes_, " bytes"));
   }
   const size_t capacity = static_cast<size_t>(hold_.bytes());
   if (size > capacity) {
     const size_t grown = std::min(std::max(size, 2 * capacity), static_cast<size_t>(max_bytes_));
     if (!hold_.TryGrow(static_cast<int64_t>(grown - capacity))) {
-      return absl::ResourceExhaustedError(absl::StrCat(
-          "this server's memory budget for uploads and queued jobs is full (", budget_->held(), " of ",
-          budget_->limit(), " bytes held; --max-buffered-bytes); retry later"));
+      return absl::ResourceExhaustedError(
+          absl::StrCat("this server's memory budget for uploads and queued jobs is full (", budget_->held(), " of ",
+                       budget_->limit(), " bytes held; --max-buffered-bytes); retry later"));
     }
     std::string bigger;
     bigger.reserve(grown);  // from empty: exactly `grown` (growing in place could double it)
@@ -104,8 +105,7 @@ grpc::Status ShuttingDown() {
 }  // namespace
 
 Admission::Admission(const ServerOptions& options)
-    : options_(options),
-      budget_(options.max_buffered_bytes > 0 ? options.max_buffered_bytes : DefaultBufferedBytes()) {
+    : options_(options), budget_(options.max_buffered_bytes > 0 ? options.max_buffered_bytes : DefaultBufferedBytes()) {
   if (options.upload_idle_seconds > 0.0 || options.max_queue_wait_seconds > 0.0) {
     reaper_ = std::thread([this] { Reap(); });
   }
@@ -122,9 +122,9 @@ grpc::Status Admission::Open(AdmittedCall* call) {
   }
   if (draining_.load()) return ShuttingDown();
   if (static_cast<int64_t>(open) > options_.max_concurrent_streams) {
-    return grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
-                        absl::StrCat("too many concurrent Smooth calls (limit ", options_.max_concurrent_streams,
-                                     "); retry later"));
+    return grpc::Status(
+        grpc::StatusCode::RESOURCE_EXHAUSTED,
+        absl::StrCat("too many concurrent Smooth calls (limit ", options_.max_concurrent_streams, "); retry later"));
   }
   return grpc::Status::OK;
 }

@@ -31,9 +31,8 @@ absl::Status CheckJobId(const std::string& id) {
   for (size_t i = 0; i < id.size(); ++i) {
     const unsigned char c = static_cast<unsigned char>(id[i]);
     if (c < 0x21 || c > 0x7e) {
-      return absl::InvalidArgumentError(absl::StrCat(
-          "job_id: character ", i, " is byte ", static_cast<int>(c),
-          "; a job id is printable ASCII without spaces (0x21-0x7E)"));
+      return absl::InvalidArgumentError(absl::StrCat("job_id: character ", i, " is byte ", static_cast<int>(c),
+                                                     "; a job id is printable ASCII without spaces (0x21-0x7E)"));
     }
   }
   return absl::OkStatus();
@@ -70,7 +69,7 @@ absl::StatusOr<JobParams> FromProto(const v1::JobSpec& spec, int max_iterations)
   p.max_auto_iterations = std::min(max_iterations, kMaxAutoIterations);
   if (spec.step() != 0.0) p.step = spec.step();
   p.weights = spec.weights() == v1::UMBRELLA_WEIGHTS_INVERSE_DISTANCE ? UmbrellaWeights::kInverseDistance
-                                                                       : UmbrellaWeights::kUniform;
+                                                                      : UmbrellaWeights::kUniform;
   if (spec.has_taubin_mu()) p.taubin_mu = spec.taubin_mu();
   if (spec.has_taubin_pass_band()) p.taubin_pass_band = spec.taubin_pass_band();
   if (spec.has_tangential_weight()) p.tangential_weight = spec.tangential_weight();
@@ -86,10 +85,18 @@ absl::StatusOr<JobParams> FromProto(const v1::JobSpec& spec, int max_iterations)
   if (nf.has_sigma_spatial()) p.normal_filter.sigma_spatial = nf.sigma_spatial();
   if (nf.has_sigma_range()) p.normal_filter.sigma_range = nf.sigma_range();
   switch (spec.adaptive().mode()) {
-    case v1::ADAPTIVE_MODE_CONSTANT: p.adaptive = AdaptiveMode::kConstant; break;
-    case v1::ADAPTIVE_MODE_RING1: p.adaptive = AdaptiveMode::kRing1; break;
-    case v1::ADAPTIVE_MODE_RING2: p.adaptive = AdaptiveMode::kRing2; break;
-    default: p.adaptive = AdaptiveMode::kNone; break;
+    case v1::ADAPTIVE_MODE_CONSTANT:
+      p.adaptive = AdaptiveMode::kConstant;
+      break;
+    case v1::ADAPTIVE_MODE_RING1:
+      p.adaptive = AdaptiveMode::kRing1;
+      break;
+    case v1::ADAPTIVE_MODE_RING2:
+      p.adaptive = AdaptiveMode::kRing2;
+      break;
+    default:
+      p.adaptive = AdaptiveMode::kNone;
+      break;
   }
   p.adaptive_threshold = spec.adaptive().threshold();
   if (spec.adaptive().recompute_every() > 0) {
@@ -232,11 +239,11 @@ std::string JobLogLine(const JobReport& report, const JobParams& params) {
   char seconds[128];
   std::snprintf(seconds, sizeof seconds, "decode=%.3fs queue=%.3fs smooth=%.3fs encode=%.3fs", report.decode_seconds,
                 report.queue_seconds, report.smooth_seconds, report.encode_seconds);
-  return absl::StrCat("meshsmoothd job=", report.job_id, " flow=", std::string(FlowName(params.flow.flow.value_or(kDefaultFlow))),
-                      " vertices=", report.vertices, " iterations=", report.flow.iterations_run, "/",
-                      params.flow.iterations == kAutoIterations ? std::string("auto")
-                                                                : absl::StrCat(params.flow.iterations),
-                      " status=", report.status, " ", seconds);
+  return absl::StrCat(
+      "meshsmoothd job=", report.job_id, " flow=", std::string(FlowName(params.flow.flow.value_or(kDefaultFlow))),
+      " vertices=", report.vertices, " iterations=", report.flow.iterations_run, "/",
+      params.flow.iterations == kAutoIterations ? std::string("auto") : absl::StrCat(params.flow.iterations),
+      " status=", report.status, " ", seconds);
 }
 
 }  // namespace meshsmooth::server

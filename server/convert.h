@@ -6,10 +6,10 @@
 #include <string>
 
 #include "absl/status/statusor.h"
-#include "core/io/draco_codec.h"
 #include "core/features/ridges.h"
-#include "core/flows/flow.h"
 #include "core/flows/catalogue.h"
+#include "core/flows/flow.h"
+#include "core/io/draco_codec.h"
 #include "core/measure/metrics.h"
 #include "core/topology.h"
 #include "grpcpp/support/status.h"

@@ -15,8 +15,8 @@
 #include "CLI/CLI.hpp"
 #include "absl/strings/str_cat.h"
 #include "base/huge_pages.h"
-#include "core/io/file_bytes.h"
 #include "base/shutdown_signals.h"
+#include "core/io/file_bytes.h"
 #include "server/admission.h"
 #include "server/server.h"
 
@@ -29,9 +29,11 @@ int main(int argc, char** argv) {
   app.add_option("--listen", o.listen, "host:port to listen on; port 0 picks a free one")->capture_default_str();
   app.add_option("--workers", o.workers, "jobs smoothed at once; 0 = hardware threads")->capture_default_str();
   app.add_option("--queue-depth", o.queue_depth, "jobs that may wait for a worker; more get RESOURCE_EXHAUSTED")
-      ->capture_default_str()->check(CLI::NonNegativeNumber);
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
   app.add_option("--threads-per-job", o.threads_per_job, "threads of one job's vertex loops; 0 = hardware threads")
-      ->capture_default_str()->check(CLI::NonNegativeNumber);
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
   app.add_option("--max-upload-bytes", o.max_upload_bytes, "largest Draco upload of one job")->capture_default_str();
   app.add_option("--max-vertices", o.max_vertices, "largest mesh, in vertices")->capture_default_str();
   app.add_option("--max-iterations", o.max_iterations, "most iterations one job may ask for")->capture_default_str();
@@ -46,20 +48,24 @@ int main(int argc, char** argv) {
   app.add_option("--max-queue-wait", o.max_queue_wait_seconds,
                  "seconds a job may wait for a worker; then RESOURCE_EXHAUSTED, so the client retries elsewhere; "
                  "0 = it waits its turn")
-      ->capture_default_str()->check(CLI::NonNegativeNumber);
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
   app.add_option("--max-buffered-bytes", o.max_buffered_bytes,
                  absl::StrCat("bytes held by uploads in flight and queued jobs; beyond, uploads get "
                               "RESOURCE_EXHAUSTED; 0 = a quarter of this machine's memory (",
                               meshsmooth::server::DefaultBufferedBytes(), " here)"))
-      ->capture_default_str()->check(CLI::NonNegativeNumber);
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
   app.add_option("--grace-seconds", o.grace_seconds,
                  "on SIGINT/SIGTERM, time running jobs get to finish; the process exits within this + 1 s")
-      ->capture_default_str()->check(CLI::Range(0.0, 1e6));
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1e6));
   app.add_option("--tls-cert", o.tls_cert_file, "PEM certificate chain; with --tls-key enables TLS");
   app.add_option("--tls-key", o.tls_key_file, "PEM private key");
   app.add_option("--auth-token-file", token_file,
                  "file holding a bearer token; calls must then send 'authorization: Bearer <token>'");
-  app.add_flag("--quiet", [&o](int64_t) { o.log_jobs = false; }, "no per-job log lines");
+  app.add_flag(
+      "--quiet", [&o](int64_t) { o.log_jobs = false; }, "no per-job log lines");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

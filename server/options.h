@@ -14,8 +14,8 @@ struct ServerOptions {
   int64_t max_upload_bytes = 512ll << 20;  // Draco bytes of one job
   int64_t max_vertices = 20'000'000;       // vertices of one mesh (after welding seams)
   int max_iterations = 10'000;
-  double max_job_seconds = 600.0;          // a job's time on its worker (decode to encode)
-  int max_concurrent_streams = 128;        // Smooth calls open at once
+  double max_job_seconds = 600.0;    // a job's time on its worker (decode to encode)
+  int max_concurrent_streams = 128;  // Smooth calls open at once
   // An upload that receives no message for this long ends with DEADLINE_EXCEEDED, freeing its
   // call slot; <= 0: never. A 1 MiB chunk at 20 KiB/s still arrives within the default.
   double upload_idle_seconds = 60.0;

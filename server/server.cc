@@ -60,9 +60,9 @@ void Server::Shutdown() {
   shut_down_ = true;
   const double grace = std::clamp(options_.grace_seconds, 0.0, 1e6);
   server_->GetHealthCheckService()->SetServingStatus(false);
-  service_->DrainAndStop(std::chrono::steady_clock::now() +
-                         std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                             std::chrono::duration<double>(grace)));
+  service_->DrainAndStop(
+      std::chrono::steady_clock::now() +
+      std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(grace)));
   // Every job has ended by now; what is left are calls finishing their last write and health
   // watches, which gRPC cancels after this short deadline.
   server_->Shutdown(std::chrono::system_clock::now() + std::chrono::milliseconds(200));

@@ -52,8 +52,7 @@ grpc::ServerBidiReactor<v1::SmoothRequest, v1::SmoothResponse>* MeshSmootherServ
 }
 
 grpc::ServerUnaryReactor* MeshSmootherService::ListFlows(grpc::CallbackServerContext* context,
-                                                         const v1::ListFlowsRequest*,
-                                                         v1::ListFlowsResponse* response) {
+                                                         const v1::ListFlowsRequest*, v1::ListFlowsResponse* response) {
   grpc::ServerUnaryReactor* reactor = context->DefaultReactor();
   if (grpc::Status s = Authenticate(context); !s.ok()) {
     reactor->Finish(s);
@@ -67,7 +66,8 @@ grpc::ServerUnaryReactor* MeshSmootherService::ListFlows(grpc::CallbackServerCon
     for (const ParameterInfo& p : f.parameters) ToProto(p, out->add_parameters());
     for (const std::string& c : f.constraints) out->add_constraints(c);
   }
-  for (const ParameterInfo& p : CommonParameters(options_.max_iterations)) ToProto(p, response->add_common_parameters());
+  for (const ParameterInfo& p : CommonParameters(options_.max_iterations))
+    ToProto(p, response->add_common_parameters());
   response->set_max_iterations(static_cast<uint32_t>(options_.max_iterations));
   reactor->Finish(grpc::Status::OK);
   return reactor;

@@ -19,10 +19,9 @@ class MeshSmootherService final : public v1::MeshSmoother::CallbackService {
   explicit MeshSmootherService(const ServerOptions& options);
   ~MeshSmootherService() override;
 
-  grpc::ServerBidiReactor<v1::SmoothRequest, v1::SmoothResponse>* Smooth(
-      grpc::CallbackServerContext* context) override;
+  grpc::ServerBidiReactor<v1::SmoothRequest, v1::SmoothResponse>* Smooth(grpc::CallbackServerContext* context) override;
   grpc::ServerUnaryReactor* ListFlows(grpc::CallbackServerContext* context, const v1::ListFlowsRequest* request,
-                                     v1::ListFlowsResponse* response) override;
+                                      v1::ListFlowsResponse* response) override;
 
   // Shutdown, in order: refuse new calls, end uploads and queued jobs with UNAVAILABLE, wait
   // until `deadline` for running jobs, then end the rest with UNAVAILABLE and stop the workers.

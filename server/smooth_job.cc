@@ -34,8 +34,8 @@ Clock::time_point Deadline(Clock::time_point start, double seconds) {
 
 }  // namespace
 
-SmoothJob::SmoothJob(std::string id, JobParams params, std::string upload, BudgetHold hold,
-                     Clock::time_point received, const ServerOptions& options, JobSink* sink)
+SmoothJob::SmoothJob(std::string id, JobParams params, std::string upload, BudgetHold hold, Clock::time_point received,
+                     const ServerOptions& options, JobSink* sink)
     : id_(std::move(id)),
       params_(std::move(params)),
       upload_(std::move(upload)),
@@ -87,8 +87,8 @@ absl::Status SmoothJob::CheckQuadraticWork(const Topology& topo) const {
   for (int32_t v = 0; v < topo.num_vertices(); ++v) valence = std::max(valence, topo.valence(v));
   return absl::ResourceExhaustedError(absl::StrCat(
       ring2 ? "adaptive.mode ADAPTIVE_MODE_RING2" : "Edgebreaker output", " costs the sum of the squared valences, ",
-      work, " for this mesh (a vertex of valence ", valence, "), above this server's limit of ", limit,
-      " for it; ", ring2 ? "use ADAPTIVE_MODE_RING1" : "ask for sequential output"));
+      work, " for this mesh (a vertex of valence ", valence, "), above this server's limit of ", limit, " for it; ",
+      ring2 ? "use ADAPTIVE_MODE_RING1" : "ask for sequential output"));
 }
 
 absl::StatusOr<DracoMesh> SmoothJob::DecodeUpload(const StopToken& stop) {
@@ -119,7 +119,7 @@ absl::StatusOr<FlowResult> SmoothJob::SmoothMesh(Mesh& mesh, const Topology& top
   FlowParams flow = params_.flow;
   flow.threads = options_.threads_per_job;
   RunControl control;
-  control.stop = stop;  // the job's cancel flag and what is left of its time
+  control.stop = stop;                                            // the job's cancel flag and what is left of its time
   Clock::time_point last_progress = decoded - kProgressInterval;  // the first iteration is reported
   control.on_progress = [&](const Progress& p) {
     report.flow.iterations_run = p.iteration;  // what the log says if the run ends early
@@ -134,10 +134,9 @@ absl::StatusOr<FlowResult> SmoothJob::SmoothMesh(Mesh& mesh, const Topology& top
   return Smooth(mesh, topo, flow, control);
 }
 
-absl::StatusOr<std::vector<GenericAttribute>> SmoothJob::DetectFeaturesIfAsked(const Mesh& mesh,
-                                                                              const Topology& topo,
-                                                                              const StopToken& stop,
-                                                                              JobReport& report) const {
+absl::StatusOr<std::vector<GenericAttribute>> SmoothJob::DetectFeaturesIfAsked(const Mesh& mesh, const Topology& topo,
+                                                                               const StopToken& stop,
+                                                                               JobReport& report) const {
   if (!params_.detect_features) return std::vector<GenericAttribute>{};
   const Clock::time_point t0 = Clock::now();
   const Features features = DetectFeatures(mesh, topo, params_.features, stop);

@@ -11,11 +11,11 @@
 
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
-#include "core/io/draco_codec.h"
 #include "core/flows/flow.h"
+#include "core/io/draco_codec.h"
 #include "core/mesh.h"
-#include "core/util/stop_token.h"
 #include "core/topology.h"
+#include "core/util/stop_token.h"
 #include "meshsmooth/v1/smoothing.pb.h"
 #include "server/admission.h"
 #include "server/convert.h"
@@ -84,13 +84,12 @@ class SmoothJob {
                                         const StopToken& stop, JobReport& report);
   // Ridges and ravines as the result's attributes when the spec asks; counts in `report`.
   absl::StatusOr<std::vector<GenericAttribute>> DetectFeaturesIfAsked(const Mesh& mesh, const Topology& topo,
-                                                                      const StopToken& stop,
-                                                                      JobReport& report) const;
+                                                                      const StopToken& stop, JobReport& report) const;
   // The result's Draco bytes; the after metrics and the displacement go to `report`.
   absl::StatusOr<std::string> EncodeAndMeasure(DracoMesh& draco, const Mesh& mesh, const Topology& topo,
                                                const std::vector<Vec3>& input,
-                                               const std::vector<GenericAttribute>& attributes,
-                                               const StopToken& stop, JobReport& report) const;
+                                               const std::vector<GenericAttribute>& attributes, const StopToken& stop,
+                                               JobReport& report) const;
 
   const std::string id_;
   const JobParams params_;
@@ -102,7 +101,7 @@ class SmoothJob {
   std::atomic<int> queue_position_{0};
   const ServerOptions& options_;
   std::atomic<bool> cancel_{false};
-  std::mutex mu_;        // guards sink_, upload_ and upload_hold_
+  std::mutex mu_;  // guards sink_, upload_ and upload_hold_
   JobSink* sink_;
 };
 

@@ -25,8 +25,8 @@ class SmoothReactor final : public grpc::ServerBidiReactor<v1::SmoothRequest, v1
  public:
   // `authenticated`: OK, or the status the call ends with at once. `new_job_id` names a job
   // whose spec brings no id.
-  SmoothReactor(const grpc::Status& authenticated, Admission& admission, WorkerPool& pool,
-                const ServerOptions& options, std::function<std::string()> new_job_id)
+  SmoothReactor(const grpc::Status& authenticated, Admission& admission, WorkerPool& pool, const ServerOptions& options,
+                std::function<std::string()> new_job_id)
       : admission_(admission),
         pool_(pool),
         options_(options),
@@ -45,9 +45,7 @@ class SmoothReactor final : public grpc::ServerBidiReactor<v1::SmoothRequest, v1
   }
 
   // AdmittedCall.
-  bool IdleSince(Clock::time_point cutoff) const override {
-    return uploading_.load() && last_read_.load() < cutoff;
-  }
+  bool IdleSince(Clock::time_point cutoff) const override { return uploading_.load() && last_read_.load() < cutoff; }
   bool QueuedSince(Clock::time_point cutoff) override {
     std::lock_guard<std::mutex> lock(mu_);
     return job_ != nullptr && !job_->started() && job_->submitted() < cutoff;
@@ -69,7 +67,6 @@ class SmoothReactor final : public grpc::ServerBidiReactor<v1::SmoothRequest, v1
     if (job) job->Detach();
     Pump();
   }
-
 
   void OnReadDone(bool ok) override {
     last_read_.store(Clock::now());
@@ -190,8 +187,8 @@ class SmoothReactor final : public grpc::ServerBidiReactor<v1::SmoothRequest, v1
     }
     if (grpc::Status s = admission_.CheckNotDraining(); !s.ok()) return Abort(s);
     const std::string id = !params_->job_id.empty() ? params_->job_id : new_job_id_();
-    auto job = std::make_shared<SmoothJob>(id, std::move(*params_), upload_.TakeBytes(), upload_.TakeHold(),
-                                           received_, options_, this);
+    auto job = std::make_shared<SmoothJob>(id, std::move(*params_), upload_.TakeBytes(), upload_.TakeHold(), received_,
+                                           options_, this);
     {
       std::lock_guard<std::mutex> lock(mu_);
       job_ = job;

@@ -7,8 +7,8 @@
 
 #include "core/flows/flow.h"
 #include "core/measure/metrics.h"
-#include "core/shapes/parametric.h"
 #include "core/shapes/added_noise.h"
+#include "core/shapes/parametric.h"
 #include "core/topology.h"
 
 namespace meshsmooth::testing {

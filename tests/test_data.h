@@ -15,9 +15,9 @@ inline std::filesystem::path SharedData(const std::string& sub) {
 }  // namespace meshsmooth::testing
 
 // Skips the current test when ../shared/data/<sub> does not exist.
-#define MESHSMOOTH_REQUIRE_SHARED(sub)                                                      \
-  do {                                                                                      \
-    if (!std::filesystem::is_directory(::meshsmooth::testing::SharedData(sub))) {           \
+#define MESHSMOOTH_REQUIRE_SHARED(sub)                                                         \
+  do {                                                                                         \
+    if (!std::filesystem::is_directory(::meshsmooth::testing::SharedData(sub))) {              \
       GTEST_SKIP() << "shared data folder absent: " << ::meshsmooth::testing::SharedData(sub); \
-    }                                                                                       \
+    }                                                                                          \
   } while (0)

@@ -24,19 +24,19 @@
 #include <vector>
 
 #include "core/mesh.h"
-#include "core/util/stop_token.h"
 #include "core/topology.h"
+#include "core/util/stop_token.h"
 
 namespace meshsmooth {
 
 // One entry per vertex. Where valid[v] is 0 every field of v is zero except possibly the
 // normal; nothing is ever NaN or Inf.
 struct CurvatureField {
-  std::vector<Vec3> normal;   // unit, Max-weighted mean of the incident face normals (faces with
-                              // a coincident or non-finite corner left out); zero where
-                              // undefined (isolated, non-manifold, every face degenerate)
-  std::vector<Vec3> dir_max;  // unit tangent direction of kmax (sign arbitrary)
-  std::vector<Vec3> dir_min;  // unit tangent direction of kmin, = normal x dir_max
+  std::vector<Vec3> normal;        // unit, Max-weighted mean of the incident face normals (faces with
+                                   // a coincident or non-finite corner left out); zero where
+                                   // undefined (isolated, non-manifold, every face degenerate)
+  std::vector<Vec3> dir_max;       // unit tangent direction of kmax (sign arbitrary)
+  std::vector<Vec3> dir_min;       // unit tangent direction of kmin, = normal x dir_max
   std::vector<double> kmax, kmin;  // kmax >= kmin
   // 1 where the estimate exists: an interior vertex (closed one-ring) with a normal and at
   // least one incident face of non-zero area whose corners all have normals and whose edges

@@ -108,13 +108,12 @@ bool IsExtremumAlong(const Mesh& mesh, const Topology& topo, const CurvatureFiel
   return here > sign * ahead_value && here > sign * behind_value;
 }
 
-FeatureLabel Classify(const Mesh& mesh, const Topology& topo, const CurvatureField& f,
-                      const std::vector<Compared>& c, int32_t v, double threshold) {
+FeatureLabel Classify(const Mesh& mesh, const Topology& topo, const CurvatureField& f, const std::vector<Compared>& c,
+                      int32_t v, double threshold) {
   if (!f.valid[v]) return FeatureLabel::kNone;
   const double kmax = c[v].k[0], kmin = c[v].k[1];
   const bool ridge = kmax > 0.0 && kmax > threshold && IsExtremumAlong(mesh, topo, f, c, v, f.dir_max[v], 0, 1.0);
-  const bool ravine =
-      kmin < 0.0 && -kmin > threshold && IsExtremumAlong(mesh, topo, f, c, v, f.dir_min[v], 1, -1.0);
+  const bool ravine = kmin < 0.0 && -kmin > threshold && IsExtremumAlong(mesh, topo, f, c, v, f.dir_min[v], 1, -1.0);
   if (ridge && ravine) return kmax >= -kmin ? FeatureLabel::kRidge : FeatureLabel::kRavine;
   if (ridge) return FeatureLabel::kRidge;
   return ravine ? FeatureLabel::kRavine : FeatureLabel::kNone;

@@ -8,11 +8,11 @@
 #include <cstdint>
 #include <vector>
 
-#include "core/io/draco_codec.h"
 #include "core/features/curvature.h"
+#include "core/io/draco_codec.h"
 #include "core/mesh.h"
-#include "core/util/stop_token.h"
 #include "core/topology.h"
+#include "core/util/stop_token.h"
 
 namespace meshsmooth {
 
@@ -28,7 +28,7 @@ struct Features {
   CurvatureField curvature;     // EstimateCurvature() of the mesh
   std::vector<uint8_t> labels;  // a FeatureLabel per vertex
   int64_t ridges = 0, ravines = 0;
-  int64_t classified = 0;       // vertices with a curvature estimate (valid)
+  int64_t classified = 0;  // vertices with a curvature estimate (valid)
 };
 
 // Labels every vertex of `mesh` (`topology` = BuildTopology(mesh)), Section 5 of the paper.

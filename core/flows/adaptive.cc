@@ -28,20 +28,21 @@ void RingThresholds(const StepContext& c, const Vec3* pos, int32_t n, int rings,
       }
     }
     if (!batched) return;
-    RunWithIsa(c.isa, [&](auto width) __attribute__((always_inline)) {
-      constexpr int W = decltype(width)::value;
-      using V = typename VertexLanesOf<W>::type;
-      const LaneBatches& lanes = *c.batches;
-      alignas(8 * W) double norm[W];
-      for (int32_t j = lanes.block_first[block]; j < lanes.block_first[block + 1]; ++j) {
-        const int32_t* const rows = &lanes.data[lanes.offsets[j]];
-        const auto k = MeanCurvatureLanes<W, true>(c, pos, 0, W, rows);
-        const V len = LaneSqrt(k.hn.x * k.hn.x + k.hn.y * k.hn.y + k.hn.z * k.hn.z);
-        std::memcpy(norm, &len, sizeof norm);
-        for (int32_t l = 0; l < lanes.lanes[j]; ++l) h[rows[l]] = norm[l];
-      }
-      return BlockStats{};
-    });
+    RunWithIsa(
+        c.isa, [&](auto width) __attribute__((always_inline)) {
+          constexpr int W = decltype(width)::value;
+          using V = typename VertexLanesOf<W>::type;
+          const LaneBatches& lanes = *c.batches;
+          alignas(8 * W) double norm[W];
+          for (int32_t j = lanes.block_first[block]; j < lanes.block_first[block + 1]; ++j) {
+            const int32_t* const rows = &lanes.data[lanes.offsets[j]];
+            const auto k = MeanCurvatureLanes<W, true>(c, pos, 0, W, rows);
+            const V len = LaneSqrt(k.hn.x * k.hn.x + k.hn.y * k.hn.y + k.hn.z * k.hn.z);
+            std::memcpy(norm, &len, sizeof norm);
+            for (int32_t l = 0; l < lanes.lanes[j]; ++l) h[rows[l]] = norm[l];
+          }
+          return BlockStats{};
+        });
   });
   t.resize(n);
   // Per thread: seen[w] == v + 1 once w is in v's list. Blocks of one thread run in order, and

@@ -1,6 +1,6 @@
 // Automatic stopping (FlowParams::iterations == kAutoIterations): the run keeps the iteration
-// whose estimated error to the noise-free surface is least. docs/quality-method.md and docs/decisions.md have the figures that
-// chose the constants.
+// whose estimated error to the noise-free surface is least. docs/quality-method.md and docs/decisions.md have the
+// figures that chose the constants.
 //
 // Before the run, EstimateNoise() (core/measure/noise.h) reads the input's noise. Part of that reading is
 // the estimator's own misfit on clean, coarse meshes (up to ~0.04 h on the benchmark's clean
@@ -30,9 +30,9 @@
 // Noise folds thin triangles over, and a run can leave some folded: RepairFolds() then moves
 // the free vertices of edges whose two faces face nearly opposite ways (normals more than
 // kFoldAngleDeg apart: a fold, not a crease) half-way to their ring's centroid, a few rounds at
-// most, and no vertex further than kFoldRepairReachH h in all. Last, every flow with a step loses some volume: on a closed mesh the run gives the
-// input's enclosed volume back by moving its free vertices along their normals by a common
-// distance (KeepVolume): the shrinkage is a bias of the flow, not noise.
+// most, and no vertex further than kFoldRepairReachH h in all. Last, every flow with a step loses some volume: on a
+// closed mesh the run gives the input's enclosed volume back by moving its free vertices along their normals by a
+// common distance (KeepVolume): the shrinkage is a bias of the flow, not noise.
 #pragma once
 
 #include <cmath>
@@ -138,12 +138,12 @@ class AutoStop {
   int threads_;
   std::vector<Vec3> start_;
   bool estimated_ = false;  // the noise estimate is reliable (core/measure/noise.h)
-  int32_t stride_ = 1;    // every stride_-th vertex is measured
-  int64_t counted_ = 0;   // free interior vertices measured
+  int32_t stride_ = 1;      // every stride_-th vertex is measured
+  int64_t counted_ = 0;     // free interior vertices measured
   double cos_fold_ = std::cos(kFoldAngleDeg * std::numbers::pi / 180.0);
-  bool closed_ = true;   // every vertex in use is interior
+  bool closed_ = true;  // every vertex in use is interior
   double start_volume_ = 0.0;
-  double sigma_ = 0.0;   // the noise's deviation, in mesh units
+  double sigma_ = 0.0;        // the noise's deviation, in mesh units
   std::vector<Vec3> normal_;  // unit normals of the input at the measured vertices, else zero
   double best_risk_ = 0.0;
   int best_it_ = 0;

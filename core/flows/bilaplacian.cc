@@ -39,9 +39,18 @@ std::unique_ptr<FlowKernel> MakeBilaplacian(const FlowParams&, double) { return 
 }  // namespace
 
 FlowRow BilaplacianRow() {
-  return {FlowId::kBilaplacian, "bilaplacian", FlowKind::kUmbrella, 0.2, 0.5,
-          "Bilaplacian flow P -= lambda U0^2(P): smooth, slight deformation", "Section 2 (sign: docs/paper.md)", {},
-          {}, nullptr, MakeBilaplacian, PassReach::kExtent};
+  return {FlowId::kBilaplacian,
+          "bilaplacian",
+          FlowKind::kUmbrella,
+          0.2,
+          0.5,
+          "Bilaplacian flow P -= lambda U0^2(P): smooth, slight deformation",
+          "Section 2 (sign: docs/paper.md)",
+          {},
+          {},
+          nullptr,
+          MakeBilaplacian,
+          PassReach::kExtent};
 }
 
 }  // namespace meshsmooth::flows

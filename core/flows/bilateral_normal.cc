@@ -30,11 +30,19 @@ std::unique_ptr<FlowKernel> MakeBilateralNormal(const FlowParams& p, double) {
 }  // namespace
 
 FlowRow BilateralNormalRow() {
-  return {FlowId::kBilateralNormal, "bilateral_normal", FlowKind::kNormalFilter, 1.0, 1.0,
+  return {FlowId::kBilateralNormal,
+          "bilateral_normal",
+          FlowKind::kNormalFilter,
+          1.0,
+          1.0,
           "Bilateral filtering of the face normals, then vertices fitted to them: removes noise and keeps "
           "sharp creases; one iteration = normal_iterations filter passes + vertex_iterations vertex updates",
-          "Zheng et al. 2011 (docs/normal-filtering.md)", NormalFilterParameters(), {}, ValidateNormalFilter,
-          MakeBilateralNormal, PassReach::kMeanEdge};
+          "Zheng et al. 2011 (docs/normal-filtering.md)",
+          NormalFilterParameters(),
+          {},
+          ValidateNormalFilter,
+          MakeBilateralNormal,
+          PassReach::kMeanEdge};
 }
 
 }  // namespace meshsmooth::flows

@@ -14,9 +14,15 @@ namespace {
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
 ParameterInfo Step(const FlowRow& row) {
-  return {"step",
-          row.kind == FlowKind::kCurvature ? "lambda relative to the squared mean edge length" : "lambda, dimensionless",
-          row.default_step, 0.0, row.max_step, true, false, {}};
+  return {
+      "step",
+      row.kind == FlowKind::kCurvature ? "lambda relative to the squared mean edge length" : "lambda, dimensionless",
+      row.default_step,
+      0.0,
+      row.max_step,
+      true,
+      false,
+      {}};
 }
 
 }  // namespace
@@ -63,8 +69,8 @@ std::string ChoiceFlowNames() {
 std::vector<FlowInfo> DescribeFlows() {
   std::vector<FlowInfo> flows;
   for (const FlowRow& row : FlowTable()) {
-    FlowInfo f{std::string(row.name), std::string(row.description), std::string(row.equations), {Step(row)},
-               row.constraints};
+    FlowInfo f{
+        std::string(row.name), std::string(row.description), std::string(row.equations), {Step(row)}, row.constraints};
     f.parameters.insert(f.parameters.end(), row.parameters.begin(), row.parameters.end());
     flows.push_back(std::move(f));
   }
@@ -77,21 +83,57 @@ std::vector<ParameterInfo> CommonParameters(int max_iterations) {
       {"iterations",
        "number of iterations; 0 = automatic: estimate the input's noise and return the iteration whose estimated "
        "distance to the noise-free surface (SURE) is least (a clean mesh comes back unchanged; closed meshes keep "
-       "their volume); with no flow named and no step, " + ChoiceFlowNames() + " both run and the smaller "
-       "estimated error wins",
-       static_cast<double>(d.iterations), 0, static_cast<double>(max_iterations), false, false, {}},
-      {"adaptive.mode", "eq. (14): none, constant T, or T(P) = mean |H| over the 1-ring or the 1+2-rings", 0, 0, 0,
-       false, false, {"ADAPTIVE_MODE_NONE", "ADAPTIVE_MODE_CONSTANT", "ADAPTIVE_MODE_RING1", "ADAPTIVE_MODE_RING2"}},
+       "their volume); with no flow named and no step, " +
+           ChoiceFlowNames() +
+           " both run and the smaller "
+           "estimated error wins",
+       static_cast<double>(d.iterations),
+       0,
+       static_cast<double>(max_iterations),
+       false,
+       false,
+       {}},
+      {"adaptive.mode",
+       "eq. (14): none, constant T, or T(P) = mean |H| over the 1-ring or the 1+2-rings",
+       0,
+       0,
+       0,
+       false,
+       false,
+       {"ADAPTIVE_MODE_NONE", "ADAPTIVE_MODE_CONSTANT", "ADAPTIVE_MODE_RING1", "ADAPTIVE_MODE_RING2"}},
       {"adaptive.threshold",
        "T for the constant mode: a curvature for the curvature flows, a length relative to the mean edge for the "
        "umbrella flows",
-       0.0, 0.0, kInf, false, true, {}},
-      {"adaptive.recompute_every", "T(P) is recomputed every this many iterations",
-       static_cast<double>(d.adaptive_recompute_every), 1, kInf, false, true, {}},
-      {"boundary", "boundary vertices: fixed, or smoothed as polygonal curves", 0, 0, 0, false, false,
+       0.0,
+       0.0,
+       kInf,
+       false,
+       true,
+       {}},
+      {"adaptive.recompute_every",
+       "T(P) is recomputed every this many iterations",
+       static_cast<double>(d.adaptive_recompute_every),
+       1,
+       kInf,
+       false,
+       true,
+       {}},
+      {"boundary",
+       "boundary vertices: fixed, or smoothed as polygonal curves",
+       0,
+       0,
+       0,
+       false,
+       false,
        {"BOUNDARY_MODE_FIXED", "BOUNDARY_MODE_CURVE"}},
-      {"tolerance", "stop when an iteration's largest move is below tolerance x mean edge length (0 = off)", 0.0, 0.0,
-       kInf, false, true, {}},
+      {"tolerance",
+       "stop when an iteration's largest move is below tolerance x mean edge length (0 = off)",
+       0.0,
+       0.0,
+       kInf,
+       false,
+       true,
+       {}},
       {"output.quantization_bits", "0 = lossless float32 positions; 1..24 = quantized", 0, 0, 24, false, false, {}},
   };
 }

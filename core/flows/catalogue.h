@@ -17,13 +17,13 @@ namespace meshsmooth {
 // Every flow, in the order ListFlows and the CLI list them: X(enumerator, Name), where Name's
 // own file (core/flows/<name>.cc) defines flows::NameRow(), the flow's row of the table. Adding a
 // flow adds one line here (docs/development.md, "Adding a flow").
-#define MESHSMOOTH_FLOWS(X)          \
-  X(kLaplacian, Laplacian)           \
-  X(kTaubin, Taubin)                 \
-  X(kBilaplacian, Bilaplacian)       \
-  X(kMcf, Mcf)                       \
-  X(kMcfTangential, McfTangential)   \
-  X(kMedian, Median)                 \
+#define MESHSMOOTH_FLOWS(X)            \
+  X(kLaplacian, Laplacian)             \
+  X(kTaubin, Taubin)                   \
+  X(kBilaplacian, Bilaplacian)         \
+  X(kMcf, Mcf)                         \
+  X(kMcfTangential, McfTangential)     \
+  X(kMedian, Median)                   \
   X(kBilateralNormal, BilateralNormal) \
   X(kGuidedNormal, GuidedNormal)
 

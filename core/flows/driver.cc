@@ -119,7 +119,8 @@ class FlowRun {
       kernel_->Prepare(ctx_, in, n_, threads_);
       const FlowKernel& k = *kernel_;
       Vec3* const dst = out->data();
-      ForBlocks(n_, threads_, [&](int32_t b, int32_t begin, int32_t end) { stats_[b] = k.Step(ctx_, in, dst, begin, end); });
+      ForBlocks(n_, threads_,
+                [&](int32_t b, int32_t begin, int32_t end) { stats_[b] = k.Step(ctx_, in, dst, begin, end); });
       in = dst;
     }
     if (passes > 1) MeasureWholeIteration(cur.data(), in);

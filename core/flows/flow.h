@@ -62,8 +62,8 @@ enum class ReorderMode {
 // face normals, then `vertex_iterations` updates that move the vertices so that the faces fit
 // the filtered normals.
 struct NormalFilterParams {
-  int normal_iterations = 1;   // 1 .. 100
-  int vertex_iterations = 5;   // 1 .. 100
+  int normal_iterations = 1;  // 1 .. 100
+  int vertex_iterations = 5;  // 1 .. 100
   // The spatial Gaussian's sigma, relative to the mean distance between the centroids of
   // faces that share an edge (measured once, on the input): scale-free.
   double sigma_spatial = 1.0;  // (0, 10]
@@ -94,18 +94,18 @@ struct FlowParams {
   std::optional<double> step;
 
   UmbrellaWeights weights = UmbrellaWeights::kUniform;  // umbrella flows that list it
-  double taubin_mu = 0.0;          // taubin: mu > lambda; 0 = derive from the pass band
-  double taubin_pass_band = 0.1;   // taubin: k_PB = 1/lambda - 1/mu (> 0), used when mu is 0
-  double tangential_weight = 5.0;  // mcf_tangential: C; the tangential term moves by step*C*U0t
-  double epsilon = 0.1;            // median: eq. (13)'s epsilon, in (0, 1)
-  NormalFilterParams normal_filter;  // the normal-filtering flows
+  double taubin_mu = 0.0;                               // taubin: mu > lambda; 0 = derive from the pass band
+  double taubin_pass_band = 0.1;                        // taubin: k_PB = 1/lambda - 1/mu (> 0), used when mu is 0
+  double tangential_weight = 5.0;                       // mcf_tangential: C; the tangential term moves by step*C*U0t
+  double epsilon = 0.1;                                 // median: eq. (13)'s epsilon, in (0, 1)
+  NormalFilterParams normal_filter;                     // the normal-filtering flows
 
   // Eq. (14). The threshold compares with |F|. For kConstant, T is in the flow's speed units:
   // curvature (1/length) for the curvature flows, and for the umbrella flows length relative
   // to h (|U|/h). kRing1/kRing2 compute T(P) from |H| and, for the umbrella flows, convert it
   // with |U0| ~ h^2 |H| / 2 (a regular mesh's umbrella).
   AdaptiveMode adaptive = AdaptiveMode::kNone;
-  double adaptive_threshold = 0.0;  // T for kConstant
+  double adaptive_threshold = 0.0;    // T for kConstant
   int adaptive_recompute_every = 10;  // K: T(P) is recomputed every K iterations
 
   BoundaryMode boundary = BoundaryMode::kFixed;
@@ -122,7 +122,6 @@ struct FlowParams {
   // Morton-ordered copy, when the run is long enough to repay the copy (ReorderMode).
   ReorderMode reorder = ReorderMode::kAuto;
 };
-
 
 struct Progress {
   int iteration = 0;  // 1-based, iterations done so far
@@ -142,8 +141,8 @@ struct RunControl {
 };
 
 enum class StopReason {
-  kIterations,    // ran the iterations asked for (or automatic stopping's cap)
-  kTolerance,     // the largest displacement fell below tolerance * h
+  kIterations,  // ran the iterations asked for (or automatic stopping's cap)
+  kTolerance,   // the largest displacement fell below tolerance * h
   kTimeBudget,
   kNoiseRemoved,  // automatic: the vertices moved as far as the estimated noise
   kNoNoise,       // automatic: the input's noise is below what the estimate can tell from its shape
@@ -157,9 +156,9 @@ std::string_view StopReasonName(StopReason reason);
 
 // What automatic stopping measured (FlowParams::iterations == kAutoIterations).
 struct AutoStopReport {
-  double noise_sigma_h = 0.0;     // EstimateNoise() of the input, in h
+  double noise_sigma_h = 0.0;      // EstimateNoise() of the input, in h
   double noise_to_remove_h = 0.0;  // the part of it taken for noise (see driver.cc), in h
-  double displacement_h = 0.0;    // RMS normal displacement from the input when it stopped, in h
+  double displacement_h = 0.0;     // RMS normal displacement from the input when it stopped, in h
   // The run's estimated mean squared error to the noise-free surface, a vertex, less the
   // noise's variance (auto_stop.h): comparable between flows run on the same input, in h^2.
   double risk_h2 = 0.0;
@@ -169,8 +168,8 @@ struct FlowResult {
   FlowId flow = kDefaultFlow;  // the flow that ran (chosen when FlowParams::flow is unset)
   int iterations_run = 0;
   StopReason stop_reason = StopReason::kIterations;
-  double effective_step = 0.0;  // lambda actually used (mesh units for the curvature flows)
-  double effective_mu = 0.0;    // taubin's mu
+  double effective_step = 0.0;    // lambda actually used (mesh units for the curvature flows)
+  double effective_mu = 0.0;      // taubin's mu
   double mean_edge_length = 0.0;  // h of the input
   Progress last;
   std::optional<AutoStopReport> auto_stop;  // set when the run stopped automatically

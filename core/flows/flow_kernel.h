@@ -39,14 +39,14 @@ struct StepContext {
   const int32_t* ring = nullptr;     // Topology::ring
   const uint8_t* role = nullptr;
   const uint8_t* all_free = nullptr;  // per block of kBlock vertices: 1 when every role is kFree
-  const VertexKind* kind = nullptr;  // Topology::kind
-  double lambda = 0.0;          // effective step of this pass (negative for taubin's mu pass)
-  double curve_lambda = 0.0;    // step of the boundary-curve umbrella in this pass
+  const VertexKind* kind = nullptr;   // Topology::kind
+  double lambda = 0.0;                // effective step of this pass (negative for taubin's mu pass)
+  double curve_lambda = 0.0;          // step of the boundary-curve umbrella in this pass
   const double* threshold = nullptr;  // eq. (14): per-vertex T in the flow's speed units, or null
-  double h = 1.0;               // mean edge length of the input
+  double h = 1.0;                     // mean edge length of the input
   // Curvature flows: a free vertex moves at most this far (squared) in one pass; see smooth.cc.
   double max_step_sq = std::numeric_limits<double>::infinity();
-  double inv_h2 = 1.0;          // 1 / h^2
+  double inv_h2 = 1.0;               // 1 / h^2
   VectorIsa isa = VectorIsa::kSse2;  // see RunWithIsa
   // The cotangent kernel's batches of free vertices (core/flows/lane_batches.h), or null.
   const LaneBatches* batches = nullptr;

@@ -32,10 +32,10 @@ struct FlowRow {
   FlowId id;
   std::string_view name;  // JobSpec.flow and --flow
   FlowKind kind;
-  double default_step;  // dimensionless, or relative to h^2 (kCurvature)
-  double max_step;      // valid steps are (0, max_step]
+  double default_step;           // dimensionless, or relative to h^2 (kCurvature)
+  double max_step;               // valid steps are (0, max_step]
   std::string_view description;  // one line, for ListFlows and --help
-  std::string_view equations;     // where in the paper (docs/paper.md)
+  std::string_view equations;    // where in the paper (docs/paper.md)
   // Parameters of this flow besides the step (which DescribeFlows() lists first).
   std::vector<ParameterInfo> parameters;
   // Constraints between parameters that their ranges cannot express, as ListFlows states them.
@@ -67,7 +67,7 @@ MESHSMOOTH_FLOWS(MESHSMOOTH_FLOW_ROW)
 #undef MESHSMOOTH_FLOW_ROW
 
 // Parameters that several rows share, for their `parameters`.
-ParameterInfo WeightsParameter();                   // laplacian, taubin: U0 or U1
+ParameterInfo WeightsParameter();                     // laplacian, taubin: U0 or U1
 std::vector<ParameterInfo> NormalFilterParameters();  // the normal-filtering flows
 
 }  // namespace flows

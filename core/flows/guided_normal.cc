@@ -105,12 +105,20 @@ std::unique_ptr<FlowKernel> MakeGuidedNormal(const FlowParams& p, double) {
 }  // namespace
 
 FlowRow GuidedNormalRow() {
-  return {FlowId::kGuidedNormal, "guided_normal", FlowKind::kNormalFilter, 1.0, 1.0,
+  return {FlowId::kGuidedNormal,
+          "guided_normal",
+          FlowKind::kNormalFilter,
+          1.0,
+          1.0,
           "Guided filtering of the face normals (the range weight compares the mean normals of each "
           "face's most consistent patch), then vertices fitted to them: keeps the creases and corners of "
           "CAD parts; one iteration as bilateral_normal",
-          "Zhang et al. 2015, eqs. (3)-(6) (docs/normal-filtering.md)", NormalFilterParameters(), {},
-          ValidateNormalFilter, MakeGuidedNormal, PassReach::kMeanEdge};
+          "Zhang et al. 2015, eqs. (3)-(6) (docs/normal-filtering.md)",
+          NormalFilterParameters(),
+          {},
+          ValidateNormalFilter,
+          MakeGuidedNormal,
+          PassReach::kMeanEdge};
 }
 
 }  // namespace meshsmooth::flows

@@ -20,11 +20,24 @@ using Lanes = double __attribute__((vector_size(16)));
 // W doubles, one per vertex, for the cotangent kernel below (W = 1 is a plain double). Only
 // lane-wise IEEE operations are used on them, so every lane computes the bits a plain double
 // computation of the same vertex would: results do not depend on W.
-template <int W> struct VertexLanesOf;
-template <> struct VertexLanesOf<1> { using type = double; };
-template <> struct VertexLanesOf<2> { typedef double type __attribute__((vector_size(16))); };
-template <> struct VertexLanesOf<4> { typedef double type __attribute__((vector_size(32))); };
-template <> struct VertexLanesOf<8> { typedef double type __attribute__((vector_size(64))); };
+template <int W>
+struct VertexLanesOf;
+template <>
+struct VertexLanesOf<1> {
+  using type = double;
+};
+template <>
+struct VertexLanesOf<2> {
+  typedef double type __attribute__((vector_size(16)));
+};
+template <>
+struct VertexLanesOf<4> {
+  typedef double type __attribute__((vector_size(32)));
+};
+template <>
+struct VertexLanesOf<8> {
+  typedef double type __attribute__((vector_size(64)));
+};
 
 // Square roots of the lanes. Builtins, not <immintrin.h>: its always_inline wrappers refuse to
 // inline into these templates, which get their instruction set only once inlined into
@@ -62,33 +75,52 @@ __attribute__((always_inline)) inline bool AnyLaneLess(VertexLanesOf<8>::type a,
 // turns only some of these selects into minpd/maxpd.
 inline double LaneMin(double a, double b) { return a < b ? a : b; }
 inline double LaneMax(double a, double b) { return b < a ? a : b; }
-__attribute__((always_inline)) inline VertexLanesOf<2>::type LaneMin(VertexLanesOf<2>::type a, VertexLanesOf<2>::type b) {
+__attribute__((always_inline)) inline VertexLanesOf<2>::type LaneMin(VertexLanesOf<2>::type a,
+                                                                     VertexLanesOf<2>::type b) {
   return __builtin_ia32_minpd(a, b);
 }
-__attribute__((always_inline)) inline VertexLanesOf<2>::type LaneMax(VertexLanesOf<2>::type a, VertexLanesOf<2>::type b) {
+__attribute__((always_inline)) inline VertexLanesOf<2>::type LaneMax(VertexLanesOf<2>::type a,
+                                                                     VertexLanesOf<2>::type b) {
   return __builtin_ia32_maxpd(a, b);
 }
 #if MESHSMOOTH_WIDE_LANES
-__attribute__((always_inline)) inline VertexLanesOf<4>::type LaneMin(VertexLanesOf<4>::type a, VertexLanesOf<4>::type b) {
+__attribute__((always_inline)) inline VertexLanesOf<4>::type LaneMin(VertexLanesOf<4>::type a,
+                                                                     VertexLanesOf<4>::type b) {
   return __builtin_ia32_minpd256(a, b);
 }
-__attribute__((always_inline)) inline VertexLanesOf<4>::type LaneMax(VertexLanesOf<4>::type a, VertexLanesOf<4>::type b) {
+__attribute__((always_inline)) inline VertexLanesOf<4>::type LaneMax(VertexLanesOf<4>::type a,
+                                                                     VertexLanesOf<4>::type b) {
   return __builtin_ia32_maxpd256(a, b);
 }
-__attribute__((always_inline)) inline VertexLanesOf<8>::type LaneMin(VertexLanesOf<8>::type a, VertexLanesOf<8>::type b) {
+__attribute__((always_inline)) inline VertexLanesOf<8>::type LaneMin(VertexLanesOf<8>::type a,
+                                                                     VertexLanesOf<8>::type b) {
   return __builtin_ia32_minpd512_mask(a, b, a, static_cast<unsigned char>(0xff), 4 /* current rounding */);
 }
-__attribute__((always_inline)) inline VertexLanesOf<8>::type LaneMax(VertexLanesOf<8>::type a, VertexLanesOf<8>::type b) {
+__attribute__((always_inline)) inline VertexLanesOf<8>::type LaneMax(VertexLanesOf<8>::type a,
+                                                                     VertexLanesOf<8>::type b) {
   return __builtin_ia32_maxpd512_mask(a, b, a, static_cast<unsigned char>(0xff), 4 /* current rounding */);
 }
 #endif
 
 // W int32 lanes beside them: vertex and ring indices.
-template <int W> struct IndexLanesOf;
-template <> struct IndexLanesOf<1> { using type = int32_t; };
-template <> struct IndexLanesOf<2> { typedef int32_t type __attribute__((vector_size(8))); };
-template <> struct IndexLanesOf<4> { typedef int32_t type __attribute__((vector_size(16))); };
-template <> struct IndexLanesOf<8> { typedef int32_t type __attribute__((vector_size(32))); };
+template <int W>
+struct IndexLanesOf;
+template <>
+struct IndexLanesOf<1> {
+  using type = int32_t;
+};
+template <>
+struct IndexLanesOf<2> {
+  typedef int32_t type __attribute__((vector_size(8)));
+};
+template <>
+struct IndexLanesOf<4> {
+  typedef int32_t type __attribute__((vector_size(16)));
+};
+template <>
+struct IndexLanesOf<8> {
+  typedef int32_t type __attribute__((vector_size(32)));
+};
 
 // Lane l holds base[index[l]] where live[l] (a comparison of lanes), else fallback[l]; lanes
 // that are not live read no memory.
@@ -132,7 +164,8 @@ __attribute__((always_inline)) inline typename VertexLanesOf<W>::type GatherLane
 // one position each (3 doubles; masked-off elements never fault past the array's end)
 // transposed by shuffles instead of three gathers. The same values either way.
 template <int W>
-__attribute__((always_inline)) inline void GatherXyzLanes(const double* base, const typename IndexLanesOf<W>::type& index3,
+__attribute__((always_inline)) inline void GatherXyzLanes(const double* base,
+                                                          const typename IndexLanesOf<W>::type& index3,
                                                           typename VertexLanesOf<W>::type& x,
                                                           typename VertexLanesOf<W>::type& y,
                                                           typename VertexLanesOf<W>::type& z) {
@@ -151,7 +184,7 @@ __attribute__((always_inline)) inline void GatherXyzLanes(const double* base, co
             l7 = __builtin_ia32_loadupd512_mask(base + index3[7], V{}, xyz);
     // l_i = (x_i, y_i, z_i, 0, ...): two lanes per register, then x and y of four lanes, then all.
     const Select pair{0, 1, 2, 3, 8, 9, 10, 11}, xy{0, 4, 8, 12, 1, 5, 9, 13}, zz{2, 6, 10, 14, 2, 6, 10, 14},
-                 low{0, 1, 2, 3, 8, 9, 10, 11}, high{4, 5, 6, 7, 12, 13, 14, 15};
+        low{0, 1, 2, 3, 8, 9, 10, 11}, high{4, 5, 6, 7, 12, 13, 14, 15};
     const V p01 = __builtin_shuffle(l0, l1, pair), p23 = __builtin_shuffle(l2, l3, pair),
             p45 = __builtin_shuffle(l4, l5, pair), p67 = __builtin_shuffle(l6, l7, pair);
     const V xy0 = __builtin_shuffle(p01, p23, xy), xy1 = __builtin_shuffle(p45, p67, xy);

@@ -12,9 +12,8 @@ template <bool kInverseDistance>
 class Laplacian final : public FlowKernel {
  public:
   BlockStats Step(const StepContext& c, const Vec3* cur, Vec3* next, int32_t begin, int32_t end) const override {
-    return ApplyStep(c, cur, next, begin, end, [&](int32_t v) {
-      return kInverseDistance ? UmbrellaU1(c, cur, v) : UmbrellaU0(c, cur, v);
-    });
+    return ApplyStep(c, cur, next, begin, end,
+                     [&](int32_t v) { return kInverseDistance ? UmbrellaU1(c, cur, v) : UmbrellaU0(c, cur, v); });
   }
 };
 
@@ -26,9 +25,18 @@ std::unique_ptr<FlowKernel> MakeLaplacian(const FlowParams& p, double /*step*/) 
 }  // namespace
 
 FlowRow LaplacianRow() {
-  return {FlowId::kLaplacian, "laplacian", FlowKind::kUmbrella, 0.5, 1.0,
-          "Laplacian smoothing: regularises the sampling but shrinks and flattens", "eqs. (2)-(4)",
-          {WeightsParameter()}, {}, nullptr, MakeLaplacian, PassReach::kConvex};
+  return {FlowId::kLaplacian,
+          "laplacian",
+          FlowKind::kUmbrella,
+          0.5,
+          1.0,
+          "Laplacian smoothing: regularises the sampling but shrinks and flattens",
+          "eqs. (2)-(4)",
+          {WeightsParameter()},
+          {},
+          nullptr,
+          MakeLaplacian,
+          PassReach::kConvex};
 }
 
 }  // namespace meshsmooth::flows

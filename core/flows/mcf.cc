@@ -12,8 +12,8 @@ namespace {
 class Mcf final : public FlowKernel {
  public:
   BlockStats Step(const StepContext& c, const Vec3* cur, Vec3* next, int32_t begin, int32_t end) const override {
-    return ApplyCurvatureStep(c, cur, next, begin, end,
-                              [](const auto& k) __attribute__((always_inline)) { return k.hn; });
+    return ApplyCurvatureStep(
+        c, cur, next, begin, end, [](const auto& k) __attribute__((always_inline)) { return k.hn; });
   }
 };
 
@@ -22,9 +22,18 @@ std::unique_ptr<FlowKernel> MakeMcf(const FlowParams&, double) { return std::mak
 }  // namespace
 
 FlowRow McfRow() {
-  return {FlowId::kMcf, "mcf", FlowKind::kCurvature, 0.1, 10.0,
-          "Mean curvature flow with cotangent weights: smooths well, sampling gets irregular", "eqs. (7)-(8)", {}, {},
-          nullptr, MakeMcf, PassReach::kMeanEdge};
+  return {FlowId::kMcf,
+          "mcf",
+          FlowKind::kCurvature,
+          0.1,
+          10.0,
+          "Mean curvature flow with cotangent weights: smooths well, sampling gets irregular",
+          "eqs. (7)-(8)",
+          {},
+          {},
+          nullptr,
+          MakeMcf,
+          PassReach::kMeanEdge};
 }
 
 }  // namespace meshsmooth::flows

@@ -20,20 +20,21 @@ class McfTangential final : public FlowKernel {
   explicit McfTangential(double c) : c_(c) {}
   BlockStats Step(const StepContext& c, const Vec3* cur, Vec3* next, int32_t begin, int32_t end) const override {
     const double weight = c_ * c.inv_h2;
-    return ApplyCurvatureStep(c, cur, next, begin, end, [&](const auto& k) __attribute__((always_inline)) {
-      using V = decltype(k.hn.x);
-      const LaneVec3<V>&u = k.u0, &n = k.normal, &hn = k.hn;
-      // The tangential part U0 - (U0 . n) n with n = N / |N|, without the square root; none
-      // where N is zero. (Selects only of the form `m ? x : 0` with x computed: GCC 12 rewrites
-      // `m ? b + c : b` or `m ? constant : 0` into an & with a 512-bit mask, which it lowers
-      // to a branch per lane.)
-      const V zero{}, len2 = n.x * n.x + n.y * n.y + n.z * n.z;
-      const auto has_normal = zero < len2;
-      const V t = has_normal ? (u.x * n.x + u.y * n.y + u.z * n.z) / len2 : zero;
-      const V tx = has_normal ? u.x - n.x * t : zero, ty = has_normal ? u.y - n.y * t : zero,
-              tz = has_normal ? u.z - n.z * t : zero;
-      return LaneVec3<V>{hn.x + tx * weight, hn.y + ty * weight, hn.z + tz * weight};
-    });
+    return ApplyCurvatureStep(
+        c, cur, next, begin, end, [&](const auto& k) __attribute__((always_inline)) {
+          using V = decltype(k.hn.x);
+          const LaneVec3<V>&u = k.u0, &n = k.normal, &hn = k.hn;
+          // The tangential part U0 - (U0 . n) n with n = N / |N|, without the square root; none
+          // where N is zero. (Selects only of the form `m ? x : 0` with x computed: GCC 12 rewrites
+          // `m ? b + c : b` or `m ? constant : 0` into an & with a 512-bit mask, which it lowers
+          // to a branch per lane.)
+          const V zero{}, len2 = n.x * n.x + n.y * n.y + n.z * n.z;
+          const auto has_normal = zero < len2;
+          const V t = has_normal ? (u.x * n.x + u.y * n.y + u.z * n.z) / len2 : zero;
+          const V tx = has_normal ? u.x - n.x * t : zero, ty = has_normal ? u.y - n.y * t : zero,
+                  tz = has_normal ? u.z - n.z * t : zero;
+          return LaneVec3<V>{hn.x + tx * weight, hn.y + ty * weight, hn.z + tz * weight};
+        });
   }
 
  private:
@@ -57,11 +58,25 @@ std::unique_ptr<FlowKernel> MakeMcfTangential(const FlowParams& p, double) {
 
 FlowRow McfTangentialRow() {
   const FlowParams d;
-  return {FlowId::kMcfTangential, "mcf_tangential", FlowKind::kCurvature, 0.1, 10.0,
-          "Mean curvature flow plus a tangential umbrella that evens out the sampling", "eq. (11)",
-          {{"tangential_weight", "C: the tangential part moves a vertex by step * C * U0_t (step * C <= 1)",
-            d.tangential_weight, 0.0, std::numeric_limits<double>::infinity(), false, true, {}}},
-          {"step * tangential_weight <= 1"}, ValidateMcfTangential, MakeMcfTangential, PassReach::kMeanEdge};
+  return {FlowId::kMcfTangential,
+          "mcf_tangential",
+          FlowKind::kCurvature,
+          0.1,
+          10.0,
+          "Mean curvature flow plus a tangential umbrella that evens out the sampling",
+          "eq. (11)",
+          {{"tangential_weight",
+            "C: the tangential part moves a vertex by step * C * U0_t (step * C <= 1)",
+            d.tangential_weight,
+            0.0,
+            std::numeric_limits<double>::infinity(),
+            false,
+            true,
+            {}}},
+          {"step * tangential_weight <= 1"},
+          ValidateMcfTangential,
+          MakeMcfTangential,
+          PassReach::kMeanEdge};
 }
 
 }  // namespace meshsmooth::flows

@@ -27,7 +27,6 @@ int32_t MergeThree(const int32_t* a, const int32_t* a_end, const int32_t* b, con
   }
 }
 
-
 // The face other than f holding both a and b, or -1 when there is none or more than one.
 int32_t FaceAcross(const FaceGraph& g, int32_t f, int32_t a, int32_t b) {
   const int32_t *p = &g.vertex_faces[g.vertex_offsets[a]], *p_end = &g.vertex_faces[g.vertex_offsets[a + 1]];
@@ -46,7 +45,6 @@ int32_t FaceAcross(const FaceGraph& g, int32_t f, int32_t a, int32_t b) {
   return count == 1 ? other : -1;
 }
 
-
 // exp(-x) on a table (NegExp in normal_filtering.h).
 class NegExpTable {
  public:
@@ -61,16 +59,15 @@ class NegExpTable {
   double value_[kSize + 2];
 };
 
-
 // The faces sharing a vertex with face f (f included), ascending, into `out` (null: only
 // counted); returns their number. vertex_faces lists each vertex's faces ascending.
 int32_t NeighbourFaces(const FaceGraph& g, int32_t f, int32_t* out) {
   const Triangle& t = g.faces[f];
   const int32_t* vf = g.vertex_faces.data();
   const int32_t* o = g.vertex_offsets.data();
-  return MergeThree(vf + o[t[0]], vf + o[t[0] + 1], vf + o[t[1]], vf + o[t[1] + 1], vf + o[t[2]], vf + o[t[2] + 1], out);
+  return MergeThree(vf + o[t[0]], vf + o[t[0] + 1], vf + o[t[1]], vf + o[t[1] + 1], vf + o[t[2]], vf + o[t[2] + 1],
+                    out);
 }
-
 
 }  // namespace
 
@@ -99,7 +96,6 @@ absl::Status ValidateNormalFilter(const FlowParams& p, double /*step*/) {
   }
   return absl::OkStatus();
 }
-
 
 FaceGraph BuildFaceGraph(const Mesh& mesh, const Topology& topo, int threads) {
   FaceGraph g;

@@ -47,7 +47,9 @@ FaceGraph BuildFaceGraph(const Mesh& mesh, const Topology& topo, int threads);
 
 inline Vec3 Centroid(const Vec3* pos, const Triangle& t) { return (pos[t[0]] + pos[t[1]] + pos[t[2]]) * (1.0 / 3.0); }
 // Twice the area times the unit normal of triangle t.
-inline Vec3 FaceCross(const Vec3* pos, const Triangle& t) { return Cross(pos[t[1]] - pos[t[0]], pos[t[2]] - pos[t[0]]); }
+inline Vec3 FaceCross(const Vec3* pos, const Triangle& t) {
+  return Cross(pos[t[1]] - pos[t[0]], pos[t[2]] - pos[t[0]]);
+}
 
 // exp(-x) for x >= 0 from a table with linear interpolation (relative error below 1e-6; 0 from
 // x = 40 on, where exp(-x) < 5e-18): the filters' weights take most of their time with libm's
@@ -99,8 +101,8 @@ class NormalFilterKernel : public FlowKernel {
   NormalFilterParams p_;
   int threads_ = 1;
   FaceGraph graph_;
-  std::vector<Vec3> normal_;   // per face: unit, or zero without area
-  std::vector<double> area_;   // per face
+  std::vector<Vec3> normal_;  // per face: unit, or zero without area
+  std::vector<double> area_;  // per face
   // Per neighbour entry j of face i: A_j exp(-|c_i - c_j|^2 / (2 sigma_s^2)); a float is as
   // precise as a weight needs and halves what the filter reads.
   std::vector<float> spatial_;
@@ -119,11 +121,11 @@ class NormalFilterKernel : public FlowKernel {
   // offset_ and state_ for the positions target_ holds then.
   void GuardOrientation(const Vec3* cur, int32_t n, int threads);
 
-  int pass_ = 0;  // passes prepared so far
-  std::vector<Vec3> target_;      // per vertex: the pass's result
-  std::vector<double> offset_;    // per face: n_f . c_f in the pass's positions
-  std::vector<uint8_t> state_;    // per face: FaceState in the pass's positions
-  std::vector<double> cosine_;    // per face: between it and its filtered normal, ditto
+  int pass_ = 0;                     // passes prepared so far
+  std::vector<Vec3> target_;         // per vertex: the pass's result
+  std::vector<double> offset_;       // per face: n_f . c_f in the pass's positions
+  std::vector<uint8_t> state_;       // per face: FaceState in the pass's positions
+  std::vector<double> cosine_;       // per face: between it and its filtered normal, ditto
   std::vector<double> next_offset_;  // the same in target_, for the next pass of the round
   std::vector<uint8_t> next_state_;
   std::vector<double> next_cosine_;

@@ -132,7 +132,8 @@ void NormalFilterKernel::GuardOrientation(const Vec3* cur, int32_t n, int thread
   auto movable = [&](int32_t v) { return damping_[v] < 2 && !(target_[v] == cur[v]); };
   ForFaces([&](int32_t f) {
     fit(f);
-    turned_[f] = state_[f] == kAgrees ? next_state_[f] != kAgrees : state_[f] == kOpposes && next_cosine_[f] < cosine_[f];
+    turned_[f] =
+        state_[f] == kAgrees ? next_state_[f] != kAgrees : state_[f] == kOpposes && next_cosine_[f] < cosine_[f];
   });
   const int32_t blocks = (n + kBlock - 1) / kBlock;
   std::vector<std::vector<int32_t>> found(blocks);

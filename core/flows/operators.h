@@ -86,7 +86,6 @@ struct CurvatureLanes {
   LaneVec3<V> hn, normal, u0;
 };
 
-
 // Eq. (8) with the mixed Voronoi area of Meyer et al. in place of A/3 (docs/paper.md): on a sphere
 // of radius r, |H n| = 1/r. Zero-area triangles contribute nothing; cotangents are clamped.
 // Meaningful only for interior vertices (closed ring); finite for any vertex.
@@ -129,7 +128,8 @@ __attribute__((always_inline)) inline CurvatureLanes<typename VertexLanesOf<W>::
       std::memcpy(&end, c.offsets + first + 1, sizeof end);
     } else {
       const I all = self == self;
-      begin = GatherIndexLanes<W>(c.offsets, self, all, self), end = GatherIndexLanes<W>(c.offsets, self + 1, all, self);
+      begin = GatherIndexLanes<W>(c.offsets, self, all, self),
+      end = GatherIndexLanes<W>(c.offsets, self + 1, all, self);
     }
   }
   V valence;
@@ -184,7 +184,7 @@ __attribute__((always_inline)) inline CurvatureLanes<typename VertexLanesOf<W>::
   for (int32_t k = 0; k < max_valence; ++k) {
     // Edges a = Q_{k-1} - P and q = Q_k - P.
     const V qx = next_x - px, qy = next_y - py, qz = next_z - pz;
-    at += 1;  // Q_{k+1}; a lane past its ring loads its own P, as above
+    at += 1;                    // Q_{k+1}; a lane past its ring loads its own P, as above
     if (k + 1 < max_valence) {  // none after the last step
       if constexpr (kLaneRows) {
         std::memcpy(&index3, rows + (k + 2) * W, sizeof index3);

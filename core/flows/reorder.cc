@@ -69,8 +69,8 @@ std::vector<int32_t> MortonOrder(const std::vector<Vec3>& pos, int threads) {
   std::vector<uint64_t> keys(n);
 #pragma omp parallel for schedule(static) num_threads(threads)
   for (int32_t i = 0; i < n; ++i) {
-    const uint64_t code = Spread3(cell(pos[i].x, lo.x)) | Spread3(cell(pos[i].y, lo.y)) << 1 |
-                          Spread3(cell(pos[i].z, lo.z)) << 2;
+    const uint64_t code =
+        Spread3(cell(pos[i].x, lo.x)) | Spread3(cell(pos[i].y, lo.y)) << 1 | Spread3(cell(pos[i].z, lo.z)) << 2;
     keys[i] = code << 25 | static_cast<uint64_t>(i);
   }
   const int chunks = threads > 1 && n >= kReorderThreshold ? threads : 1;
@@ -98,8 +98,7 @@ bool MortonOrderPaysOff(const Topology& topo, int iterations) {
   return share > kLocalFarShare && share * iterations >= kRepayingFarShareIterations;
 }
 
-ReorderedMesh ReorderByMorton(const Mesh& mesh, const Topology& topo, const std::vector<uint8_t>& locked,
-                              int threads) {
+ReorderedMesh ReorderByMorton(const Mesh& mesh, const Topology& topo, const std::vector<uint8_t>& locked, int threads) {
   const int32_t n = mesh.num_vertices();
   ReorderedMesh r;
   // A pure permutation, so it runs on the job's threads without changing a bit.

@@ -30,15 +30,14 @@ bool ReorderableSize(int32_t n);
 
 // A mesh, its topology and its lock mask copied into an order (new -> old).
 struct ReorderedMesh {
-  std::vector<int32_t> order;  // new -> old
-  Mesh mesh;                   // positions and triangles, renumbered
-  Topology topo;               // kind, rings and usable faces, renumbered
+  std::vector<int32_t> order;   // new -> old
+  Mesh mesh;                    // positions and triangles, renumbered
+  Topology topo;                // kind, rings and usable faces, renumbered
   std::vector<uint8_t> locked;  // empty when the caller's was
 };
 
 // The copy of (mesh, topo, locked) in Morton order, made on `threads`.
-ReorderedMesh ReorderByMorton(const Mesh& mesh, const Topology& topo, const std::vector<uint8_t>& locked,
-                              int threads);
+ReorderedMesh ReorderByMorton(const Mesh& mesh, const Topology& topo, const std::vector<uint8_t>& locked, int threads);
 
 // Writes r's positions back to `mesh` in the caller's order.
 void RestoreOrder(const ReorderedMesh& r, Mesh& mesh, int threads);

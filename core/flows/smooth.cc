@@ -12,8 +12,8 @@
 #include "absl/strings/str_format.h"
 #include "core/flows/choice.h"
 #include "core/flows/driver.h"
-#include "core/flows/flow_table.h"
 #include "core/flows/flow.h"
+#include "core/flows/flow_table.h"
 #include "core/flows/operators.h"
 #include "core/flows/reorder.h"
 #include "core/measure/metrics.h"
@@ -29,13 +29,20 @@ constexpr int kTypicalAutoIterations = 20;
 
 std::string_view StopReasonName(StopReason reason) {
   switch (reason) {
-    case StopReason::kIterations: return "iterations";
-    case StopReason::kTolerance: return "tolerance";
-    case StopReason::kTimeBudget: return "time_budget";
-    case StopReason::kNoiseRemoved: return "noise_removed";
-    case StopReason::kNoNoise: return "no_noise";
-    case StopReason::kConverged: return "converged";
-    case StopReason::kNoEstimate: return "no_estimate";
+    case StopReason::kIterations:
+      return "iterations";
+    case StopReason::kTolerance:
+      return "tolerance";
+    case StopReason::kTimeBudget:
+      return "time_budget";
+    case StopReason::kNoiseRemoved:
+      return "noise_removed";
+    case StopReason::kNoNoise:
+      return "no_noise";
+    case StopReason::kConverged:
+      return "converged";
+    case StopReason::kNoEstimate:
+      return "no_estimate";
   }
   return "iterations";
 }
@@ -52,8 +59,8 @@ absl::Status ValidateFlowParams(const FlowParams& p, int32_t num_vertices) {
   }
   const FlowRow& row = FlowOf(flow);
   if (p.iterations < kAutoIterations || p.iterations > kMaxIterations) {
-    return absl::InvalidArgumentError(absl::StrCat("iterations must be in 1..", kMaxIterations, " or ",
-                                                   kAutoIterations, " (automatic), got ", p.iterations));
+    return absl::InvalidArgumentError(absl::StrCat("iterations must be in 1..", kMaxIterations, " or ", kAutoIterations,
+                                                   " (automatic), got ", p.iterations));
   }
   if (p.max_auto_iterations < 1) {
     return absl::InvalidArgumentError(
@@ -61,20 +68,22 @@ absl::Status ValidateFlowParams(const FlowParams& p, int32_t num_vertices) {
   }
   const double step = p.step.value_or(row.default_step);
   if (!(step > 0.0) || !(step <= row.max_step)) {
-    return absl::InvalidArgumentError(absl::StrFormat(
-        "step must be in (0, %g] for %s, got %g%s", row.max_step, row.name, step,
-        row.kind == FlowKind::kCurvature ? " (relative to the squared mean edge length)" : ""));
+    return absl::InvalidArgumentError(
+        absl::StrFormat("step must be in (0, %g] for %s, got %g%s", row.max_step, row.name, step,
+                        row.kind == FlowKind::kCurvature ? " (relative to the squared mean edge length)" : ""));
   }
   if (row.validate != nullptr) {
     if (absl::Status s = row.validate(p, step); !s.ok()) return s;
   }
   if (!std::isfinite(p.taubin_mu) || p.taubin_mu < 0.0) {
-    return absl::InvalidArgumentError(absl::StrFormat("taubin mu must be >= 0 (0 = from the pass band), got %g", p.taubin_mu));
+    return absl::InvalidArgumentError(
+        absl::StrFormat("taubin mu must be >= 0 (0 = from the pass band), got %g", p.taubin_mu));
   }
   if (!(p.epsilon > 0.0) || !(p.epsilon < 1.0)) {
     return absl::InvalidArgumentError(absl::StrFormat("epsilon must be in (0, 1), got %g", p.epsilon));
   }
-  if (p.adaptive == AdaptiveMode::kConstant && (!(p.adaptive_threshold >= 0.0) || !std::isfinite(p.adaptive_threshold))) {
+  if (p.adaptive == AdaptiveMode::kConstant &&
+      (!(p.adaptive_threshold >= 0.0) || !std::isfinite(p.adaptive_threshold))) {
     return absl::InvalidArgumentError(
         absl::StrFormat("the adaptive threshold T must be finite and >= 0, got %g", p.adaptive_threshold));
   }
@@ -86,8 +95,8 @@ absl::Status ValidateFlowParams(const FlowParams& p, int32_t num_vertices) {
     return absl::InvalidArgumentError(absl::StrFormat("tolerance must be finite and >= 0, got %g", p.tolerance));
   }
   if (!p.locked.empty() && p.locked.size() != static_cast<size_t>(num_vertices)) {
-    return absl::InvalidArgumentError(absl::StrCat("the lock mask has ", p.locked.size(),
-                                                   " entries for ", num_vertices, " vertices"));
+    return absl::InvalidArgumentError(
+        absl::StrCat("the lock mask has ", p.locked.size(), " entries for ", num_vertices, " vertices"));
   }
   if (p.threads < 0) return absl::InvalidArgumentError(absl::StrCat("threads must be >= 0, got ", p.threads));
   return absl::OkStatus();
@@ -127,7 +136,7 @@ absl::StatusOr<FlowResult> SmoothOneFlow(Mesh& mesh, const Topology& topo, const
   const bool reorder = p.reorder == ReorderMode::kAlways
                            ? ReorderableSize(n)
                            : p.reorder == ReorderMode::kAuto &&
-                               MortonOrderPaysOff(topo, iterations * PassesPerIteration(p));  // validated: below 2^25
+                                 MortonOrderPaysOff(topo, iterations * PassesPerIteration(p));  // validated: below 2^25
   if (!reorder) return RunIterations(mesh, topo, p, control, h, fixed_auto_iterations);
 
   const int threads = ThreadsFor(n, p);

@@ -187,7 +187,8 @@ __attribute__((always_inline)) inline BlockStats CurvatureStepLanes(const StepCo
   const double* const threshold = c.threshold;
   const V zero{}, one = zero + 1.0, max_sq_lanes = zero + max_step_sq;
   const LaneBatches& lanes = *c.batches;
-  const int32_t block = begin / kBlock, first_batch = lanes.block_first[block], last_batch = lanes.block_first[block + 1];
+  const int32_t block = begin / kBlock, first_batch = lanes.block_first[block],
+                last_batch = lanes.block_first[block + 1];
   // Per vertex of the block (offset from begin): a free vertex's squared step, its length and
   // whether it was capped.
   alignas(64) double d2_at[kBlock], root_at[kBlock];
@@ -270,15 +271,16 @@ __attribute__((always_inline)) inline BlockStats CurvatureStepLanes(const StepCo
 template <typename FinishFn>
 __attribute__((always_inline)) inline BlockStats ApplyCurvatureStep(const StepContext& c, const Vec3* cur, Vec3* next,
                                                                     int32_t begin, int32_t end, FinishFn&& finish) {
-  return RunWithIsa(c.isa, [&](auto width) __attribute__((always_inline)) {
-    constexpr int W = decltype(width)::value;
-    if (c.batches != nullptr && c.batches->width == W) {
-      if (AllFreeBlock(c, begin)) return CurvatureStepLanes<W, true>(c, cur, next, begin, end, finish);
-      return CurvatureStepLanes<W, false>(c, cur, next, begin, end, finish);
-    }
-    CurvatureSpeed<W, FinishFn> speed(c, cur, begin, end, finish);
-    return ApplyStep(c, cur, next, begin, end, speed);
-  });
+  return RunWithIsa(
+      c.isa, [&](auto width) __attribute__((always_inline)) {
+        constexpr int W = decltype(width)::value;
+        if (c.batches != nullptr && c.batches->width == W) {
+          if (AllFreeBlock(c, begin)) return CurvatureStepLanes<W, true>(c, cur, next, begin, end, finish);
+          return CurvatureStepLanes<W, false>(c, cur, next, begin, end, finish);
+        }
+        CurvatureSpeed<W, FinishFn> speed(c, cur, begin, end, finish);
+        return ApplyStep(c, cur, next, begin, end, speed);
+      });
 }
 
 }  // namespace meshsmooth::flows

@@ -21,9 +21,8 @@ class Taubin final : public FlowKernel {
   double mu() const override { return mu_; }
   double pass_factor(int pass) const override { return pass == 0 ? 1.0 : -mu_over_lambda_; }
   BlockStats Step(const StepContext& c, const Vec3* cur, Vec3* next, int32_t begin, int32_t end) const override {
-    return ApplyStep(c, cur, next, begin, end, [&](int32_t v) {
-      return kInverseDistance ? UmbrellaU1(c, cur, v) : UmbrellaU0(c, cur, v);
-    });
+    return ApplyStep(c, cur, next, begin, end,
+                     [&](int32_t v) { return kInverseDistance ? UmbrellaU1(c, cur, v) : UmbrellaU0(c, cur, v); });
   }
 
  private:
@@ -42,9 +41,9 @@ absl::Status ValidateTaubin(const FlowParams& p, double step) {
           absl::StrFormat("taubin needs mu > lambda and mu <= 1 (lambda %g, mu %g)", step, p.taubin_mu));
     }
   } else if (!(p.taubin_pass_band > 0.0) || !(p.taubin_pass_band < 1.0 / step - 1.0)) {
-    return absl::InvalidArgumentError(absl::StrFormat(
-        "taubin pass band k_PB must be in (0, 1/lambda - 1) = (0, %g) so that lambda < mu <= 1, got %g",
-        1.0 / step - 1.0, p.taubin_pass_band));
+    return absl::InvalidArgumentError(
+        absl::StrFormat("taubin pass band k_PB must be in (0, 1/lambda - 1) = (0, %g) so that lambda < mu <= 1, got %g",
+                        1.0 / step - 1.0, p.taubin_pass_band));
   }
   return absl::OkStatus();
 }
@@ -59,17 +58,29 @@ std::unique_ptr<FlowKernel> MakeTaubin(const FlowParams& p, double step) {
 
 FlowRow TaubinRow() {
   const FlowParams d;
-  return {FlowId::kTaubin, "taubin", FlowKind::kUmbrella, 0.5, 1.0,
+  return {FlowId::kTaubin,
+          "taubin",
+          FlowKind::kUmbrella,
+          0.5,
+          1.0,
           "Taubin lambda|mu smoothing: no shrinkage, but turns noise into low-frequency waves; one "
           "iteration is a lambda pass and a mu pass",
           "eq. (6)",
           {WeightsParameter(),
            {"taubin_mu", "mu (> lambda, <= 1); unset = from the pass band", 0.0, 0.0, 1.0, true, false, {}},
-           {"taubin_pass_band", "k_PB = 1/lambda - 1/mu, used when mu is unset", d.taubin_pass_band, 0.0,
-            std::numeric_limits<double>::infinity(), true, true, {}}},
+           {"taubin_pass_band",
+            "k_PB = 1/lambda - 1/mu, used when mu is unset",
+            d.taubin_pass_band,
+            0.0,
+            std::numeric_limits<double>::infinity(),
+            true,
+            true,
+            {}}},
           {"taubin_mu set: step < taubin_mu <= 1",
            "taubin_mu unset: 0 < taubin_pass_band < 1/step - 1 (so step < 1 / (1 + taubin_pass_band))"},
-          ValidateTaubin, MakeTaubin, PassReach::kExtent};
+          ValidateTaubin,
+          MakeTaubin,
+          PassReach::kExtent};
 }
 
 }  // namespace meshsmooth::flows

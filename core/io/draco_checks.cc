@@ -33,8 +33,8 @@ absl::Status CheckCoordinates(const Vec3& p, const char* what, int64_t index) {
   for (double c : {p.x, p.y, p.z}) {
     if (!(std::abs(c) <= kMaxCoordinate)) {
       return absl::InvalidArgumentError(absl::StrCat(what, " ", index, " has a coordinate of ", c,
-                                                     ": coordinates must be finite and at most 2^100 (",
-                                                     kMaxCoordinate, ") in magnitude"));
+                                                     ": coordinates must be finite and at most 2^100 (", kMaxCoordinate,
+                                                     ") in magnitude"));
     }
   }
   return absl::OkStatus();
@@ -52,7 +52,7 @@ absl::Status CheckDracoOptions(const DracoOptions& options) {
 }
 
 absl::StatusOr<std::optional<DeclaredSizes>> CheckDeclaredEdgebreakerSizes(std::string_view bytes,
-                                                                            int64_t max_vertices) {
+                                                                           int64_t max_vertices) {
   draco::DecoderBuffer buffer;
   buffer.Init(bytes.data(), bytes.size());
   draco::DracoHeader header;
@@ -84,18 +84,18 @@ absl::StatusOr<std::optional<DeclaredSizes>> CheckDeclaredEdgebreakerSizes(std::
   // Draco refuses more split symbols than symbols; counted anyway, the bound stays an upper one.
   const int64_t declared_vertices = int64_t{vertices} + new_vertices + split_symbols;
   if (faces > 4 * max_vertices || declared_vertices > 2 * max_vertices) {
-    return absl::ResourceExhaustedError(absl::StrCat(
-        "the Draco data declares ", faces, " faces and ", declared_vertices, " vertices (Edgebreaker); with a limit of ",
-        max_vertices, " vertices at most ", 4 * max_vertices, " faces and ", 2 * max_vertices,
-        " vertices are decoded"));
+    return absl::ResourceExhaustedError(absl::StrCat("the Draco data declares ", faces, " faces and ",
+                                                     declared_vertices, " vertices (Edgebreaker); with a limit of ",
+                                                     max_vertices, " vertices at most ", 4 * max_vertices,
+                                                     " faces and ", 2 * max_vertices, " vertices are decoded"));
   }
   // Within the limit, counts no real encoding can back: files read from disk have no limit
   // but int32 indices, and 436 bytes declaring 657 million faces make Draco ask for 7.9 GB.
   const int64_t plausible = kDeclaredCountFloor + kDeclaredCountsPerByte * static_cast<int64_t>(bytes.size());
   if (faces > plausible || declared_vertices > plausible) {
-    return absl::InvalidArgumentError(absl::StrCat(
-        "corrupt Draco mesh: ", bytes.size(), " bytes declare ", faces, " faces and ", declared_vertices,
-        " vertices (Edgebreaker); at most ", plausible, " of each fit in that many bytes"));
+    return absl::InvalidArgumentError(
+        absl::StrCat("corrupt Draco mesh: ", bytes.size(), " bytes declare ", faces, " faces and ", declared_vertices,
+                     " vertices (Edgebreaker); at most ", plausible, " of each fit in that many bytes"));
   }
   return DeclaredSizes{faces, declared_vertices};
 }
@@ -111,9 +111,9 @@ absl::Status CheckQuantizedExtent(const draco::PointAttribute& positions) {
   double extent = 0.0;
   for (int c = 0; c < 3; ++c) extent = std::max(extent, static_cast<double>(hi[c]) - lo[c]);
   if (extent > 0.0 && extent < kMinQuantizedExtent) {
-    return absl::InvalidArgumentError(absl::StrCat(
-        "the mesh is too small to quantize: it spans ", extent, ", less than 2^-100 (", kMinQuantizedExtent,
-        "); ask for lossless output (0 quantization bits)"));
+    return absl::InvalidArgumentError(absl::StrCat("the mesh is too small to quantize: it spans ", extent,
+                                                   ", less than 2^-100 (", kMinQuantizedExtent,
+                                                   "); ask for lossless output (0 quantization bits)"));
   }
   return absl::OkStatus();
 }
@@ -146,8 +146,8 @@ absl::Status EdgebreakerDropsError(int64_t dropped) {
 absl::Status CheckDracoLayout(const draco::Mesh& dm) {
   const uint32_t n = dm.num_points();
   if (n > kMaxPoints) {
-    return absl::InvalidArgumentError(absl::StrCat("the Draco mesh has ", n, " points; at most ", kMaxPoints,
-                                                   " can be read"));
+    return absl::InvalidArgumentError(
+        absl::StrCat("the Draco mesh has ", n, " points; at most ", kMaxPoints, " can be read"));
   }
   if (dm.num_attributes() > kMaxAttributes) {
     return absl::InvalidArgumentError(absl::StrCat("the Draco mesh has ", dm.num_attributes(), " attributes; at most ",
@@ -156,7 +156,8 @@ absl::Status CheckDracoLayout(const draco::Mesh& dm) {
   int positions = 0;
   for (int32_t i = 0; i < dm.num_attributes(); ++i) {
     const draco::PointAttribute* a = dm.attribute(i);
-    if (a == nullptr) return absl::InvalidArgumentError(absl::StrCat("corrupt Draco mesh: attribute ", i, " is missing"));
+    if (a == nullptr)
+      return absl::InvalidArgumentError(absl::StrCat("corrupt Draco mesh: attribute ", i, " is missing"));
     const std::string name = absl::StrCat("attribute ", i, " (", a->TypeToString(a->attribute_type()), ")");
     positions += a->attribute_type() == draco::GeometryAttribute::POSITION;
     const int64_t value_bytes = int64_t{draco::DataTypeLength(a->data_type())} * a->num_components();
@@ -164,7 +165,8 @@ absl::Status CheckDracoLayout(const draco::Mesh& dm) {
     const int64_t needed = size == 0 ? 0 : a->byte_offset() + a->byte_stride() * (size - 1) + value_bytes;
     if (value_bytes <= 0 || a->byte_stride() < value_bytes || a->byte_offset() < 0 || a->buffer() == nullptr ||
         needed > static_cast<int64_t>(a->buffer()->data_size())) {
-      return absl::InvalidArgumentError(absl::StrCat("corrupt Draco mesh: the values of ", name, " do not fit its buffer"));
+      return absl::InvalidArgumentError(
+          absl::StrCat("corrupt Draco mesh: the values of ", name, " do not fit its buffer"));
     }
     if (a->is_mapping_identity()) {
       if (a->size() < n) {

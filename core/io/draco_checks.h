@@ -56,7 +56,7 @@ struct DeclaredSizes {
   int64_t vertices = 0;
 };
 absl::StatusOr<std::optional<DeclaredSizes>> CheckDeclaredEdgebreakerSizes(std::string_view bytes,
-                                                                            int64_t max_vertices);
+                                                                           int64_t max_vertices);
 
 // The largest block of memory Draco's decoder may allocate for one input: more, and the data is
 // refused as corrupt (core/io/allocation_limit.h says why). Edgebreaker data declares its faces and

@@ -9,13 +9,13 @@
 #include <variant>
 
 #include "absl/strings/str_cat.h"
+#include "core/io/allocation_limit.h"
+#include "core/io/draco_checks.h"
+#include "core/weld.h"
 #include "draco/compression/decode.h"
 #include "draco/compression/encode.h"
 #include "draco/mesh/mesh.h"
 #include "draco/metadata/geometry_metadata.h"
-#include "core/io/allocation_limit.h"
-#include "core/io/draco_checks.h"
-#include "core/weld.h"
 
 namespace meshsmooth {
 namespace {
@@ -262,7 +262,8 @@ absl::StatusOr<std::vector<float>> DecodeDracoAttribute(std::string_view bytes, 
   if (!dm.ok()) return dm.status();
   if (absl::StatusOr<Mesh> points = PointMesh(**dm); !points.ok()) return points.status();  // the coordinates
   const int id = NamedAttributeId(**dm, name);
-  if (id < 0) return absl::NotFoundError(absl::StrCat("the Draco mesh has no attribute named '", std::string(name), "'"));
+  if (id < 0)
+    return absl::NotFoundError(absl::StrCat("the Draco mesh has no attribute named '", std::string(name), "'"));
   const draco::PointAttribute* a = (*dm)->attribute(id);
   const std::string what = absl::StrCat("attribute '", std::string(name), "'");
   if (absl::Status s = CheckNumericValues(*a, what); !s.ok()) return s;
@@ -271,7 +272,8 @@ absl::StatusOr<std::vector<float>> DecodeDracoAttribute(std::string_view bytes, 
   for (uint32_t p = 0; p < n; ++p) {
     const draco::AttributeValueIndex avi = a->mapped_index(draco::PointIndex(p));
     if (avi.value() >= a->size() || !a->ConvertValue<float>(avi, 1, &values[p])) {
-      return absl::InvalidArgumentError(absl::StrCat("corrupt Draco mesh: no '", std::string(name), "' value for point ", p));
+      return absl::InvalidArgumentError(
+          absl::StrCat("corrupt Draco mesh: no '", std::string(name), "' value for point ", p));
     }
   }
   return values;
@@ -280,8 +282,8 @@ absl::StatusOr<std::vector<float>> DecodeDracoAttribute(std::string_view bytes, 
 absl::StatusOr<std::string> DracoMesh::Encode(const Mesh& smoothed, const DracoOptions& options,
                                               const std::vector<GenericAttribute>& extra, const StopToken& stop) {
   if (static_cast<int64_t>(smoothed.positions.size()) != impl_->num_vertices) {
-    return absl::InvalidArgumentError(absl::StrCat("expected ", impl_->num_vertices,
-                                                   " positions, got ", smoothed.positions.size()));
+    return absl::InvalidArgumentError(
+        absl::StrCat("expected ", impl_->num_vertices, " positions, got ", smoothed.positions.size()));
   }
   if (absl::Status s = CheckEncodable(options); !s.ok()) return s;
   for (size_t v = 0; v < smoothed.positions.size(); ++v) {
@@ -294,8 +296,8 @@ absl::StatusOr<std::string> DracoMesh::Encode(const Mesh& smoothed, const DracoO
   for (const GenericAttribute& g : extra) {
     const size_t count = std::visit([](const auto& v) { return v.size(); }, g.values);
     if (count != smoothed.positions.size()) {
-      return absl::InvalidArgumentError(absl::StrCat("attribute '", g.name, "' has ", count, " values for ",
-                                                     smoothed.positions.size(), " vertices"));
+      return absl::InvalidArgumentError(
+          absl::StrCat("attribute '", g.name, "' has ", count, " values for ", smoothed.positions.size(), " vertices"));
     }
     for (int id = NamedAttributeId(dm, g.name); id >= 0; id = NamedAttributeId(dm, g.name)) dm.DeleteAttribute(id);
     const bool bytes = std::holds_alternative<std::vector<uint8_t>>(g.values);

@@ -125,8 +125,7 @@ class DracoMesh {
   // output of a mesh spanning less than kMinQuantizedExtent; Cancelled or
   // DeadlineExceeded when `stop` has fired before Draco's encoder starts.
   absl::StatusOr<std::string> Encode(const Mesh& smoothed, const DracoOptions& options = {},
-                                     const std::vector<GenericAttribute>& extra = {},
-                                     const StopToken& stop = {});
+                                     const std::vector<GenericAttribute>& extra = {}, const StopToken& stop = {});
 
  private:
   struct Impl;

@@ -77,9 +77,7 @@ inline bool ParseInt(std::string_view tok, int64_t& out) {
 
 // Maps a parsed index to int32, sending anything unrepresentable to -1 (out of range: the
 // validation report counts the face and the topology leaves it out).
-inline int32_t ClampIndex(int64_t i) {
-  return (i < 0 || i > INT32_MAX) ? -1 : static_cast<int32_t>(i);
-}
+inline int32_t ClampIndex(int64_t i) { return (i < 0 || i > INT32_MAX) ? -1 : static_cast<int32_t>(i); }
 
 // Shortest decimal text that reads back to the same double.
 inline void AppendDouble(std::string& out, double v) {

@@ -27,11 +27,16 @@ absl::StatusOr<Mesh> ParseMesh(std::string_view data, MeshFormat format, ReadInf
   ReadInfo& i = info != nullptr ? *info : local;
   i = ReadInfo{};
   switch (format) {
-    case MeshFormat::kObj: return io::ParseObj(data, i);
-    case MeshFormat::kPly: return io::ParsePly(data, i);
-    case MeshFormat::kOff: return io::ParseOff(data, i);
-    case MeshFormat::kStl: return io::ParseStl(data, i);
-    case MeshFormat::kDraco: return DecodeDraco(data);
+    case MeshFormat::kObj:
+      return io::ParseObj(data, i);
+    case MeshFormat::kPly:
+      return io::ParsePly(data, i);
+    case MeshFormat::kOff:
+      return io::ParseOff(data, i);
+    case MeshFormat::kStl:
+      return io::ParseStl(data, i);
+    case MeshFormat::kDraco:
+      return DecodeDraco(data);
   }
   return absl::InvalidArgumentError("unknown mesh format");
 }
@@ -50,11 +55,16 @@ absl::StatusOr<Mesh> ReadMesh(const std::string& path, ReadInfo* info) {
 
 absl::StatusOr<std::string> SerializeMesh(const Mesh& mesh, MeshFormat format, const WriteOptions& options) {
   switch (format) {
-    case MeshFormat::kObj: return io::WriteObj(mesh);
-    case MeshFormat::kPly: return io::WritePly(mesh, options.ply_binary);
-    case MeshFormat::kOff: return io::WriteOff(mesh);
-    case MeshFormat::kStl: return io::WriteStl(mesh);
-    case MeshFormat::kDraco: return EncodeDraco(mesh, options.draco);
+    case MeshFormat::kObj:
+      return io::WriteObj(mesh);
+    case MeshFormat::kPly:
+      return io::WritePly(mesh, options.ply_binary);
+    case MeshFormat::kOff:
+      return io::WriteOff(mesh);
+    case MeshFormat::kStl:
+      return io::WriteStl(mesh);
+    case MeshFormat::kDraco:
+      return EncodeDraco(mesh, options.draco);
   }
   return absl::InvalidArgumentError("unknown mesh format");
 }

@@ -53,8 +53,7 @@ struct WriteOptions {
 
 // Serialises to bytes in `format`. InvalidArgument for PLY when the mesh has colours but not
 // one per vertex.
-absl::StatusOr<std::string> SerializeMesh(const Mesh& mesh, MeshFormat format,
-                                          const WriteOptions& options = {});
+absl::StatusOr<std::string> SerializeMesh(const Mesh& mesh, MeshFormat format, const WriteOptions& options = {});
 
 // Writes a file in the format its extension names.
 absl::Status WriteMesh(const std::string& path, const Mesh& mesh, const WriteOptions& options = {});

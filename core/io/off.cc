@@ -39,8 +39,8 @@ absl::StatusOr<Mesh> ParseOff(std::string_view data, ReadInfo& info) {
     rest = line;
   }
   int64_t nv = 0, nf = 0;
-  if (!ParseInt(NextToken(rest), nv) || !ParseInt(NextToken(rest), nf) || nv < 0 || nf < 0 ||
-      nv > INT32_MAX || nf > INT32_MAX) {
+  if (!ParseInt(NextToken(rest), nv) || !ParseInt(NextToken(rest), nf) || nv < 0 || nf < 0 || nv > INT32_MAX ||
+      nf > INT32_MAX) {
     return error("bad vertex and face counts");
   }
   Mesh mesh;

@@ -14,12 +14,10 @@ enum class PlyType { kI8, kU8, kI16, kU16, kI32, kU32, kF32, kF64 };
 
 bool TypeFromName(std::string_view name, PlyType& t) {
   static constexpr std::pair<std::string_view, PlyType> kNames[] = {
-      {"char", PlyType::kI8},    {"int8", PlyType::kI8},     {"uchar", PlyType::kU8},
-      {"uint8", PlyType::kU8},   {"short", PlyType::kI16},   {"int16", PlyType::kI16},
-      {"ushort", PlyType::kU16}, {"uint16", PlyType::kU16},  {"int", PlyType::kI32},
-      {"int32", PlyType::kI32},  {"uint", PlyType::kU32},    {"uint32", PlyType::kU32},
-      {"float", PlyType::kF32},  {"float32", PlyType::kF32}, {"double", PlyType::kF64},
-      {"float64", PlyType::kF64}};
+      {"char", PlyType::kI8},   {"int8", PlyType::kI8},     {"uchar", PlyType::kU8},   {"uint8", PlyType::kU8},
+      {"short", PlyType::kI16}, {"int16", PlyType::kI16},   {"ushort", PlyType::kU16}, {"uint16", PlyType::kU16},
+      {"int", PlyType::kI32},   {"int32", PlyType::kI32},   {"uint", PlyType::kU32},   {"uint32", PlyType::kU32},
+      {"float", PlyType::kF32}, {"float32", PlyType::kF32}, {"double", PlyType::kF64}, {"float64", PlyType::kF64}};
   for (const auto& [n, type] : kNames) {
     if (n == name) {
       t = type;
@@ -31,10 +29,18 @@ bool TypeFromName(std::string_view name, PlyType& t) {
 
 size_t TypeSize(PlyType t) {
   switch (t) {
-    case PlyType::kI8: case PlyType::kU8: return 1;
-    case PlyType::kI16: case PlyType::kU16: return 2;
-    case PlyType::kI32: case PlyType::kU32: case PlyType::kF32: return 4;
-    case PlyType::kF64: return 8;
+    case PlyType::kI8:
+    case PlyType::kU8:
+      return 1;
+    case PlyType::kI16:
+    case PlyType::kU16:
+      return 2;
+    case PlyType::kI32:
+    case PlyType::kU32:
+    case PlyType::kF32:
+      return 4;
+    case PlyType::kF64:
+      return 8;
   }
   return 1;
 }
@@ -80,14 +86,30 @@ class ValueReader {
       for (size_t i = 0; i < n / 2; ++i) std::swap(b[i], b[n - 1 - i]);
     }
     switch (t) {
-      case PlyType::kI8: out = static_cast<int8_t>(b[0]); break;
-      case PlyType::kU8: out = b[0]; break;
-      case PlyType::kI16: out = Load<int16_t>(b); break;
-      case PlyType::kU16: out = Load<uint16_t>(b); break;
-      case PlyType::kI32: out = Load<int32_t>(b); break;
-      case PlyType::kU32: out = Load<uint32_t>(b); break;
-      case PlyType::kF32: out = Load<float>(b); break;
-      case PlyType::kF64: out = Load<double>(b); break;
+      case PlyType::kI8:
+        out = static_cast<int8_t>(b[0]);
+        break;
+      case PlyType::kU8:
+        out = b[0];
+        break;
+      case PlyType::kI16:
+        out = Load<int16_t>(b);
+        break;
+      case PlyType::kU16:
+        out = Load<uint16_t>(b);
+        break;
+      case PlyType::kI32:
+        out = Load<int32_t>(b);
+        break;
+      case PlyType::kU32:
+        out = Load<uint32_t>(b);
+        break;
+      case PlyType::kF32:
+        out = Load<float>(b);
+        break;
+      case PlyType::kF64:
+        out = Load<double>(b);
+        break;
     }
     return true;
   }
@@ -135,10 +157,14 @@ absl::StatusOr<Mesh> ParsePly(std::string_view data, ReadInfo& info) {
     const std::string_view key = NextToken(rest);
     if (key == "format") {
       const std::string_view f = NextToken(rest);
-      if (f == "ascii") enc = Encoding::kAscii;
-      else if (f == "binary_little_endian") enc = Encoding::kLittle;
-      else if (f == "binary_big_endian") enc = Encoding::kBig;
-      else return error(absl::StrCat("unknown format '", Sv(f), "'"));
+      if (f == "ascii")
+        enc = Encoding::kAscii;
+      else if (f == "binary_little_endian")
+        enc = Encoding::kLittle;
+      else if (f == "binary_big_endian")
+        enc = Encoding::kBig;
+      else
+        return error(absl::StrCat("unknown format '", Sv(f), "'"));
       have_format = true;
     } else if (key == "element") {
       Element e;
@@ -147,8 +173,8 @@ absl::StatusOr<Mesh> ParsePly(std::string_view data, ReadInfo& info) {
         return error(absl::StrCat("bad count for element '", Sv(e.name), "'"));
       }
       // A second one would replace the positions and leave the first one's colours behind.
-      if (e.name == "vertex" && std::any_of(elements.begin(), elements.end(),
-                                            [](const Element& other) { return other.name == "vertex"; })) {
+      if (e.name == "vertex" &&
+          std::any_of(elements.begin(), elements.end(), [](const Element& other) { return other.name == "vertex"; })) {
         return error("more than one vertex element");
       }
       elements.push_back(e);
@@ -224,12 +250,18 @@ absl::StatusOr<Mesh> ParsePly(std::string_view data, ReadInfo& info) {
           if (is_vertex) {
             Vec3& pos = mesh.positions[r];
             const int i = static_cast<int>(pi);
-            if (i == ix) pos.x = value;
-            else if (i == iy) pos.y = value;
-            else if (i == iz) pos.z = value;
-            else if (i == ired) mesh.colors[r].r = ColorChannel(p.type, value);
-            else if (i == igreen) mesh.colors[r].g = ColorChannel(p.type, value);
-            else if (i == iblue) mesh.colors[r].b = ColorChannel(p.type, value);
+            if (i == ix)
+              pos.x = value;
+            else if (i == iy)
+              pos.y = value;
+            else if (i == iz)
+              pos.z = value;
+            else if (i == ired)
+              mesh.colors[r].r = ColorChannel(p.type, value);
+            else if (i == igreen)
+              mesh.colors[r].g = ColorChannel(p.type, value);
+            else if (i == iblue)
+              mesh.colors[r].b = ColorChannel(p.type, value);
           }
           continue;
         }
@@ -244,7 +276,8 @@ absl::StatusOr<Mesh> ParsePly(std::string_view data, ReadInfo& info) {
           corners.clear();
         }
         for (int64_t k = 0; k < count; ++k) {
-          if (!reader.Read(p.type, value)) return error(absl::StrCat("data ends inside element '", Sv(e.name), "' ", r));
+          if (!reader.Read(p.type, value))
+            return error(absl::StrCat("data ends inside element '", Sv(e.name), "' ", r));
           if (is_corners) {
             corners.push_back(std::isfinite(value) && value == std::floor(value)
                                   ? ClampIndex(static_cast<int64_t>(std::fmax(-1.0, std::fmin(value, 4e9))))
@@ -270,12 +303,11 @@ absl::StatusOr<std::string> WritePly(const Mesh& mesh, bool binary) {
     return absl::InvalidArgumentError(absl::StrCat("PLY: the mesh has ", mesh.colors.size(), " colours for ",
                                                    mesh.positions.size(), " vertices (want one per vertex or none)"));
   }
-  std::string out = absl::StrCat("ply\nformat ", binary ? "binary_little_endian" : "ascii",
-                                 " 1.0\ncomment written by meshsmooth\nelement vertex ", mesh.positions.size(),
-                                 "\nproperty float x\nproperty float y\nproperty float z\n",
-                                 with_colors ? "property uchar red\nproperty uchar green\nproperty uchar blue\n" : "",
-                                 "element face ", mesh.triangles.size(),
-                                 "\nproperty list uchar int vertex_indices\nend_header\n");
+  std::string out = absl::StrCat(
+      "ply\nformat ", binary ? "binary_little_endian" : "ascii", " 1.0\ncomment written by meshsmooth\nelement vertex ",
+      mesh.positions.size(), "\nproperty float x\nproperty float y\nproperty float z\n",
+      with_colors ? "property uchar red\nproperty uchar green\nproperty uchar blue\n" : "", "element face ",
+      mesh.triangles.size(), "\nproperty list uchar int vertex_indices\nend_header\n");
   if (binary) {
     static_assert(std::endian::native == std::endian::little, "binary PLY writer assumes little endian");
     out.reserve(out.size() + mesh.positions.size() * (with_colors ? 15 : 12) + mesh.triangles.size() * 13);

@@ -59,7 +59,8 @@ absl::StatusOr<Mesh> ParseStl(std::string_view data, ReadInfo& info) {
   }
   std::string_view rest = data;
   if (NextToken(rest) != "solid") {
-    return absl::InvalidArgumentError("STL: neither binary (size does not match the face count) nor ASCII (no 'solid')");
+    return absl::InvalidArgumentError(
+        "STL: neither binary (size does not match the face count) nor ASCII (no 'solid')");
   }
   int corner = 0;
   for (std::string_view tok = NextToken(rest); !tok.empty(); tok = NextToken(rest)) {
@@ -70,7 +71,8 @@ absl::StatusOr<Mesh> ParseStl(std::string_view data, ReadInfo& info) {
         return absl::InvalidArgumentError(absl::StrCat("STL: bad vertex in facet ", (corners.size() - corner) / 3));
       }
       if (corner == 3) {
-        return absl::InvalidArgumentError(absl::StrCat("STL: facet ", (corners.size() - corner) / 3, " has more than 3 vertices"));
+        return absl::InvalidArgumentError(
+            absl::StrCat("STL: facet ", (corners.size() - corner) / 3, " has more than 3 vertices"));
       }
       if (corner == 0) {
         if (absl::Status s = CheckFacetCount(static_cast<int64_t>(corners.size() / 3) + 1); !s.ok()) return s;
@@ -79,7 +81,8 @@ absl::StatusOr<Mesh> ParseStl(std::string_view data, ReadInfo& info) {
       ++corner;
     } else if (tok == "endloop") {
       if (corner != 3) {
-        return absl::InvalidArgumentError(absl::StrCat("STL: facet ", (corners.size() - corner) / 3, " has ", corner, " vertices"));
+        return absl::InvalidArgumentError(
+            absl::StrCat("STL: facet ", (corners.size() - corner) / 3, " has ", corner, " vertices"));
       }
       corner = 0;
     }

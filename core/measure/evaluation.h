@@ -13,8 +13,8 @@
 #include <vector>
 
 #include "absl/status/statusor.h"
-#include "core/mesh.h"
 #include "core/measure/surface_distance.h"
+#include "core/mesh.h"
 #include "core/topology.h"
 
 namespace meshsmooth {
@@ -83,8 +83,8 @@ class GroundTruth {
   ValidationReport report_;
   Topology topo_;
   double h_ = 0.0, volume_ = 0.0;
-  double zero_cross_ = 0.0;  // |cross| below this: a zero-area face (twice the area threshold)
-  std::vector<Vec3> face_cross_;  // per topo_.faces entry: cross product of the clean face
+  double zero_cross_ = 0.0;          // |cross| below this: a zero-area face (twice the area threshold)
+  std::vector<Vec3> face_cross_;     // per topo_.faces entry: cross product of the clean face
   std::vector<uint8_t> face_class_;  // per topo_.faces entry: kSkipped, kPlain or kCrease
   int64_t measured_faces_ = 0, crease_faces_ = 0, folded_faces_ = 0, fine_detail_faces_ = 0;
   std::vector<uint8_t> folded_;  // per topo_.faces entry

@@ -34,7 +34,7 @@ Partial BlockReduce(int64_t n, const StopToken& stop, Fn&& fn, Merge&& merge) {
   if (omp_in_parallel()) {
     // At most kMetricTasks tasks: libgomp runs tasks beyond 64 per thread at once on the thread
     // that makes them, which then leaves nothing for a thread that comes free.
-#pragma omp taskloop num_tasks(std::min<int64_t>(blocks, kMetricTasks)) default(shared)
+#pragma omp taskloop num_tasks(std::min <int64_t>(blocks, kMetricTasks)) default(shared)
     for (int64_t b = 0; b < blocks; ++b) block(b);
   } else {
 #pragma omp parallel for schedule(static) if (blocks > 4)
@@ -188,8 +188,8 @@ absl::StatusOr<Displacement> CompareMeshes(const Mesh& before, const Mesh& after
 
 absl::StatusOr<Displacement> CompareMeshes(const std::vector<Vec3>& before, const Mesh& after) {
   if (before.size() != after.positions.size()) {
-    return absl::InvalidArgumentError(absl::StrCat("vertex counts differ: ", before.size(),
-                                                   " and ", after.positions.size()));
+    return absl::InvalidArgumentError(
+        absl::StrCat("vertex counts differ: ", before.size(), " and ", after.positions.size()));
   }
   Displacement d;
   double sq = 0.0;

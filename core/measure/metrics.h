@@ -7,18 +7,18 @@
 
 #include "absl/status/statusor.h"
 #include "core/mesh.h"
-#include "core/util/stop_token.h"
 #include "core/topology.h"
+#include "core/util/stop_token.h"
 
 namespace meshsmooth {
 
 struct MeshMetrics {
-  double area = 0.0;            // sum of the usable faces' areas
-  double signed_volume = 0.0;   // sum of det(a-c, b-c, ...)/6 about the centroid c; > 0 outward
+  double area = 0.0;           // sum of the usable faces' areas
+  double signed_volume = 0.0;  // sum of det(a-c, b-c, ...)/6 about the centroid c; > 0 outward
   double edge_length_mean = 0.0;
-  double edge_length_cv = 0.0;  // standard deviation / mean over the unique edges
-  double min_angle_deg = 0.0;   // smallest triangle angle
-  double mean_angle_deg = 0.0;  // mean of the smallest angle of each face
+  double edge_length_cv = 0.0;            // standard deviation / mean over the unique edges
+  double min_angle_deg = 0.0;             // smallest triangle angle
+  double mean_angle_deg = 0.0;            // mean of the smallest angle of each face
   double share_angles_below_10deg = 0.0;  // of all triangle angles
 };
 
@@ -34,7 +34,7 @@ MeshMetrics ComputeMetricsBeside(const Mesh& mesh, const Topology& topo, const s
                                  int threads = 0, const StopToken& stop = {});
 
 struct Displacement {
-  double rms = 0.0;             // RMS of |after_i - before_i| over all vertices
+  double rms = 0.0;  // RMS of |after_i - before_i| over all vertices
   double max = 0.0;
   int64_t flipped_normals = 0;  // usable faces whose normal turned by more than 90 degrees
 };

@@ -45,7 +45,8 @@ constexpr int64_t kMinWellPosedPerTried = 4;  // one in four
 // The normalised residual r / sqrt(1 + g) of vertex v (header comment), or NaN when its fit is
 // not well posed (or v's second ring too large to gather: a fan's rim around a centre of huge
 // valence, skipped in bounded time).
-double NormalisedResidual(const Mesh& mesh, const Topology& topo, int32_t v, double inv_h, std::vector<int32_t>& ring2) {
+double NormalisedResidual(const Mesh& mesh, const Topology& topo, int32_t v, double inv_h,
+                          std::vector<int32_t>& ring2) {
   const Vec3* pos = mesh.positions.data();
   const Vec3 normal = RingNormal(topo, pos, v);
   const double len = Norm(normal);
@@ -108,7 +109,8 @@ double NormalisedResidual(const Mesh& mesh, const Topology& topo, int32_t v, dou
   if (ldlt.info() != Eigen::Success) return std::numeric_limits<double>::quiet_NaN();
   const auto d = ldlt.vectorD();
   const double largest = d.cwiseAbs().maxCoeff();
-  if (!(largest > 0.0) || !(d.minCoeff() > kMinRelativePivot * largest)) return std::numeric_limits<double>::quiet_NaN();
+  if (!(largest > 0.0) || !(d.minCoeff() > kMinRelativePivot * largest))
+    return std::numeric_limits<double>::quiet_NaN();
   const Col coef = ldlt.solve(atz);
   Col unit_f = Col::Zero();
   unit_f(0) = 1.0;

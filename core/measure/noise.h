@@ -17,13 +17,13 @@
 #include <cstdint>
 
 #include "core/mesh.h"
-#include "core/util/stop_token.h"
 #include "core/topology.h"
+#include "core/util/stop_token.h"
 
 namespace meshsmooth {
 
 struct NoiseEstimate {
-  double sigma = 0.0;   // in the mesh's units
+  double sigma = 0.0;    // in the mesh's units
   double sigma_h = 0.0;  // relative to the mean edge length h
   // The root mean square of the offsets, from the residuals within three robust scales of
   // zero: sigma_h for Gaussian noise, larger for noise whose distribution is more peaked (noise
@@ -39,8 +39,8 @@ struct NoiseEstimate {
 };
 
 // The estimate for `mesh`; zero and not reliable when too few vertices have a well-posed fit
-// (fewer than 14 second-ring neighbours, or a ring too degenerate for a cubic). `threads`: 0 = all hardware threads. Deterministic for
-// any thread count. Returns early (an estimate of zero) once `stop` fires.
+// (fewer than 14 second-ring neighbours, or a ring too degenerate for a cubic). `threads`: 0 = all hardware threads.
+// Deterministic for any thread count. Returns early (an estimate of zero) once `stop` fires.
 NoiseEstimate EstimateNoise(const Mesh& mesh, const Topology& topo, double h, int threads = 0,
                             const StopToken& stop = {});
 

@@ -59,7 +59,7 @@ class Rasterizer {
   void Draw(Corner c0, Corner c1, Corner c2) {
     int64_t area = (c1.x - c0.x) * (c2.y - c0.y) - (c1.y - c0.y) * (c2.x - c0.x);
     if (area == 0) return;  // edge-on or smaller than the snapping grid
-    if (area < 0) {  // two-sided: draw both windings with the same (positive) edge functions
+    if (area < 0) {         // two-sided: draw both windings with the same (positive) edge functions
       std::swap(c1, c2);
       area = -area;
     }
@@ -117,16 +117,17 @@ class Rasterizer {
 absl::Status ValidateOptions(const RenderOptions& o) {
   for (const auto& [name, side] : {std::pair{"width", o.width}, std::pair{"height", o.height}}) {
     if (side < kMinRenderSide || side > kMaxRenderSide) {
-      return absl::InvalidArgumentError(absl::StrCat("render ", name, " must be in [", kMinRenderSide, ", ",
-                                                     kMaxRenderSide, "] pixels, got ", side));
+      return absl::InvalidArgumentError(
+          absl::StrCat("render ", name, " must be in [", kMinRenderSide, ", ", kMaxRenderSide, "] pixels, got ", side));
     }
   }
   if (!(o.margin >= 0.0 && o.margin < 0.5)) {
     return absl::InvalidArgumentError(absl::StrCat("render margin must be in [0, 0.5), got ", o.margin));
   }
   if (!std::isfinite(o.view.azimuth_deg) || !(std::fabs(o.view.elevation_deg) <= 90.0)) {
-    return absl::InvalidArgumentError(absl::StrCat("the view needs a finite azimuth and an elevation in [-90, 90], got ",
-                                                   o.view.azimuth_deg, ",", o.view.elevation_deg));
+    return absl::InvalidArgumentError(
+        absl::StrCat("the view needs a finite azimuth and an elevation in [-90, 90], got ", o.view.azimuth_deg, ",",
+                     o.view.elevation_deg));
   }
   if (o.shading != Shading::kFlat && o.shading != Shading::kGouraud) {
     return absl::InvalidArgumentError("unknown shading");
@@ -138,8 +139,12 @@ absl::Status ValidateOptions(const RenderOptions& o) {
 
 absl::StatusOr<View> ParseView(std::string_view spec) {
   static constexpr std::pair<std::string_view, View> kNamed[] = {
-      {"front", {0, 0}},  {"back", {180, 0}}, {"left", {-90, 0}},
-      {"right", {90, 0}}, {"top", {0, 90}},   {"bottom", {0, -90}},
+      {"front", {0, 0}},
+      {"back", {180, 0}},
+      {"left", {-90, 0}},
+      {"right", {90, 0}},
+      {"top", {0, 90}},
+      {"bottom", {0, -90}},
       // Elevation atan(1 / sqrt(2)): the camera on the (1, 1, 1) diagonal.
       {"iso", {45, 35.264389682754654}},
   };

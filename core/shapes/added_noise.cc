@@ -49,5 +49,4 @@ void AddRandomDirectionNoise(Mesh& mesh, double sigma_fraction_of_mean_edge, uin
                    [](int32_t, SplitMix64& rng) { return rng.NextDirection(); });
 }
 
-
 }  // namespace meshsmooth

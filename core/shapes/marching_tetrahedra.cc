@@ -17,7 +17,8 @@ Mesh MarchingTetrahedra(const std::function<double(const Vec3&)>& f, const Vec3&
   Mesh m;
   std::unordered_map<int64_t, int32_t> edge_vertex;  // key: smaller node * nodes + larger node
   // The six tetrahedra of a cube with corners c = bits (x, y, z), all around the diagonal 0-7.
-  static constexpr int kTets[6][4] = {{0, 1, 3, 7}, {0, 3, 2, 7}, {0, 2, 6, 7}, {0, 6, 4, 7}, {0, 4, 5, 7}, {0, 5, 1, 7}};
+  static constexpr int kTets[6][4] = {{0, 1, 3, 7}, {0, 3, 2, 7}, {0, 2, 6, 7},
+                                      {0, 6, 4, 7}, {0, 4, 5, 7}, {0, 5, 1, 7}};
   // f on the grid, one x-slab pair at a time.
   std::vector<double> value(static_cast<size_t>(2) * ny * nz);
   auto fill = [&](int i, double* slab) {
@@ -68,7 +69,8 @@ Mesh MarchingTetrahedra(const std::function<double(const Vec3&)>& f, const Vec3&
             const Vec3 ma = mid(in[0], out[0]), mb = mid(in[0], out[1]), mc = mid(in[1], out[1]);
             const Vec3 outward = ps[out[0]] + ps[out[1]] - ps[in[0]] - ps[in[1]];
             if (Dot(Cross(mb - ma, mc - ma), outward) < 0.0) std::swap(out[0], out[1]);
-            const int32_t a = cut(in[0], out[0]), b = cut(in[0], out[1]), c = cut(in[1], out[1]), d = cut(in[1], out[0]);
+            const int32_t a = cut(in[0], out[0]), b = cut(in[0], out[1]), c = cut(in[1], out[1]),
+                          d = cut(in[1], out[0]);
             m.triangles.push_back({a, b, c});
             m.triangles.push_back({a, c, d});
           }

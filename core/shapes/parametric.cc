@@ -56,15 +56,14 @@ void AddOffsetRowStrips(Mesh& m, int rows, int columns, bool periodic, bool flip
 Mesh Icosphere(int level) {
   const double t = (1.0 + std::sqrt(5.0)) / 2.0;
   Mesh m;
-  for (const Vec3& v : {Vec3{-1, t, 0}, Vec3{1, t, 0}, Vec3{-1, -t, 0}, Vec3{1, -t, 0},
-                        Vec3{0, -1, t}, Vec3{0, 1, t}, Vec3{0, -1, -t}, Vec3{0, 1, -t},
-                        Vec3{t, 0, -1}, Vec3{t, 0, 1}, Vec3{-t, 0, -1}, Vec3{-t, 0, 1}}) {
+  for (const Vec3& v :
+       {Vec3{-1, t, 0}, Vec3{1, t, 0}, Vec3{-1, -t, 0}, Vec3{1, -t, 0}, Vec3{0, -1, t}, Vec3{0, 1, t}, Vec3{0, -1, -t},
+        Vec3{0, 1, -t}, Vec3{t, 0, -1}, Vec3{t, 0, 1}, Vec3{-t, 0, -1}, Vec3{-t, 0, 1}}) {
     m.positions.push_back(Normalized(v));
   }
-  m.triangles = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11},
-                 {1, 5, 9},  {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
-                 {3, 9, 4},  {3, 4, 2},  {3, 2, 6},   {3, 6, 8},  {3, 8, 9},
-                 {4, 9, 5},  {2, 4, 11}, {6, 2, 10},  {8, 6, 7},  {9, 8, 1}};
+  m.triangles = {{0, 11, 5},  {0, 5, 1},  {0, 1, 7},  {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+                 {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
+                 {3, 8, 9},   {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
   for (int l = 0; l < level; ++l) {
     std::map<std::pair<int32_t, int32_t>, int32_t> midpoints;
     auto mid = [&](int32_t a, int32_t b) {
@@ -218,7 +217,8 @@ Mesh HoleySphere(int level, int holes, double radius, uint64_t seed) {
   }
   std::vector<uint8_t> in_hole(sphere.positions.size(), 0);
   for (size_t v = 0; v < sphere.positions.size(); ++v) {
-    for (size_t h = 0; h < centre.size(); ++h) in_hole[v] |= SquaredNorm(sphere.positions[v] - centre[h]) < radius_sq[h];
+    for (size_t h = 0; h < centre.size(); ++h)
+      in_hole[v] |= SquaredNorm(sphere.positions[v] - centre[h]) < radius_sq[h];
   }
   Mesh m;
   std::vector<int32_t> index(sphere.positions.size(), -1);

@@ -32,7 +32,8 @@ void RadixSortBits(std::vector<uint64_t>& keys, int low_bit, int digit_bits, int
       uint32_t* h = &count[static_cast<size_t>(c) * buckets];
       const uint64_t* const in = keys.data();
       uint64_t* const out = tmp.data();
-      for (int64_t i = chunk_begin(c), end = chunk_begin(c + 1); i < end; ++i) out[h[(in[i] >> shift) & mask]++] = in[i];
+      for (int64_t i = chunk_begin(c), end = chunk_begin(c + 1); i < end; ++i)
+        out[h[(in[i] >> shift) & mask]++] = in[i];
     }
     keys.swap(tmp);
   }

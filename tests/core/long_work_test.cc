@@ -3,14 +3,14 @@
 #include <atomic>
 #include <chrono>
 
-#include "core/io/draco_codec.h"
 #include "core/features/ridges.h"
 #include "core/flows/flow.h"
+#include "core/io/draco_codec.h"
 #include "core/measure/metrics.h"
-#include "core/shapes/parametric.h"
 #include "core/shapes/added_noise.h"
-#include "core/util/stop_token.h"
+#include "core/shapes/parametric.h"
 #include "core/topology.h"
+#include "core/util/stop_token.h"
 #include "gtest/gtest.h"
 #include "tests/flow_fixtures.h"
 #include "tests/hostile_inputs.h"
@@ -90,7 +90,10 @@ TEST(LongWorkTest, FiredTokenStopsEveryLongStep) {
 
   EXPECT_GT(ComputeMetrics(mesh, full).area, 12.0);
   EXPECT_LT(ComputeMetrics(mesh, full, stop).area, 6.0);
-  EXPECT_LT(ComputeMetricsBeside(mesh, full, [] {}, 2, stop).area, 6.0);
+  EXPECT_LT(ComputeMetricsBeside(
+                mesh, full, [] {}, 2, stop)
+                .area,
+            6.0);
 
   EXPECT_EQ(DetectFeatures(mesh, full).classified, mesh.num_vertices());
   EXPECT_LT(DetectFeatures(mesh, full, {}, stop).classified, mesh.num_vertices() / 2);

@@ -128,9 +128,8 @@ TEST(LoadAndFaultTest, ThirtyTwoClientsMixValidAndHostileRequestsOnTwoWorkers) {
   // Valid jobs, every flow, lossless and quantized.
   for (size_t f = 0; f < FlowNames().size(); ++f) {
     const std::string flow(FlowNames()[f]);
-    cases.push_back({"valid " + flow, [&, flow, f](auto ch) {
-                       return ValidJob(ch, flow, 10, 100 + f, f % 2 == 0 ? 0 : 12, retries);
-                     }});
+    cases.push_back({"valid " + flow,
+                     [&, flow, f](auto ch) { return ValidJob(ch, flow, 10, 100 + f, f % 2 == 0 ? 0 : 12, retries); }});
   }
   // Hostile uploads and specs, each with its status.
   auto hostile = [&](const std::string& name, v1::JobSpec spec, const std::string* bytes, absl::StatusCode code,
@@ -155,8 +154,7 @@ TEST(LoadAndFaultTest, ThirtyTwoClientsMixValidAndHostileRequestsOnTwoWorkers) {
           "2 POSITION attributes");
   hostile("extreme coordinate", with_output(Spec("median", 3), 22, false), &in.extreme, kInvalid,
           "has a coordinate of 3.4e+38");
-  hostile("30-bit quantization", with_output(Spec("median", 3), 30, false), &in.sphere, kInvalid,
-          "quantization_bits");
+  hostile("30-bit quantization", with_output(Spec("median", 3), 30, false), &in.sphere, kInvalid, "quantization_bits");
   v1::JobSpec bad_enum = Spec("laplacian", 3);
   bad_enum.set_weights(static_cast<v1::UmbrellaWeights>(99));
   hostile("unknown enum", bad_enum, &in.sphere, kInvalid, "weights: unknown value 99");
@@ -167,9 +165,9 @@ TEST(LoadAndFaultTest, ThirtyTwoClientsMixValidAndHostileRequestsOnTwoWorkers) {
   diverging.set_step(10.0);
   hostile("diverging flow", diverging, &in.sphere, absl::StatusCode::kFailedPrecondition, "diverged");
   cases.push_back({"chunk above 1 MiB", [&](auto ch) {
-                     return Expect(RawCall(ch, {SpecMessage(Spec("median", 3)),
-                                                ChunkMessage(std::string((1 << 20) + 1, 'x'))}),
-                                   kExhausted, "per chunk");
+                     return Expect(
+                         RawCall(ch, {SpecMessage(Spec("median", 3)), ChunkMessage(std::string((1 << 20) + 1, 'x'))}),
+                         kExhausted, "per chunk");
                    }});
   cases.push_back({"upload above the limit", [&](auto ch) {
                      std::vector<v1::SmoothRequest> messages = {SpecMessage(Spec("median", 3))};
@@ -191,9 +189,9 @@ TEST(LoadAndFaultTest, ThirtyTwoClientsMixValidAndHostileRequestsOnTwoWorkers) {
                      auto stub = v1::MeshSmoother::NewStub(ch);
                      grpc::ClientContext ctx;
                      const absl::Status s =
-                         CallSmooth(*stub, ctx, Spec("median", 5000), in.long_job,
-                                    [&ctx](const v1::Progress&) { ctx.TryCancel(); })
-                             .status();
+                         CallSmooth(*stub, ctx, Spec("median", 5000), in.long_job, [&ctx](const v1::Progress&) {
+                           ctx.TryCancel();
+                         }).status();
                      return Expect(s, absl::StatusCode::kCancelled, "");
                    }});
   cases.push_back({"client deadline", [&](auto ch) {

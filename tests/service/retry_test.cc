@@ -19,9 +19,9 @@ TEST(RetryTest, OnlyCapacityAndAvailabilityBeforeAnyResult) {
   EXPECT_TRUE(Retryable(absl::ResourceExhaustedError("queue full"), fresh));
   EXPECT_TRUE(Retryable(absl::UnavailableError("cancelled after the grace"), accepted));
   EXPECT_FALSE(Retryable(absl::UnavailableError("went away mid-result"), streaming));
-  for (const absl::Status& s : {absl::InvalidArgumentError("x"), absl::DeadlineExceededError("x"),
-                                absl::CancelledError("x"), absl::FailedPreconditionError("x"),
-                                absl::UnauthenticatedError("x"), absl::InternalError("x")}) {
+  for (const absl::Status& s :
+       {absl::InvalidArgumentError("x"), absl::DeadlineExceededError("x"), absl::CancelledError("x"),
+        absl::FailedPreconditionError("x"), absl::UnauthenticatedError("x"), absl::InternalError("x")}) {
     EXPECT_FALSE(Retryable(s, fresh)) << s;
   }
 }
@@ -29,7 +29,7 @@ TEST(RetryTest, OnlyCapacityAndAvailabilityBeforeAnyResult) {
 TEST(RetryTest, BackoffIsJitteredBelowAnExponentialCap) {
   RetryPolicy p;  // 200 ms, x2, at most 5 s
   std::mt19937_64 rng(7);
-  const milliseconds caps[] = {milliseconds(200), milliseconds(400), milliseconds(800), milliseconds(1600),
+  const milliseconds caps[] = {milliseconds(200),  milliseconds(400),  milliseconds(800), milliseconds(1600),
                                milliseconds(3200), milliseconds(5000), milliseconds(5000)};
   for (int retry = 1; retry <= 7; ++retry) {
     milliseconds lo = milliseconds::max(), hi = milliseconds::zero();

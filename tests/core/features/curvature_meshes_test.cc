@@ -26,8 +26,8 @@
 #include "core/features/curvature.h"
 #include "core/features/ridges.h"
 #include "core/measure/metrics.h"
-#include "core/shapes/parametric.h"
 #include "core/shapes/marching_tetrahedra.h"
+#include "core/shapes/parametric.h"
 #include "core/topology.h"
 #include "gtest/gtest.h"
 
@@ -179,13 +179,14 @@ TEST(CurvatureMeshesTest, CosineSheetCrestsAndTroughsInEveryTriangulation) {
     }
     const LineScore crests = ScoreSheet(m, f, FeatureLabel::kRidge, 0.0);
     const LineScore troughs = ScoreSheet(m, f, FeatureLabel::kRavine, kPi);
-    std::printf("sheet, %s: %lld of %lld interior vertices valid; crests: %lld labelled, precision %.3f, recall %.3f "
-                "(%lld of %lld stretches); troughs: %lld labelled, precision %.3f, recall %.3f (%lld of %lld)\n",
-                c.name, static_cast<long long>(valid), static_cast<long long>(interior),
-                static_cast<long long>(crests.detected), crests.precision(), crests.recall(),
-                static_cast<long long>(crests.found), static_cast<long long>(crests.bins),
-                static_cast<long long>(troughs.detected), troughs.precision(), troughs.recall(),
-                static_cast<long long>(troughs.found), static_cast<long long>(troughs.bins));
+    std::printf(
+        "sheet, %s: %lld of %lld interior vertices valid; crests: %lld labelled, precision %.3f, recall %.3f "
+        "(%lld of %lld stretches); troughs: %lld labelled, precision %.3f, recall %.3f (%lld of %lld)\n",
+        c.name, static_cast<long long>(valid), static_cast<long long>(interior),
+        static_cast<long long>(crests.detected), crests.precision(), crests.recall(),
+        static_cast<long long>(crests.found), static_cast<long long>(crests.bins),
+        static_cast<long long>(troughs.detected), troughs.precision(), troughs.recall(),
+        static_cast<long long>(troughs.found), static_cast<long long>(troughs.bins));
     EXPECT_EQ(valid, interior) << c.name;
     EXPECT_GE(crests.precision(), 0.9) << c.name;
     EXPECT_GE(crests.recall(), 0.8) << c.name;
@@ -268,7 +269,8 @@ Mesh RandomTorus() {
   for (int i = 0; i < kU; ++i) {
     for (int j = 0; j < kV; ++j) {
       const double u = (i + jitter(rng)) * 2.0 * kPi / kU, v = (j + jitter(rng)) * 2.0 * kPi / kV;
-      m.positions.push_back({(R + r * std::cos(v)) * std::cos(u), (R + r * std::cos(v)) * std::sin(u), r * std::sin(v)});
+      m.positions.push_back(
+          {(R + r * std::cos(v)) * std::cos(u), (R + r * std::cos(v)) * std::sin(u), r * std::sin(v)});
     }
   }
   for (int i = 0; i < kU; ++i) {
@@ -296,9 +298,10 @@ std::pair<double, double> TorusCurvatures(const Vec3& p) {
 template <typename Truth>
 void ExpectAccurate(const char* name, const Mesh& m, Truth truth) {
   const ErrorStats s = CurvatureErrors(m, truth);
-  std::printf("%s through %d stratified random points: relative error median %.4f%%, 95th percentile %.4f%%, "
-              "%lld vertices without an estimate\n",
-              name, m.num_vertices(), 100.0 * s.median, 100.0 * s.p95, static_cast<long long>(s.unclassified));
+  std::printf(
+      "%s through %d stratified random points: relative error median %.4f%%, 95th percentile %.4f%%, "
+      "%lld vertices without an estimate\n",
+      name, m.num_vertices(), 100.0 * s.median, 100.0 * s.p95, static_cast<long long>(s.unclassified));
   EXPECT_LE(s.median, 0.05) << name;
   EXPECT_LE(s.p95, 0.15) << name;
   EXPECT_EQ(s.unclassified, 0) << name;
@@ -338,12 +341,13 @@ TEST(CurvatureMeshesTest, MarchingTetrahedraSphere) {
   const auto unit = [](const Vec3&) { return std::make_pair(1.0, 1.0); };
   const ErrorStats r = CurvatureErrors(raw, unit);
   const ErrorStats s = CurvatureErrors(on_sphere, unit);
-  std::printf("marching-tetrahedra sphere: %d vertices (%lld of valence 3 or 4), %lld zero-area faces; relative "
-              "error median %.4f%%, 95th percentile %.4f%%, %lld without an estimate; vertices on the sphere: "
-              "median %.4f%%, 95th percentile %.4f%%, %lld without an estimate\n",
-              raw.num_vertices(), static_cast<long long>(valence_3_or_4), static_cast<long long>(report.zero_area_faces),
-              100.0 * r.median, 100.0 * r.p95, static_cast<long long>(r.unclassified), 100.0 * s.median,
-              100.0 * s.p95, static_cast<long long>(s.unclassified));
+  std::printf(
+      "marching-tetrahedra sphere: %d vertices (%lld of valence 3 or 4), %lld zero-area faces; relative "
+      "error median %.4f%%, 95th percentile %.4f%%, %lld without an estimate; vertices on the sphere: "
+      "median %.4f%%, 95th percentile %.4f%%, %lld without an estimate\n",
+      raw.num_vertices(), static_cast<long long>(valence_3_or_4), static_cast<long long>(report.zero_area_faces),
+      100.0 * r.median, 100.0 * r.p95, static_cast<long long>(r.unclassified), 100.0 * s.median, 100.0 * s.p95,
+      static_cast<long long>(s.unclassified));
   EXPECT_GT(valence_3_or_4, 1000);
   EXPECT_EQ(r.unclassified, 0);
   EXPECT_EQ(s.unclassified, 0);

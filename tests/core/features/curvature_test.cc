@@ -38,9 +38,10 @@ TEST(CurvatureTest, SphereHasBothCurvaturesOneOverRadius) {
       max_ortho = std::max({max_ortho, std::abs(Norm(f.dir_max[v]) - 1.0), std::abs(Dot(f.dir_max[v], f.normal[v])),
                             std::abs(Dot(f.dir_min[v], f.dir_max[v])), std::abs(Norm(f.normal[v]) - 1.0)});
     }
-    std::printf("icosphere(5), r = %g: max relative error of kmax, kmin %.4f%%, of the mean curvature %.4f%%; "
-                "max normal angle %.4f deg\n",
-                r, 100.0 * max_rel, 100.0 * max_mean, max_angle);
+    std::printf(
+        "icosphere(5), r = %g: max relative error of kmax, kmin %.4f%%, of the mean curvature %.4f%%; "
+        "max normal angle %.4f deg\n",
+        r, 100.0 * max_rel, 100.0 * max_mean, max_angle);
     EXPECT_LT(max_rel, 0.03) << r;
     EXPECT_LT(max_mean, 0.01) << r;
     EXPECT_LT(max_angle, 1.0) << r;
@@ -74,11 +75,12 @@ TEST(CurvatureTest, CylinderHasOneOverRadiusAroundAndZeroAlong) {
     max_axial = std::max(max_axial, std::abs(f.dir_max[v].z));
     max_angle = std::max(max_angle, AngleDeg(f.normal[v], Vec3{m.positions[v].x, m.positions[v].y, 0.0}));
   }
-  std::printf("cylinder r = %g (%d x %d): max |kmax r - 1| %.2e%%, max |kmin| r %.4f%%, max |dir_max . axis| %.2e, "
-              "max normal angle %.4f deg over %d vertices\n",
-              r, around, along, 100.0 * max_rel, 100.0 * max_kmin, max_axial, max_angle, checked);
+  std::printf(
+      "cylinder r = %g (%d x %d): max |kmax r - 1| %.2e%%, max |kmin| r %.4f%%, max |dir_max . axis| %.2e, "
+      "max normal angle %.4f deg over %d vertices\n",
+      r, around, along, 100.0 * max_rel, 100.0 * max_kmin, max_axial, max_angle, checked);
   EXPECT_GT(checked, around * (along - 4) - 1);
-  EXPECT_LT(max_rel, 1e-3);  // measured ~0 (Taubin's closed form: 0.21%)
+  EXPECT_LT(max_rel, 1e-3);   // measured ~0 (Taubin's closed form: 0.21%)
   EXPECT_LT(max_kmin, 1e-3);  // measured 0.015% (Taubin's closed form: 0.20%)
   EXPECT_LT(max_axial, 1e-6);
   EXPECT_LT(max_angle, 1.0);
@@ -137,8 +139,8 @@ TEST(CurvatureTest, DegenerateInputGivesFiniteOutputAndInvalidVertices) {
   m.positions[bad].x = std::numeric_limits<double>::infinity();
   // Bow tie of two tetrahedra meeting at vertex `apex`.
   const int32_t base = m.num_vertices();
-  for (const Vec3& p : {Vec3{0, 0, 0}, Vec3{1, 0, 0}, Vec3{0, 1, 0}, Vec3{0, 0, 1}, Vec3{-1, 0, 0},
-                        Vec3{0, -1, 0}, Vec3{0, 0, -1}, Vec3{5, 5, 5}}) {
+  for (const Vec3& p : {Vec3{0, 0, 0}, Vec3{1, 0, 0}, Vec3{0, 1, 0}, Vec3{0, 0, 1}, Vec3{-1, 0, 0}, Vec3{0, -1, 0},
+                        Vec3{0, 0, -1}, Vec3{5, 5, 5}}) {
     m.positions.push_back(p + Vec3{4, 0, 0});
   }
   const int32_t apex = base;

@@ -8,8 +8,8 @@
 
 #include "core/flows/flow.h"
 #include "core/measure/metrics.h"
-#include "core/shapes/parametric.h"
 #include "core/shapes/added_noise.h"
+#include "core/shapes/parametric.h"
 #include "core/topology.h"
 #include "gtest/gtest.h"
 

@@ -23,7 +23,8 @@ TEST(AdaptiveTest, ThresholdAboveEverySpeedFreezesTheMesh) {
 // Eq. (14) with a constant T: the vertex moves by lambda (|F| - T) along F.
 TEST(AdaptiveTest, ConstantThresholdShortensTheSpeed) {
   Mesh m;
-  m.positions = {{0.1, 0.2, 0.3}, {1, 0, 0}, {0.5, 0.9, 0}, {-0.5, 0.8, 0.1}, {-1, 0, 0}, {-0.5, -0.9, 0}, {0.6, -0.8, -0.2}};
+  m.positions = {{0.1, 0.2, 0.3}, {1, 0, 0},       {0.5, 0.9, 0},    {-0.5, 0.8, 0.1},
+                 {-1, 0, 0},      {-0.5, -0.9, 0}, {0.6, -0.8, -0.2}};
   for (int k = 0; k < 6; ++k) m.triangles.push_back({0, 1 + k, 1 + (k + 1) % 6});
   const Vec3 u = Vec3{0.1 / 6.0, 0.0, -0.1 / 6.0} - m.positions[0];
   const double h = MeanEdgeLength(m, BuildTopology(m));

@@ -8,17 +8,17 @@
 #include <utility>
 #include <vector>
 
-#include "core/measure/evaluation.h"
 #include "core/flows/auto_stop.h"
 #include "core/flows/choice.h"
 #include "core/flows/flow.h"
 #include "core/flows/flow_kernel.h"
 #include "core/io/mesh_io.h"
+#include "core/measure/evaluation.h"
 #include "core/measure/metrics.h"
 #include "core/measure/noise.h"
-#include "core/shapes/parametric.h"
-#include "core/shapes/marching_tetrahedra.h"
 #include "core/shapes/added_noise.h"
+#include "core/shapes/marching_tetrahedra.h"
+#include "core/shapes/parametric.h"
 #include "core/topology.h"
 #include "gtest/gtest.h"
 #include "tests/flow_fixtures.h"
@@ -89,10 +89,11 @@ TEST(AutoStopTest, NoisySphereComesBackCloserWithItsVolume) {
     ASSERT_TRUE(r.ok()) << r.status();
     const absl::StatusOr<Quality> after = truth.Evaluate(m);
     ASSERT_TRUE(before.ok() && after.ok());
-    std::printf("sigma %.1f: %d iterations (%s), estimate %.3f h, moved %.3f h; RMS %.4f -> %.4f h, normal %.2f -> %.2f deg\n",
-                sigma, r->iterations_run, std::string(StopReasonName(r->stop_reason)).c_str(),
-                r->auto_stop->noise_sigma_h, r->auto_stop->displacement_h, before->rms_distance, after->rms_distance,
-                before->normal_error_deg, after->normal_error_deg);
+    std::printf(
+        "sigma %.1f: %d iterations (%s), estimate %.3f h, moved %.3f h; RMS %.4f -> %.4f h, normal %.2f -> %.2f deg\n",
+        sigma, r->iterations_run, std::string(StopReasonName(r->stop_reason)).c_str(), r->auto_stop->noise_sigma_h,
+        r->auto_stop->displacement_h, before->rms_distance, after->rms_distance, before->normal_error_deg,
+        after->normal_error_deg);
     // A sphere is what the bilaplacian flow with the volume kept converges to: the estimated
     // error keeps falling, and the run goes on to the cap or until it stops improving.
     EXPECT_LE(r->iterations_run, kMaxAutoIterations);
@@ -133,9 +134,10 @@ TEST(AutoStopTest, DefaultJobNeverFailsOnNeedles) {
 // distance and in normals, its volume kept, nothing non-finite.
 TEST(AutoStopTest, DefaultJobGeneralisesToIsoSurfacesAndHoleyMeshes) {
   std::vector<std::pair<std::string, Mesh>> meshes;
-  meshes.emplace_back("marching-tetrahedra torus",
-                      MarchingTetrahedra([](const Vec3& p) { return std::hypot(std::hypot(p.x, p.y) - 1.0, p.z) - 0.4; },
-                                         Vec3{-1.5, -1.5, -0.5}, Vec3{1.5, 1.5, 0.5}, 0.08));
+  meshes.emplace_back(
+      "marching-tetrahedra torus",
+      MarchingTetrahedra([](const Vec3& p) { return std::hypot(std::hypot(p.x, p.y) - 1.0, p.z) - 0.4; },
+                         Vec3{-1.5, -1.5, -0.5}, Vec3{1.5, 1.5, 0.5}, 0.08));
   meshes.emplace_back("sphere with 60 holes", HoleySphere(5, 60, 0.07, 7));
   for (const auto& [name, clean] : meshes) {
     const GroundTruth truth(clean);
@@ -210,10 +212,11 @@ TEST(AutoStopTest, FoldRepairUnfoldsNeedlesWithinItsReach) {
     longest = std::max(longest, Norm(repaired.positions[v] - folded.positions[v]));
   }
   const int64_t before = truth.Evaluate(folded)->flipped_faces, after = truth.Evaluate(repaired)->flipped_faces;
-  std::printf("%d needles folded: %lld flipped faces, after the repair %lld (%lld folded vertices left); longest "
-              "move %.3f h\n",
-              needles, static_cast<long long>(before), static_cast<long long>(after), static_cast<long long>(left),
-              longest / h);
+  std::printf(
+      "%d needles folded: %lld flipped faces, after the repair %lld (%lld folded vertices left); longest "
+      "move %.3f h\n",
+      needles, static_cast<long long>(before), static_cast<long long>(after), static_cast<long long>(left),
+      longest / h);
   EXPECT_GE(before, needles);
   EXPECT_EQ(after, 0);
   EXPECT_EQ(left, 0);
@@ -263,7 +266,8 @@ TEST(AutoStopTest, NoisyFandiskComesBackCloser) {
     EXPECT_EQ(m.positions, clean->positions);
   }
   NoisyRun run;
-  ASSERT_NO_FATAL_FAILURE(RunOnNoisySharedMesh("fandisk.obj", 0.2, testing::Params("bilaplacian", kAutoIterations), &run));
+  ASSERT_NO_FATAL_FAILURE(
+      RunOnNoisySharedMesh("fandisk.obj", 0.2, testing::Params("bilaplacian", kAutoIterations), &run));
   const Quality &before = run.before, &after = run.after;
   std::printf("fandisk sigma 0.2: %d iterations, RMS %.4f -> %.4f h, normal %.2f -> %.2f deg, volume %.2f%%\n",
               run.result.iterations_run, before.rms_distance, after.rms_distance, before.normal_error_deg,
@@ -318,8 +322,8 @@ TEST(AutoStopTest, LargeMeshChoosesOnItsPatches) {
   ASSERT_TRUE(r.ok()) << r.status();
   const absl::StatusOr<Quality> after = truth.Evaluate(m);
   ASSERT_TRUE(before.ok() && after.ok());
-  std::printf("torus of %d vertices, sigma 0.2: %s, %d iterations (%s), RMS %.4f -> %.4f h\n",
-              m.num_vertices(), std::string(FlowName(r->flow)).c_str(), r->iterations_run,
+  std::printf("torus of %d vertices, sigma 0.2: %s, %d iterations (%s), RMS %.4f -> %.4f h\n", m.num_vertices(),
+              std::string(FlowName(r->flow)).c_str(), r->iterations_run,
               std::string(StopReasonName(r->stop_reason)).c_str(), before->rms_distance, after->rms_distance);
   EXPECT_GT(r->iterations_run, 0);
   EXPECT_LT(after->rms_distance, 0.4 * before->rms_distance);

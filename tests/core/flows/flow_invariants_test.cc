@@ -200,7 +200,8 @@ TEST(FlowInvariantsTest, InstructionSetChangesNoPosition) {
       }
       unsetenv("MESHSMOOTH_VECTOR_ISA");
       EXPECT_FALSE(SameBytes(runs[0], c.mesh));
-      for (size_t i = 1; i < isas.size(); ++i) EXPECT_TRUE(SameBytes(runs[0], runs[i])) << "sse2 and " << isas[i].first << " differ";
+      for (size_t i = 1; i < isas.size(); ++i)
+        EXPECT_TRUE(SameBytes(runs[0], runs[i])) << "sse2 and " << isas[i].first << " differ";
     }
   }
 }
@@ -270,9 +271,9 @@ TEST(FlowInvariantsTest, LaneBatchesHoldEachBlocksFreeVerticesByValence) {
   const int32_t n = mesh.num_vertices();
   const std::vector<int32_t>& offsets = topo.ring_offsets;
   auto valence = [&](int32_t v) { return offsets[v + 1] - offsets[v]; };
-  std::vector<uint8_t> role(n, 1);  // flows::kFree
+  std::vector<uint8_t> role(n, 1);                  // flows::kFree
   for (int32_t v = 0; v < n; v += 11) role[v] = 0;  // flows::kFixed
-  constexpr int32_t kBlock = 4096;  // flows::kBlock
+  constexpr int32_t kBlock = 4096;                  // flows::kBlock
   for (const int width : {2, 4, 8}) {
     SCOPED_TRACE(width);
     const flows::LaneBatches lanes = flows::BuildLaneBatches(topo, role.data(), width, 2);
@@ -299,7 +300,7 @@ TEST(FlowInvariantsTest, LaneBatchesHoldEachBlocksFreeVerticesByValence) {
           const int32_t v = rows[l], begin = offsets[v], nv = valence(v);
           ASSERT_EQ(rows[width + l], nv);
           ASSERT_EQ(rows[2 * width + l], 3 * topo.ring[begin + nv - 1]);  // Q_{n-1}
-          for (int32_t k = 0; k < most; ++k) {  // Q_k, or P past the ring
+          for (int32_t k = 0; k < most; ++k) {                            // Q_k, or P past the ring
             ASSERT_EQ(rows[(k + 3) * width + l], 3 * (k < nv ? topo.ring[begin + k] : v));
           }
         }
@@ -320,7 +321,8 @@ TEST(FlowInvariantsTest, BoundaryCurveModeSmoothsTheLoopInItsPlane) {
   // Wiggle the boundary inside the plane.
   const Topology topo = BuildTopology(m);
   for (int32_t v = 0; v < m.num_vertices(); ++v) {
-    if (topo.kind[v] == VertexKind::kBoundary) m.positions[v] += Vec3{0.01 * ((v * 7) % 3 - 1), 0.01 * ((v * 5) % 3 - 1), 0.0};
+    if (topo.kind[v] == VertexKind::kBoundary)
+      m.positions[v] += Vec3{0.01 * ((v * 7) % 3 - 1), 0.01 * ((v * 5) % 3 - 1), 0.0};
   }
   for (const char* flow : {"laplacian", "median"}) {
     FlowParams p = Params(flow, 5);

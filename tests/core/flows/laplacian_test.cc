@@ -12,8 +12,8 @@ using namespace meshsmooth::testing;
 // An interior vertex P with an irregular hexagonal ring (ring vertices are boundary: fixed).
 Mesh HexFixture() {
   Mesh m;
-  m.positions = {{0.1, 0.2, 0.3},   {1, 0, 0},  {0.5, 0.9, 0},   {-0.5, 0.8, 0.1},
-                 {-1, 0, 0},        {-0.5, -0.9, 0}, {0.6, -0.8, -0.2}};
+  m.positions = {{0.1, 0.2, 0.3}, {1, 0, 0},       {0.5, 0.9, 0},    {-0.5, 0.8, 0.1},
+                 {-1, 0, 0},      {-0.5, -0.9, 0}, {0.6, -0.8, -0.2}};
   for (int k = 0; k < 6; ++k) m.triangles.push_back({0, 1 + k, 1 + (k + 1) % 6});
   return m;
 }

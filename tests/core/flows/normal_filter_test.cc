@@ -126,8 +126,8 @@ TEST(NormalFilterTest, NoisyCubeComesBackWithSharpEdgesAndCorners) {
         continue;
       }
       ++cube_edges;
-      const double err = std::abs(90.0 - AngleDeg(FaceNormal(out, out.triangles[faces[0]]),
-                                                   FaceNormal(out, out.triangles[faces[1]])));
+      const double err =
+          std::abs(90.0 - AngleDeg(FaceNormal(out, out.triangles[faces[0]]), FaceNormal(out, out.triangles[faces[1]])));
       worst = std::max(worst, err);
       noisy_worst = std::max(noisy_worst, std::abs(90.0 - AngleDeg(FaceNormal(noisy, noisy.triangles[faces[0]]),
                                                                    FaceNormal(noisy, noisy.triangles[faces[1]]))));

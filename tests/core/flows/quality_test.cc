@@ -2,9 +2,9 @@
 // the measures and the noise model give the figures their closed forms predict.
 #include <cmath>
 
-#include "core/measure/evaluation.h"
 #include "core/flows/flow.h"
 #include "core/io/mesh_io.h"
+#include "core/measure/evaluation.h"
 #include "core/shapes/added_noise.h"
 #include "gtest/gtest.h"
 #include "tests/test_data.h"

@@ -19,7 +19,8 @@ TEST(TaubinTest, MuFromPassBandAsInThePaper) {
 // One iteration = a lambda pass then a mu pass (each over the whole mesh).
 TEST(TaubinTest, OneIterationIsLambdaPassThenMuPass) {
   Mesh m;
-  m.positions = {{0.1, 0.2, 0.3}, {1, 0, 0}, {0.5, 0.9, 0}, {-0.5, 0.8, 0.1}, {-1, 0, 0}, {-0.5, -0.9, 0}, {0.6, -0.8, -0.2}};
+  m.positions = {{0.1, 0.2, 0.3}, {1, 0, 0},       {0.5, 0.9, 0},    {-0.5, 0.8, 0.1},
+                 {-1, 0, 0},      {-0.5, -0.9, 0}, {0.6, -0.8, -0.2}};
   for (int k = 0; k < 6; ++k) m.triangles.push_back({0, 1 + k, 1 + (k + 1) % 6});
   const Vec3 mean{0.1 / 6.0, 0.0, -0.1 / 6.0};  // the fixed ring's mean
   const Vec3 p1 = m.positions[0] + (mean - m.positions[0]) * 0.5;

@@ -312,8 +312,8 @@ TEST(HostileDracoTest, CountsTheDeclaredFacesCannotNeedAreRefusedBeforeTheirWork
       EXPECT_NE(got.status().message().find("80 faces"), std::string::npos) << got.status();
     }
   }
-  std::printf("%zu windows of a %zu-byte file, %d refused for a block above the limit\n", good.size() - 3,
-              good.size(), refused_blocks);
+  std::printf("%zu windows of a %zu-byte file, %d refused for a block above the limit\n", good.size() - 3, good.size(),
+              refused_blocks);
   EXPECT_GE(refused_blocks, 1);
 }
 
@@ -324,11 +324,11 @@ TEST(HostileDracoTest, EveryAcceptedEncodingKeepsTheWeldedVertices) {
   Mesh m = Icosphere(2);
   for (Vec3& p : m.positions) p = RoundToFloat(p);
   const int32_t n = m.num_vertices();
-  m.positions.push_back(m.positions[0]);             // a seam copy
-  m.triangles.push_back(m.triangles[3]);             // a duplicate face
+  m.positions.push_back(m.positions[0]);  // a seam copy
+  m.triangles.push_back(m.triangles[3]);  // a duplicate face
   m.positions.push_back({2, 2, 2});
   m.triangles.push_back({m.triangles[5][0], m.triangles[5][1], n + 1});  // a non-manifold edge
-  m.triangles.push_back({1, 1, 2});                  // a repeated index
+  m.triangles.push_back({1, 1, 2});                                      // a repeated index
   m.triangles.push_back({0, n, 7});
   absl::StatusOr<DracoMesh> dm = DracoMesh::Decode(*EncodeDraco(m));
   ASSERT_TRUE(dm.ok()) << dm.status();

@@ -1,17 +1,17 @@
 #include "core/io/mesh_io.h"
 
-#include <OpenMesh/Core/IO/MeshIO.hh>
-#include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
 #include <fcntl.h>
 #include <sys/mman.h>
 #include <unistd.h>
+#include <OpenMesh/Core/IO/MeshIO.hh>
+#include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
 
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 
-#include "core/shapes/parametric.h"
 #include "core/shapes/added_noise.h"
+#include "core/shapes/parametric.h"
 #include "core/topology.h"
 #include "gtest/gtest.h"
 #include "tests/test_data.h"
@@ -30,9 +30,9 @@ Mesh AwkwardMesh() {
     p = RoundToFloat({p.x * 1e-3, p.y * 1e5, p.z});
   }
   m.positions[3] = RoundToFloat({-0.0, 1.0 / 3.0, 7e-30});
-  m.positions.push_back({9, 9, 9});  // an unreferenced vertex at the end
-  m.triangles.push_back({5, 5, 6});  // repeated index: kept, not used by the topology
-  m.triangles.push_back({0, 11, 1}); // a third face on an existing edge (non-manifold)
+  m.positions.push_back({9, 9, 9});   // an unreferenced vertex at the end
+  m.triangles.push_back({5, 5, 6});   // repeated index: kept, not used by the topology
+  m.triangles.push_back({0, 11, 1});  // a third face on an existing edge (non-manifold)
   return m;
 }
 
@@ -151,7 +151,8 @@ TEST(IoTest, MalformedFilesGiveClearErrors) {
       {MeshFormat::kStl, "garbage", "neither binary"},
       {MeshFormat::kStl, "solid s\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nendloop\nendfacet\n",
        "facet 0 has 2 vertices"},
-      {MeshFormat::kStl, "solid s\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\n", "facet 0 has no 'endloop'"},
+      {MeshFormat::kStl, "solid s\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\n",
+       "facet 0 has no 'endloop'"},
       {MeshFormat::kDraco, "DRACO garbage", "Draco"},
   };
   for (const Case& c : cases) {
@@ -322,7 +323,8 @@ TEST(IoTest, DirtyMeshesAreReadIndexForIndex) {
     EXPECT_EQ(m->positions.size(), e.vertices);
     EXPECT_EQ(m->triangles.size(), e.faces);
     // Writing in the same format and reading back keeps every index and value.
-    const fs::path out = fs::path(::testing::TempDir()) / (std::string("dirty") + fs::path(e.file).extension().string());
+    const fs::path out =
+        fs::path(::testing::TempDir()) / (std::string("dirty") + fs::path(e.file).extension().string());
     ASSERT_TRUE(WriteMesh(out.string(), *m).ok());
     absl::StatusOr<Mesh> back = ReadMesh(out.string());
     ASSERT_TRUE(back.ok());

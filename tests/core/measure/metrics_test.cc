@@ -3,8 +3,8 @@
 #include <cmath>
 #include <numbers>
 
-#include "core/shapes/parametric.h"
 #include "core/shapes/added_noise.h"
+#include "core/shapes/parametric.h"
 #include "core/topology.h"
 #include "gtest/gtest.h"
 
@@ -58,10 +58,13 @@ TEST(MetricsTest, MetricsBesideOtherWorkKeepTheirBits) {
   for (int threads : {0, 1, 3}) {
     int ran = 0;
     double beside_sum = 0.0;
-    const MeshMetrics beside = ComputeMetricsBeside(m, topo, [&] {
-      ++ran;
-      for (const Vec3& p : m.positions) beside_sum += p.x;
-    }, threads);
+    const MeshMetrics beside = ComputeMetricsBeside(
+        m, topo,
+        [&] {
+          ++ran;
+          for (const Vec3& p : m.positions) beside_sum += p.x;
+        },
+        threads);
     EXPECT_EQ(ran, 1) << threads;
     EXPECT_NE(beside_sum, 0.0);
     EXPECT_EQ(beside.area, alone.area) << threads;

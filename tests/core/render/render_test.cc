@@ -21,13 +21,9 @@ namespace fs = std::filesystem;
 constexpr double kPi = std::numbers::pi;
 
 // The radius in pixels that Render() gives the framing sphere (its documented contract).
-double FramedRadiusPixels(const RenderOptions& o) {
-  return (1.0 - 2.0 * o.margin) * 0.5 * std::min(o.width, o.height);
-}
+double FramedRadiusPixels(const RenderOptions& o) { return (1.0 - 2.0 * o.margin) * 0.5 * std::min(o.width, o.height); }
 
-bool IsBackground(const Image& img, int x, int y, const RenderOptions& o) {
-  return img.pixel(x, y) == o.background;
-}
+bool IsBackground(const Image& img, int x, int y, const RenderOptions& o) { return img.pixel(x, y) == o.background; }
 
 int64_t CoveredPixels(const Image& img, const RenderOptions& o) {
   int64_t n = 0;
@@ -79,8 +75,8 @@ TEST(RenderTest, SphereCoversTheFramedDisc) {
         sy += y + 0.5;
       }
     }
-    std::printf("%dx%d view %s margin %g: %lld covered pixels, pi R^2 = %.0f (R = %.1f px), ratio %.4f\n",
-                c.width, c.height, c.view, c.margin, static_cast<long long>(covered), disc, r, covered / disc);
+    std::printf("%dx%d view %s margin %g: %lld covered pixels, pi R^2 = %.0f (R = %.1f px), ratio %.4f\n", c.width,
+                c.height, c.view, c.margin, static_cast<long long>(covered), disc, r, covered / disc);
     EXPECT_NEAR(covered / disc, 1.0, 0.03) << c.view;
     EXPECT_NEAR(sx / covered, 0.5 * c.width, 0.5) << c.view;
     EXPECT_NEAR(sy / covered, 0.5 * c.height, 0.5) << c.view;
@@ -140,8 +136,8 @@ TEST(RenderTest, VertexColoursShowWhereTheyAre) {
     }
   }
   const double segment = (std::acos(0.2) - 0.2 * std::sqrt(1 - 0.2 * 0.2)) * r * r;  // circle beyond x = 0.2 r
-  std::printf("red pixels %lld, disc segment beyond x = 0.2 R: %.0f (ratio %.3f)\n",
-              static_cast<long long>(red_pixels), segment, red_pixels / segment);
+  std::printf("red pixels %lld, disc segment beyond x = 0.2 R: %.0f (ratio %.3f)\n", static_cast<long long>(red_pixels),
+              segment, red_pixels / segment);
   EXPECT_EQ(misplaced, 0);
   EXPECT_NEAR(red_pixels / segment, 1.0, 0.08);
   // The grey side keeps its grey.
@@ -214,7 +210,7 @@ TEST(RenderTest, OpenMeshIsLitFromBothSides) {
 // The nearer of two overlapping squares wins whatever the face order.
 TEST(RenderTest, NearerSurfaceHidesFartherOne) {
   Mesh m;
-  m.positions = {{-1, -1, 1}, {1, -1, 1}, {1, 1, 1}, {-1, 1, 1},        // near (z = 1), red
+  m.positions = {{-1, -1, 1},  {1, -1, 1},  {1, 1, 1},  {-1, 1, 1},    // near (z = 1), red
                  {-1, -1, -1}, {1, -1, -1}, {1, 1, -1}, {-1, 1, -1}};  // far (z = -1), blue
   m.colors = {{255, 0, 0}, {255, 0, 0}, {255, 0, 0}, {255, 0, 0}, {0, 0, 255}, {0, 0, 255}, {0, 0, 255}, {0, 0, 255}};
   const std::vector<Triangle> near = {{0, 1, 2}, {0, 2, 3}}, far = {{4, 5, 6}, {4, 6, 7}};
@@ -240,8 +236,8 @@ TEST(RenderTest, ParseViewAcceptsNamesAndAngles) {
   EXPECT_EQ(*ParseView("30,20"), (View{30, 20}));
   EXPECT_EQ(*ParseView(" -45.5 , +10 "), (View{-45.5, 10}));
   EXPECT_EQ(*ParseView("400,-90"), (View{400, -90}));
-  for (const char* bad : {"", "sideways", "Front", "30", "30,", ",20", "30,95", "30,-90.5", "nan,0", "30,20,10",
-                          "inf,0", "30;20"}) {
+  for (const char* bad :
+       {"", "sideways", "Front", "30", "30,", ",20", "30,95", "30,-90.5", "nan,0", "30,20,10", "inf,0", "30;20"}) {
     absl::StatusOr<View> v = ParseView(bad);
     ASSERT_FALSE(v.ok()) << bad;
     EXPECT_EQ(v.status().code(), absl::StatusCode::kInvalidArgument);
