@@ -116,9 +116,9 @@ inline std::string EdgebreakerHead(bool v22, uint32_t vertices, uint32_t faces) 
   if (!v22) put(2);  // new vertices
   put(vertices);
   put(faces);
-  out += '\x01';     // attribute data
-  put(faces);        // symbols
-  put(0);            // split symbols
+  out += '\x01';  // attribute data
+  put(faces);     // symbols
+  put(0);         // split symbols
   return out + std::string(1300, '\x0b');
 }
 

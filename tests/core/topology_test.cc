@@ -253,9 +253,8 @@ TEST(TopologyTest, SharedMeshesMatchStatsJson) {
   ASSERT_TRUE(stats.ok()) << stats.status();
   const std::string& json = *stats;
   int checked = 0;
-  for (const char* file : {"stanford-bunny.ply", "bunny-small.obj", "max-planck.obj", "fandisk.obj",
-                           "camelhead.obj", "turbine.obj", "beetle.obj", "nefertiti.obj",
-                           "stanford-dragon.ply"}) {
+  for (const char* file : {"stanford-bunny.ply", "bunny-small.obj", "max-planck.obj", "fandisk.obj", "camelhead.obj",
+                           "turbine.obj", "beetle.obj", "nefertiti.obj", "stanford-dragon.ply"}) {
     SCOPED_TRACE(file);
     absl::StatusOr<Mesh> mesh = ReadMesh((dir / file).string());
     ASSERT_TRUE(mesh.ok()) << mesh.status();

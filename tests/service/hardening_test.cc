@@ -178,8 +178,8 @@ TEST(HardeningTest, SizesBeyondTheLimitsAreResourceExhausted) {
   auto channel = grpc::CreateChannel("127.0.0.1:" + std::to_string(server->port()), grpc::InsecureChannelCredentials());
   v1::SmoothRequest spec, chunk;
   *spec.mutable_spec() = Spec("median", 3);
-  for (int64_t size : {(int64_t{1} << 20) + 1, (int64_t{1} << 20) + (32 << 10), (int64_t{1} << 20) + (128 << 10),
-                       int64_t{3} << 20}) {
+  for (int64_t size :
+       {(int64_t{1} << 20) + 1, (int64_t{1} << 20) + (32 << 10), (int64_t{1} << 20) + (128 << 10), int64_t{3} << 20}) {
     chunk.set_mesh_chunk(std::string(static_cast<size_t>(size), 'x'));
     const grpc::Status g = RawCall(channel, {spec, chunk});
     EXPECT_EQ(g.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED) << size << ": " << g.error_message();

@@ -47,7 +47,7 @@ inline v1::JobSpec Spec(const std::string& flow, uint32_t iterations) {
 
 // One Smooth call with a 120 s deadline, in 256 KiB chunks.
 inline absl::StatusOr<SmoothOutcome> Call(std::shared_ptr<grpc::Channel> channel, const v1::JobSpec& spec,
-                                   const std::string& draco, const std::string& token = "") {
+                                          const std::string& draco, const std::string& token = "") {
   auto stub = v1::MeshSmoother::NewStub(channel);
   grpc::ClientContext ctx;
   ctx.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(120));

@@ -4,15 +4,15 @@
 #include <atomic>
 #include <cmath>
 #include <fstream>
-#include <limits>
 #include <future>
+#include <limits>
 #include <sstream>
 #include <thread>
 
 #include "client/smooth_client.h"
+#include "core/features/ridges.h"
 #include "core/io/draco_codec.h"
 #include "core/io/file_bytes.h"
-#include "core/features/ridges.h"
 #include "draco/compression/decode.h"
 #include "draco/mesh/mesh.h"
 #include "gtest/gtest.h"
@@ -39,7 +39,8 @@ TEST(ServiceTest, EveryFlowEqualsTheCoreBitForBit) {
   auto in_process = StartServer();
   auto tcp = StartServer({}, /*listen=*/true);
   ASSERT_TRUE(in_process && tcp);
-  auto tcp_channel = grpc::CreateChannel("127.0.0.1:" + std::to_string(tcp->port()), grpc::InsecureChannelCredentials());
+  auto tcp_channel =
+      grpc::CreateChannel("127.0.0.1:" + std::to_string(tcp->port()), grpc::InsecureChannelCredentials());
   for (const std::string& flow : FlowNames()) {
     SCOPED_TRACE(flow);
     Mesh expected = mesh;
@@ -102,7 +103,8 @@ TEST(ServiceTest, CancellingMidJobFreesTheWorker) {
   EXPECT_EQ(cancelled.code(), absl::StatusCode::kCancelled) << cancelled;
   // The only worker is free again: a small job starts at once.
   const auto t0 = std::chrono::steady_clock::now();
-  absl::StatusOr<SmoothOutcome> next = Call(server->InProcessChannel(), Spec("laplacian", 3), *EncodeDraco(Icosphere(2)));
+  absl::StatusOr<SmoothOutcome> next =
+      Call(server->InProcessChannel(), Spec("laplacian", 3), *EncodeDraco(Icosphere(2)));
   ASSERT_TRUE(next.ok()) << next.status();
   EXPECT_LT(next->summary.timings().queue_seconds(), 1.0);
   EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 5.0);
@@ -215,7 +217,8 @@ TEST(ServiceTest, DivergingFlowEndsWithAClearError) {
 // first step): the two below are all the service has; a new method fails the count until it is
 // checked here too.
 TEST(ServiceTest, BearerTokenIsRequiredWhenConfigured) {
-  ASSERT_EQ(v1::SmoothRequest::descriptor()->file()->FindServiceByName("MeshSmoother")->method_count(), 2) << "check the new method's authentication below";
+  ASSERT_EQ(v1::SmoothRequest::descriptor()->file()->FindServiceByName("MeshSmoother")->method_count(), 2)
+      << "check the new method's authentication below";
   ServerOptions o;
   o.auth_token = "s3cret-token";
   auto server = StartServer(o, /*listen=*/true);
@@ -732,8 +735,10 @@ TEST(ServiceTlsTest, TlsServerAcceptsTlsClientsOnly) {
   const std::filesystem::path dir = std::filesystem::path(::testing::TempDir()) / "meshsmooth_tls";
   std::filesystem::create_directories(dir);
   const std::string key = (dir / "key.pem").string(), cert = (dir / "cert.pem").string();
-  const std::string cmd = "openssl req -x509 -newkey rsa:2048 -nodes -subj /CN=localhost -addext "
-                          "subjectAltName=DNS:localhost -days 1 -keyout " + key + " -out " + cert + " >/dev/null 2>&1";
+  const std::string cmd =
+      "openssl req -x509 -newkey rsa:2048 -nodes -subj /CN=localhost -addext "
+      "subjectAltName=DNS:localhost -days 1 -keyout " +
+      key + " -out " + cert + " >/dev/null 2>&1";
   if (std::system(cmd.c_str()) != 0) GTEST_SKIP() << "openssl CLI not available";
   ServerOptions o;
   o.tls_cert_file = cert;

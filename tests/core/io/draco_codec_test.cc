@@ -3,11 +3,11 @@
 #include <cmath>
 
 #include "core/io/file_bytes.h"
-#include "core/shapes/parametric.h"
 #include "core/shapes/added_noise.h"
+#include "core/shapes/parametric.h"
+#include "core/topology.h"
 #include "draco/compression/encode.h"
 #include "draco/mesh/mesh.h"
-#include "core/topology.h"
 #include "gtest/gtest.h"
 #include "tests/test_data.h"
 
@@ -153,8 +153,8 @@ TEST(DracoCodecTest, ExtentTooSmallToQuantizeIsRefused) {
       Mesh tiny = Icosphere(1);
       for (Vec3& p : tiny.positions) p = RoundToFloat(p * 1e-38);
       const absl::StatusOr<std::string> refused = EncodeDraco(tiny, {bits, method});
-      ASSERT_FALSE(refused.ok()) << bits << " bits: decodes to " << DecodeDraco(*refused)->positions[0].x
-                                 << " for " << tiny.positions[0].x;
+      ASSERT_FALSE(refused.ok()) << bits << " bits: decodes to " << DecodeDraco(*refused)->positions[0].x << " for "
+                                 << tiny.positions[0].x;
       EXPECT_EQ(refused.status().code(), absl::StatusCode::kInvalidArgument);
       EXPECT_NE(refused.status().message().find("too small to quantize"), std::string::npos) << refused.status();
       EXPECT_TRUE(EncodeDraco(tiny, {0, method}).ok()) << "lossless output has no grid";

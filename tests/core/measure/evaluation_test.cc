@@ -5,9 +5,9 @@
 #include <numbers>
 
 #include "core/measure/metrics.h"
-#include "core/shapes/parametric.h"
-#include "core/shapes/added_noise.h"
 #include "core/measure/surface_distance.h"
+#include "core/shapes/added_noise.h"
+#include "core/shapes/parametric.h"
 #include "core/topology.h"
 #include "gtest/gtest.h"
 
@@ -53,10 +53,10 @@ TEST(ClosestPointTest, AboveTheInterior) {
 
 TEST(ClosestPointTest, BeyondEachEdge) {
   const Vec3 a{0, 0, 0}, b{1, 0, 0}, c{0, 1, 0};
-  ExpectVecNear(ClosestPointOnTriangle({0.4, -1.0, 1.0}, a, b, c), {0.4, 0.0, 0.0}, 1e-15);   // ab
-  ExpectVecNear(ClosestPointOnTriangle({-2.0, 0.7, 0.5}, a, b, c), {0.0, 0.7, 0.0}, 1e-15);   // ca
-  ExpectVecNear(ClosestPointOnTriangle({1.0, 1.0, 3.0}, a, b, c), {0.5, 0.5, 0.0}, 1e-15);    // bc
-  ExpectVecNear(ClosestPointOnTriangle({0.9, 0.3, -1.0}, a, b, c), {0.8, 0.2, 0.0}, 1e-15);   // bc
+  ExpectVecNear(ClosestPointOnTriangle({0.4, -1.0, 1.0}, a, b, c), {0.4, 0.0, 0.0}, 1e-15);  // ab
+  ExpectVecNear(ClosestPointOnTriangle({-2.0, 0.7, 0.5}, a, b, c), {0.0, 0.7, 0.0}, 1e-15);  // ca
+  ExpectVecNear(ClosestPointOnTriangle({1.0, 1.0, 3.0}, a, b, c), {0.5, 0.5, 0.0}, 1e-15);   // bc
+  ExpectVecNear(ClosestPointOnTriangle({0.9, 0.3, -1.0}, a, b, c), {0.8, 0.2, 0.0}, 1e-15);  // bc
 }
 
 TEST(ClosestPointTest, BeyondEachCorner) {
@@ -154,7 +154,7 @@ TEST(EvaluationTest, SlidingAlongTheSurfaceIsNoDistance) {
   ASSERT_TRUE(q.ok()) << q.status();
   EXPECT_NEAR(q->max_distance, 0.0, 1e-14);
   EXPECT_GT(CompareMeshes(clean, slid)->max, 0.02);
-  EXPECT_EQ(q->normal_error_deg, 0.0);  // every face still faces +z
+  EXPECT_EQ(q->normal_error_deg, 0.0);                // every face still faces +z
   EXPECT_TRUE(std::isnan(q->volume_change_percent));  // open: no volume
 }
 

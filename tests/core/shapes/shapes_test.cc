@@ -1,6 +1,6 @@
-#include "core/shapes/parametric.h"
-#include "core/shapes/marching_tetrahedra.h"
 #include "core/shapes/added_noise.h"
+#include "core/shapes/marching_tetrahedra.h"
+#include "core/shapes/parametric.h"
 
 #include <algorithm>
 #include <cmath>
@@ -100,7 +100,8 @@ TEST(ShapesTest, CosineHeightFieldHasCrestsOnRowsAndUpwardFaces) {
     const Vec3& p = m.positions[v];
     ASSERT_NEAR(p.z, 0.5 * std::cos(p.x), 1e-15);
     const int row = v / columns;
-    const double on_line = row % rows_per_period == 0 ? 1.0 : (row % rows_per_period == rows_per_period / 2 ? -1.0 : 0.0);
+    const double on_line =
+        row % rows_per_period == 0 ? 1.0 : (row % rows_per_period == rows_per_period / 2 ? -1.0 : 0.0);
     if (on_line != 0.0) {
       ASSERT_NEAR(std::cos(p.x), on_line, 1e-12) << v;  // crest and trough rows
     }
@@ -133,7 +134,7 @@ TEST(ShapesTest, NoiseIsSeededAndBounded) {
     }
   }
   EXPECT_LE(max_dev, 0.3 * h);
-  EXPECT_GT(max_dev, 0.28 * h);  // the range is used, not a fraction of it
+  EXPECT_GT(max_dev, 0.28 * h);                                      // the range is used, not a fraction of it
   EXPECT_NEAR(sum / (3.0 * clean.positions.size()), 0.0, 0.02 * h);  // zero mean
 }
 
@@ -173,9 +174,8 @@ TEST(ShapesTest, HoleySphereHasOneLoopPerHole) {
   EXPECT_EQ(rep.euler_characteristic(), 2 - 60);  // a sphere with 60 disks taken out
   for (const Vec3& p : m.positions) ASSERT_NEAR(Norm(p), 1.0, 1e-15);
   EXPECT_LT(m.positions.size(), Icosphere(5).positions.size() * 95 / 100);  // the holes take area
-  EXPECT_EQ(HoleySphere(5, 60, 0.07, 7).positions, m.positions);          // seeded
+  EXPECT_EQ(HoleySphere(5, 60, 0.07, 7).positions, m.positions);            // seeded
 }
-
 
 TEST(Vec3Test, RoundToFloatRoundsEveryComponent) {
   std::vector<Vec3> v(8, Vec3{0.1, 0.2, 0.3});
