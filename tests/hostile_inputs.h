@@ -81,17 +81,23 @@ inline std::string TexturedEdgebreakerDraco(const Mesh& m) {
   return std::string(buf.data(), buf.size());
 }
 
-// Draco bytes of a point cloud of three points: Draco decodes it, but it has no faces.
-inline std::string DracoPointCloud() {
-  draco::PointCloud pc;
+// Three points (i, y, z), i = 0..2, as the only POSITION attribute of `pc`, a point cloud or a
+// draco::Mesh (which then has no faces).
+inline void PutThreePoints(draco::PointCloud& pc, float y, float z) {
   pc.set_num_points(3);
   draco::GeometryAttribute ga;
   ga.Init(draco::GeometryAttribute::POSITION, nullptr, 3, draco::DT_FLOAT32, false, 12, 0);
   const int att = pc.AddAttribute(ga, true, 3);
   for (int i = 0; i < 3; ++i) {
-    const float v[3] = {static_cast<float>(i), 1.0f, 2.0f};
+    const float v[3] = {static_cast<float>(i), y, z};
     pc.attribute(att)->SetAttributeValue(draco::AttributeValueIndex(i), v);
   }
+}
+
+// Draco bytes of a point cloud of three points: Draco decodes it, but it has no faces.
+inline std::string DracoPointCloud() {
+  draco::PointCloud pc;
+  PutThreePoints(pc, 1.0f, 2.0f);
   draco::Encoder enc;
   draco::EncoderBuffer buf;
   EXPECT_TRUE(enc.EncodePointCloudToBuffer(pc, &buf).ok());

@@ -11,6 +11,7 @@
 #include "core/shapes/parametric.h"
 #include "gtest/gtest.h"
 #include "tests/test_data.h"
+#include "tests/topology_checks.h"
 
 namespace meshsmooth {
 namespace {
@@ -66,9 +67,7 @@ TEST(TopologyTest, IcosphereIsClosedManifoldGenusZero) {
   const Mesh m = Icosphere(3);
   ValidationReport r;
   const Topology t = BuildTopology(m, &r);
-  EXPECT_TRUE(r.closed());
-  EXPECT_TRUE(r.manifold());
-  EXPECT_EQ(r.euler_characteristic(), 2);
+  EXPECT_TRUE(testing::IsClosedManifold(r, 2));
   EXPECT_EQ(r.connected_components, 1);
   for (int32_t v = 0; v < t.num_vertices(); ++v) {
     ASSERT_EQ(t.kind[v], VertexKind::kInterior);

@@ -24,11 +24,6 @@ namespace {
 
 using namespace meshsmooth::testing;
 
-void ExpectStatus(const absl::Status& s, absl::StatusCode code, const std::string& words) {
-  EXPECT_EQ(s.code(), code) << s;
-  EXPECT_NE(s.message().find(words), std::string::npos) << "expected '" << words << "' in: " << s;
-}
-
 v1::JobSpec Output(v1::JobSpec spec, uint32_t bits, bool edgebreaker) {
   spec.mutable_output()->set_quantization_bits(bits);
   spec.mutable_output()->set_edgebreaker(edgebreaker);
@@ -93,7 +88,7 @@ TEST(HardeningTest, HighValenceFanCompletesOrIsRefusedFast) {
     const auto t0 = std::chrono::steady_clock::now();
     const absl::Status s = Call(server->InProcessChannel(), spec, fan).status();
     ExpectStatus(s, absl::StatusCode::kResourceExhausted, "a vertex of valence 120000");
-    EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 2.0) << s;
+    EXPECT_LT(SecondsSince(t0), 2.0) << s;
   }
   // Both are fine on an ordinary mesh.
   EXPECT_TRUE(Call(server->InProcessChannel(), ring2, *EncodeDraco(Icosphere(3))).ok());
@@ -215,7 +210,7 @@ TEST(HardeningTest, IdleUploadsAreEndedAndFreeTheirSlots) {
     EXPECT_EQ(g.error_code(), grpc::StatusCode::DEADLINE_EXCEEDED) << g.error_message();
     EXPECT_NE(g.error_message().find("no message for 0.5 s"), std::string::npos) << g.error_message();
   }
-  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 10.0);
+  EXPECT_LT(SecondsSince(t0), 10.0);
   // The slots are free (once gRPC has let go of the ended calls, just after their status): a
   // real job goes through.
   absl::Status next = absl::ResourceExhaustedError("not tried");
@@ -270,23 +265,18 @@ TEST(HardeningTest, UploadsBeyondTheMemoryBudgetAreRefused) {
 
   // A queued job holds its upload until a worker takes it: the worker busy with a long job,
   // a queued 4 MiB upload leaves no room for a third.
-  LongJob long_job;
-  auto stub = v1::MeshSmoother::NewStub(channel);
-  grpc::ClientContext long_ctx;
-  auto running = long_job.Start(*stub, long_ctx);
+  RunningLongJob long_job(channel);
   OpenStream queued(channel, std::chrono::seconds(60));
   ASSERT_TRUE(queued.Write(SpecMessage(Spec("median", 3))));
   for (int i = 0; i < 3; ++i) ASSERT_TRUE(queued.Write(ChunkMessage(mib)));
   std::thread finisher([&] { EXPECT_EQ(queued.Finish().error_code(), grpc::StatusCode::INVALID_ARGUMENT); });
-  for (int i = 0; i < 500 && server->service().queued_jobs() < 1; ++i) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(10));
-  }
+  WaitForQueuedJobs(*server, 1);
   ASSERT_EQ(server->service().queued_jobs(), 1);
   EXPECT_EQ(server->service().buffered_bytes(), 4 << 20);
   const absl::Status third = Call(channel, Spec("median", 3), mib + mib).status();
   ExpectStatus(third, absl::StatusCode::kResourceExhausted, "memory budget");
-  long_ctx.TryCancel();
-  EXPECT_EQ(running.get().status().code(), absl::StatusCode::kCancelled);
+  long_job.ctx.TryCancel();
+  EXPECT_EQ(long_job.running.get().status().code(), absl::StatusCode::kCancelled);
   finisher.join();
   for (int i = 0; i < 200 && server->service().buffered_bytes() > 0; ++i) {
     std::this_thread::sleep_for(std::chrono::milliseconds(10));

@@ -7,6 +7,7 @@
 #include <future>
 #include <memory>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "client/smooth_client.h"
@@ -35,6 +36,24 @@ inline std::unique_ptr<server::Server> StartServer(server::ServerOptions o = {},
   absl::StatusOr<std::unique_ptr<server::Server>> s = server::Server::Start(o, listen);
   EXPECT_TRUE(s.ok()) << s.status();
   return s.ok() ? std::move(*s) : nullptr;
+}
+
+// Seconds on the steady clock from `t0` to now.
+inline double SecondsSince(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// Waits until `server` holds at least `n` queued jobs, or 30 s; the caller asserts the count.
+inline void WaitForQueuedJobs(server::Server& server, int n) {
+  for (int i = 0; i < 3000 && server.service().queued_jobs() < n; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+}
+
+// `s` has `code` and a message with `words` in it.
+inline void ExpectStatus(const absl::Status& s, absl::StatusCode code, const std::string& words) {
+  EXPECT_EQ(s.code(), code) << s;
+  EXPECT_NE(s.message().find(words), std::string::npos) << "expected '" << words << "' in: " << s;
 }
 
 // A spec for `flow` with `iterations`, everything else default.
@@ -125,6 +144,31 @@ struct LongJob {
     EXPECT_EQ(running.wait_for(std::chrono::seconds(60)), std::future_status::ready) << "the long job never started";
     return call;
   }
+};
+
+// A LongJob running on a worker of the server behind `channel` once constructed; `ctx` cancels
+// it and `running` is its outcome. The stub, spec and upload stay for the test's own calls.
+struct RunningLongJob : LongJob {
+  explicit RunningLongJob(std::shared_ptr<grpc::Channel> channel)
+      : stub(v1::MeshSmoother::NewStub(channel)), running(Start(*stub, ctx)) {}
+
+  std::unique_ptr<v1::MeshSmoother::Stub> stub;
+  grpc::ClientContext ctx;
+  std::future<absl::StatusOr<SmoothOutcome>> running;  // declared last: its call uses the members above
+};
+
+// A server with options `o` but one worker, which a LongJob keeps busy once constructed.
+struct BusyServer {
+  explicit BusyServer(server::ServerOptions o = {})
+      : server(StartServer(OneWorker(o))), long_job(server->InProcessChannel()) {}
+
+  static server::ServerOptions OneWorker(server::ServerOptions o) {
+    o.workers = 1;
+    return o;
+  }
+
+  std::unique_ptr<server::Server> server;
+  RunningLongJob long_job;  // after `server`: it runs there
 };
 
 }  // namespace meshsmooth::testing

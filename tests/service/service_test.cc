@@ -68,7 +68,7 @@ TEST(ServiceTest, ProgressIsThrottled) {
   const std::string draco = *EncodeDraco(FloatMesh(NoisySphere(3)));
   const auto t0 = std::chrono::steady_clock::now();
   absl::StatusOr<SmoothOutcome> out = Call(server->InProcessChannel(), Spec("taubin", 5000), draco);
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const double seconds = SecondsSince(t0);
   ASSERT_TRUE(out.ok()) << out.status();
   EXPECT_GE(out->progress_events, 1);
   EXPECT_LE(out->progress_events, 10.0 * seconds + 3.0) << seconds << " s";
@@ -91,48 +91,37 @@ TEST(ServiceTest, MeshAbove20MiBGoesThrough) {
 }
 
 TEST(ServiceTest, CancellingMidJobFreesTheWorker) {
-  ServerOptions o;
-  o.workers = 1;
-  auto server = StartServer(o);
-  LongJob long_job;
-  auto stub = v1::MeshSmoother::NewStub(server->InProcessChannel());
-  grpc::ClientContext ctx;
-  auto running = long_job.Start(*stub, ctx);
-  ctx.TryCancel();
-  const absl::Status cancelled = running.get().status();
+  BusyServer busy;
+  busy.long_job.ctx.TryCancel();
+  const absl::Status cancelled = busy.long_job.running.get().status();
   EXPECT_EQ(cancelled.code(), absl::StatusCode::kCancelled) << cancelled;
   // The only worker is free again: a small job starts at once.
   const auto t0 = std::chrono::steady_clock::now();
   absl::StatusOr<SmoothOutcome> next =
-      Call(server->InProcessChannel(), Spec("laplacian", 3), *EncodeDraco(Icosphere(2)));
+      Call(busy.server->InProcessChannel(), Spec("laplacian", 3), *EncodeDraco(Icosphere(2)));
   ASSERT_TRUE(next.ok()) << next.status();
   EXPECT_LT(next->summary.timings().queue_seconds(), 1.0);
-  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 5.0);
+  EXPECT_LT(SecondsSince(t0), 5.0);
 }
 
 TEST(ServiceTest, FullQueueIsRefusedAtOnce) {
   ServerOptions o;
-  o.workers = 1;
   o.queue_depth = 1;
-  auto server = StartServer(o);
-  LongJob long_job;
-  auto stub = v1::MeshSmoother::NewStub(server->InProcessChannel());
-  grpc::ClientContext a, b;
-  auto run_a = long_job.Start(*stub, a);
-  auto run_b = std::async(std::launch::async, [&] { return CallSmooth(*stub, b, long_job.spec, long_job.draco); });
+  BusyServer busy(o);
+  RunningLongJob& a = busy.long_job;
+  grpc::ClientContext b;
+  auto run_b = std::async(std::launch::async, [&] { return CallSmooth(*a.stub, b, a.spec, a.draco); });
   // B waits in the queue; C finds it full.
-  for (int i = 0; i < 600 && server->service().queued_jobs() < 1; ++i) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(50));
-  }
-  ASSERT_EQ(server->service().queued_jobs(), 1);
+  WaitForQueuedJobs(*busy.server, 1);
+  ASSERT_EQ(busy.server->service().queued_jobs(), 1);
   const auto t0 = std::chrono::steady_clock::now();
-  const absl::Status c = Call(server->InProcessChannel(), Spec("laplacian", 1), *EncodeDraco(Icosphere(1))).status();
-  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 2.0);  // at once
-  EXPECT_EQ(c.code(), absl::StatusCode::kResourceExhausted) << c;
-  EXPECT_NE(c.message().find("queue is full"), std::string::npos) << c;
-  a.TryCancel();
+  const absl::Status c =
+      Call(busy.server->InProcessChannel(), Spec("laplacian", 1), *EncodeDraco(Icosphere(1))).status();
+  EXPECT_LT(SecondsSince(t0), 2.0);  // at once
+  ExpectStatus(c, absl::StatusCode::kResourceExhausted, "queue is full");
+  a.ctx.TryCancel();
   b.TryCancel();
-  EXPECT_EQ(run_a.get().status().code(), absl::StatusCode::kCancelled);
+  EXPECT_EQ(a.running.get().status().code(), absl::StatusCode::kCancelled);
   EXPECT_EQ(run_b.get().status().code(), absl::StatusCode::kCancelled);
 }
 
@@ -183,8 +172,7 @@ TEST(ServiceTest, BadInputsAreRefusedWithClearMessages) {
   small.max_vertices = 1000;
   auto s2 = StartServer(small);
   const absl::Status too_big = Call(s2->InProcessChannel(), Spec("median", 3), *EncodeDraco(Icosphere(4))).status();
-  EXPECT_EQ(too_big.code(), absl::StatusCode::kResourceExhausted) << too_big;
-  EXPECT_NE(too_big.message().find("limit of 1000"), std::string::npos) << too_big;
+  ExpectStatus(too_big, absl::StatusCode::kResourceExhausted, "limit of 1000");
 
   // Raw streams the client library would never send: chunk first, two specs, empty request.
   auto raw = [&](const std::vector<v1::SmoothRequest>& msgs) { return RawCall(channel, msgs); };
@@ -209,8 +197,7 @@ TEST(ServiceTest, DivergingFlowEndsWithAClearError) {
   v1::JobSpec spec = Spec("mcf", 200);
   spec.set_step(10.0);
   const absl::Status s = Call(server->InProcessChannel(), spec, *EncodeDraco(FloatMesh(NoisySphere(3)))).status();
-  EXPECT_EQ(s.code(), absl::StatusCode::kFailedPrecondition) << s;
-  EXPECT_NE(s.message().find("diverged at iteration"), std::string::npos) << s;
+  ExpectStatus(s, absl::StatusCode::kFailedPrecondition, "diverged at iteration");
 }
 
 // Every method of the service authenticates (MeshSmootherService::Authenticate, each handler's
@@ -280,81 +267,61 @@ TEST(ServiceTest, SixteenConcurrentClientsAgainstTwoWorkers) {
 
 TEST(ServiceTest, GracefulShutdownLetsRunningJobsFinishThenCancels) {
   ServerOptions o;
-  o.workers = 1;
   o.grace_seconds = 0.5;
-  auto server = StartServer(o);
-  LongJob long_job;
-  auto stub = v1::MeshSmoother::NewStub(server->InProcessChannel());
-  grpc::ClientContext ctx;
-  auto running = long_job.Start(*stub, ctx);
+  BusyServer busy(o);
   const auto t0 = std::chrono::steady_clock::now();
-  server->Shutdown();
-  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 10.0);
-  const absl::Status s = running.get().status();
-  EXPECT_EQ(s.code(), absl::StatusCode::kUnavailable) << s;
-  EXPECT_NE(s.message().find("shut down"), std::string::npos) << s;
+  busy.server->Shutdown();
+  EXPECT_LT(SecondsSince(t0), 10.0);
+  ExpectStatus(busy.long_job.running.get().status(), absl::StatusCode::kUnavailable, "shut down");
 }
 
 // SIGTERM's order: a queued job ends at once with UNAVAILABLE (its client may send it to another
 // replica), the running one keeps the grace, then ends; Shutdown returns soon after the grace.
 TEST(ServiceTest, ShutdownEndsQueuedJobsAtOnceAndRunningOnesAfterTheGrace) {
   ServerOptions o;
-  o.workers = 1;
   o.grace_seconds = 1.0;
-  auto server = StartServer(o);
-  LongJob long_job;
-  auto stub = v1::MeshSmoother::NewStub(server->InProcessChannel());
-  grpc::ClientContext a, b;
-  auto running = long_job.Start(*stub, a);
+  BusyServer busy(o);
+  const RunningLongJob& long_job = busy.long_job;
+  grpc::ClientContext b;
   std::atomic<std::chrono::steady_clock::time_point> queued_ended{};
   auto queued = std::async(std::launch::async, [&] {
-    auto out = CallSmooth(*stub, b, long_job.spec, long_job.draco);
+    auto out = CallSmooth(*long_job.stub, b, long_job.spec, long_job.draco);
     queued_ended.store(std::chrono::steady_clock::now());
     return out;
   });
-  for (int i = 0; i < 600 && server->service().queued_jobs() < 1; ++i) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(10));
-  }
-  ASSERT_EQ(server->service().queued_jobs(), 1);
+  WaitForQueuedJobs(*busy.server, 1);
+  ASSERT_EQ(busy.server->service().queued_jobs(), 1);
   const auto t0 = std::chrono::steady_clock::now();
-  server->Shutdown();
-  const double shutdown_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  busy.server->Shutdown();
+  const double shutdown_seconds = SecondsSince(t0);
   const absl::Status q = queued.get().status();
   const double queued_seconds = std::chrono::duration<double>(queued_ended.load() - t0).count();
   std::printf("shutdown took %.3f s (grace 1 s); the queued job ended %.3f s after it began\n", shutdown_seconds,
               queued_seconds);
   EXPECT_GE(shutdown_seconds, 0.95);
   EXPECT_LT(shutdown_seconds, 2.0);
-  EXPECT_EQ(q.code(), absl::StatusCode::kUnavailable) << q;
-  EXPECT_NE(q.message().find("did not start"), std::string::npos) << q;
+  ExpectStatus(q, absl::StatusCode::kUnavailable, "did not start");
   EXPECT_LT(queued_seconds, 0.5);
-  const absl::Status r = running.get().status();
-  EXPECT_EQ(r.code(), absl::StatusCode::kUnavailable) << r;
-  EXPECT_NE(r.message().find("grace"), std::string::npos) << r;
+  ExpectStatus(busy.long_job.running.get().status(), absl::StatusCode::kUnavailable, "grace");
 }
 
 // --max-queue-wait: a job that finds no worker in time is refused with RESOURCE_EXHAUSTED (the
 // CLI retries it, elsewhere where it can) instead of waiting behind a long job.
 TEST(ServiceTest, JobsWaitingLongerThanMaxQueueWaitAreRefused) {
   ServerOptions o;
-  o.workers = 1;
   o.max_queue_wait_seconds = 0.3;
-  auto server = StartServer(o);
-  LongJob long_job;
-  auto stub = v1::MeshSmoother::NewStub(server->InProcessChannel());
-  grpc::ClientContext a;
-  auto running = long_job.Start(*stub, a);
+  BusyServer busy(o);
   const auto t0 = std::chrono::steady_clock::now();
-  const absl::Status w = Call(server->InProcessChannel(), Spec("laplacian", 1), *EncodeDraco(Icosphere(2))).status();
-  const double waited = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const absl::Status w =
+      Call(busy.server->InProcessChannel(), Spec("laplacian", 1), *EncodeDraco(Icosphere(2))).status();
+  const double waited = SecondsSince(t0);
   std::printf("refused after %.3f s (--max-queue-wait 0.3 s)\n", waited);
-  EXPECT_EQ(w.code(), absl::StatusCode::kResourceExhausted) << w;
-  EXPECT_NE(w.message().find("--max-queue-wait"), std::string::npos) << w;
+  ExpectStatus(w, absl::StatusCode::kResourceExhausted, "--max-queue-wait");
   EXPECT_GE(waited, 0.3);
   EXPECT_LT(waited, 1.5);
-  EXPECT_EQ(server->service().queued_jobs(), 0);  // the pool only holds a cancelled task, if any
-  a.TryCancel();
-  EXPECT_EQ(running.get().status().code(), absl::StatusCode::kCancelled);
+  EXPECT_EQ(busy.server->service().queued_jobs(), 0);  // the pool only holds a cancelled task, if any
+  busy.long_job.ctx.TryCancel();
+  EXPECT_EQ(busy.long_job.running.get().status().code(), absl::StatusCode::kCancelled);
 }
 
 // Draco's own bitstreams (0.9-2.2, Edgebreaker and sequential, attributes, non-manifold)
@@ -651,8 +618,7 @@ TEST(ServiceFeatureTest, BadMinAbsCurvatureIsRefused) {
                      std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity()}) {
     SCOPED_TRACE(bad);
     const absl::Status s = Call(server->InProcessChannel(), FeatureSpec(3, bad), draco).status();
-    EXPECT_EQ(s.code(), absl::StatusCode::kInvalidArgument) << s;
-    EXPECT_NE(s.message().find("features.min_abs_curvature"), std::string::npos) << s;
+    ExpectStatus(s, absl::StatusCode::kInvalidArgument, "features.min_abs_curvature");
   }
   // Valid thresholds (0 = none, positive) go through.
   for (double ok : {0.0, 2.5}) {
@@ -705,16 +671,11 @@ TEST(ServiceLimitsTest, ConcurrentCallsJobSecondsAndClientDeadline) {
   o.max_concurrent_streams = 1;
   o.max_job_seconds = 0.5;
   auto server = StartServer(o);
-  LongJob long_job;
-  auto stub = v1::MeshSmoother::NewStub(server->InProcessChannel());
-  grpc::ClientContext a;
-  auto run_a = long_job.Start(*stub, a);
+  RunningLongJob a(server->InProcessChannel());
   const absl::Status second = Call(server->InProcessChannel(), Spec("median", 2), *EncodeDraco(Icosphere(2))).status();
-  EXPECT_EQ(second.code(), absl::StatusCode::kResourceExhausted) << second;
-  EXPECT_NE(second.message().find("concurrent"), std::string::npos) << second;
-  const absl::Status timed_out = run_a.get().status();  // A runs into --max-job-seconds
-  EXPECT_EQ(timed_out.code(), absl::StatusCode::kDeadlineExceeded) << timed_out;
-  EXPECT_NE(timed_out.message().find("time limit"), std::string::npos) << timed_out;
+  ExpectStatus(second, absl::StatusCode::kResourceExhausted, "concurrent");
+  const absl::Status timed_out = a.running.get().status();  // A runs into --max-job-seconds
+  ExpectStatus(timed_out, absl::StatusCode::kDeadlineExceeded, "time limit");
 
   // The client's deadline cancels the job on the server, and the worker is free again.
   ServerOptions p;
@@ -723,7 +684,7 @@ TEST(ServiceLimitsTest, ConcurrentCallsJobSecondsAndClientDeadline) {
   auto stub2 = v1::MeshSmoother::NewStub(s2->InProcessChannel());
   grpc::ClientContext ctx;
   ctx.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(2));
-  const absl::Status late = CallSmooth(*stub2, ctx, long_job.spec, long_job.draco).status();
+  const absl::Status late = CallSmooth(*stub2, ctx, a.spec, a.draco).status();
   EXPECT_EQ(late.code(), absl::StatusCode::kDeadlineExceeded) << late;
   absl::StatusOr<SmoothOutcome> next = Call(s2->InProcessChannel(), Spec("laplacian", 3), *EncodeDraco(Icosphere(2)));
   ASSERT_TRUE(next.ok()) << next.status();
@@ -764,8 +725,7 @@ TEST(ServiceTlsTest, TlsServerAcceptsTlsClientsOnly) {
   half.tls_cert_file = cert;
   half.listen = "127.0.0.1:0";
   const absl::Status s = Server::Start(half).status();
-  EXPECT_EQ(s.code(), absl::StatusCode::kFailedPrecondition);
-  EXPECT_NE(s.message().find("--tls-key"), std::string::npos) << s;
+  ExpectStatus(s, absl::StatusCode::kFailedPrecondition, "--tls-key");
 }
 
 }  // namespace

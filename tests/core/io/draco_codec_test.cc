@@ -9,6 +9,7 @@
 #include "draco/compression/encode.h"
 #include "draco/mesh/mesh.h"
 #include "gtest/gtest.h"
+#include "tests/hostile_inputs.h"
 #include "tests/test_data.h"
 
 namespace meshsmooth {
@@ -107,14 +108,7 @@ TEST(DracoCodecTest, MeshWithoutFacesIsRefusedAsEmpty) {
   EXPECT_NE(enc.message().find("empty"), std::string::npos) << enc;
   // The same mesh encoded by Draco directly.
   draco::Mesh dm;
-  dm.set_num_points(3);
-  draco::GeometryAttribute ga;
-  ga.Init(draco::GeometryAttribute::POSITION, nullptr, 3, draco::DT_FLOAT32, false, 12, 0);
-  const int att = dm.AddAttribute(ga, true, 3);
-  for (int i = 0; i < 3; ++i) {
-    const float v[3] = {static_cast<float>(i), 0.0f, 0.0f};
-    dm.attribute(att)->SetAttributeValue(draco::AttributeValueIndex(i), v);
-  }
+  testing::PutThreePoints(dm, 0.0f, 0.0f);
   draco::Encoder encoder;
   encoder.SetEncodingMethod(draco::MESH_SEQUENTIAL_ENCODING);
   draco::EncoderBuffer buf;

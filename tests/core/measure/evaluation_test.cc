@@ -310,11 +310,25 @@ TEST(EvaluationTest, RefusesAnotherConnectivity) {
   EXPECT_EQ(truth.Evaluate(other).status().code(), absl::StatusCode::kInvalidArgument);
 }
 
+// What the noise tests measure: a 100 x 100 plane, its mean edge length h (the unit of the noise's
+// sigma), and a copy displaced by `add_noise` with `sigma` and `seed`.
+struct NoisyPlane {
+  Mesh clean;
+  double h;
+  Mesh noisy;
+};
+
+NoisyPlane MakeNoisyPlane(void (*add_noise)(Mesh&, double, uint64_t), double sigma, uint64_t seed) {
+  NoisyPlane p{TwoRatePlane(100, 100, 1.0), 0.0, {}};
+  p.h = MeanEdgeLength(p.clean, BuildTopology(p.clean));
+  p.noisy = p.clean;
+  add_noise(p.noisy, sigma, seed);
+  return p;
+}
+
 TEST(NoiseTest, NormalNoiseOnAPlaneIsGaussianAlongZ) {
-  const Mesh clean = TwoRatePlane(100, 100, 1.0);
-  const double sigma = 0.2, h = MeanEdgeLength(clean, BuildTopology(clean));
-  Mesh noisy = clean;
-  AddNormalNoise(noisy, sigma, 11);
+  const double sigma = 0.2;
+  const auto [clean, h, noisy] = MakeNoisyPlane(AddNormalNoise, sigma, 11);
   double sum = 0.0, sum2 = 0.0;
   int within_one_sigma = 0;
   for (int32_t v = 0; v < clean.num_vertices(); ++v) {
@@ -344,10 +358,8 @@ TEST(NoiseTest, NormalNoiseOnAPlaneIsGaussianAlongZ) {
 }
 
 TEST(NoiseTest, RandomDirectionNoiseHasAThirdOfItsVarianceAlongEachAxis) {
-  const Mesh clean = TwoRatePlane(100, 100, 1.0);
-  const double sigma = 0.2, h = MeanEdgeLength(clean, BuildTopology(clean));
-  Mesh noisy = clean;
-  AddRandomDirectionNoise(noisy, sigma, 3);
+  const double sigma = 0.2;
+  const auto [clean, h, noisy] = MakeNoisyPlane(AddRandomDirectionNoise, sigma, 3);
   double z2 = 0.0, d2 = 0.0;
   for (int32_t v = 0; v < clean.num_vertices(); ++v) {
     const Vec3 d = (noisy.positions[v] - clean.positions[v]) * (1.0 / (sigma * h));
