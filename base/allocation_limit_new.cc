@@ -19,6 +19,11 @@ void* Allocate(std::size_t n) {
 
 }  // namespace
 
+// Referenced by the link options of meshsmooth::base (base/CMakeLists.txt), so that the linker
+// takes this file out of the archive even where another library (a sanitizer's runtime, linked
+// first) already defines operator new: ours must be the one a program runs.
+extern "C" const int meshsmooth_operator_new_anchor = 1;
+
 // Plain and nothrow: a sanitizer's runtime replaces them all, so a nothrow new left to it would
 // be paired with our delete. The aligned forms stay the library's (its aligned new and aligned
 // delete pair with each other).
