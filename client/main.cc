@@ -208,7 +208,7 @@ void AddConnectionOptions(CLI::App* app, ConnectionOptions& c) {
 // Huge pages save a large input's page faults (the noisy dragon, 16.6 MB, one laplacian
 // iteration: 575 against 661 ms through the CLI) but the re-exec costs a second start of the
 // program (~20 ms: fandisk, 0.4 MB, 45 against 24 ms); they break even near 4 MB (nefertiti,
-// 3.6 MB: 89 against 87 ms). Medians of 5-15 runs, the 2-core EPYC VM.
+// 3.6 MB: 89 against 87 ms). Medians of 5-15 runs, a 2-core Intel Xeon VM (AVX-512).
 constexpr std::uintmax_t kHugePagesMinInputBytes = 4u << 20;
 
 bool HugePagesPay(const std::string& input) {
