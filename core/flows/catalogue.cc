@@ -33,8 +33,6 @@ FlowKind KindOf(FlowId id) { return FlowOf(id).kind; }
 
 double DefaultStep(FlowId id) { return FlowOf(id).default_step; }
 
-double MaxStep(FlowId id) { return FlowOf(id).max_step; }
-
 absl::StatusOr<FlowId> ParseFlowName(std::string_view name) {
   for (const FlowRow& row : FlowTable()) {
     if (row.name == name) return row.id;
@@ -50,14 +48,6 @@ const std::vector<std::string>& FlowNames() {
     return names;
   }();
   return *kNames;
-}
-
-std::vector<std::string> FlowNamesOfKind(FlowKind kind) {
-  std::vector<std::string> names;
-  for (const FlowRow& row : FlowTable()) {
-    if (row.kind == kind) names.emplace_back(row.name);
-  }
-  return names;
 }
 
 std::string ChoiceFlowNames() {

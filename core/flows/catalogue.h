@@ -88,19 +88,14 @@ std::string_view FlowName(FlowId id);
 // The flow's kind.
 FlowKind KindOf(FlowId id);
 
-// The flow's default step and the largest valid one (valid steps are (0, MaxStep]):
-// dimensionless, or relative to h^2 for FlowKind::kCurvature.
+// The flow's default step: dimensionless, or relative to h^2 for FlowKind::kCurvature.
 double DefaultStep(FlowId id);
-double MaxStep(FlowId id);
 
 // The flow called `name`, or InvalidArgument naming it and listing the flows.
 absl::StatusOr<FlowId> ParseFlowName(std::string_view name);
 
 // The flows' names, in FlowId order.
 const std::vector<std::string>& FlowNames();
-
-// The names of the flows of one kind, in FlowId order.
-std::vector<std::string> FlowNamesOfKind(FlowKind kind);
 
 // Every flow, in FlowId order, with its parameters (the step first).
 std::vector<FlowInfo> DescribeFlows();

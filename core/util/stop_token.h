@@ -19,26 +19,20 @@ class StopToken {
   // Fires once `*cancel` is true (null: never) or the clock reaches `deadline`.
   StopToken(const std::atomic<bool>* cancel, Clock::time_point deadline) : cancel_(cancel), deadline_(deadline) {}
 
+  // Each cause apart: a flow run ends on the first and returns its last iteration on the second.
+  bool Cancelled() const { return cancel_ != nullptr && cancel_->load(std::memory_order_relaxed); }
+  bool PastDeadline() const { return deadline_ != Clock::time_point::max() && Clock::now() >= deadline_; }
+
   // True once cancelled or past the deadline. Reads the clock: poll it every few thousand
   // items, not per item.
-  bool Fired() const {
-    return (cancel_ != nullptr && cancel_->load(std::memory_order_relaxed)) ||
-           (deadline_ != Clock::time_point::max() && Clock::now() >= deadline_);
-  }
+  bool Fired() const { return Cancelled() || PastDeadline(); }
 
   // Cancelled when cancelled, DeadlineExceeded past the deadline, else OK.
   absl::Status Check() const {
-    if (cancel_ != nullptr && cancel_->load(std::memory_order_relaxed)) return absl::CancelledError("cancelled");
-    if (deadline_ != Clock::time_point::max() && Clock::now() >= deadline_) {
-      return absl::DeadlineExceededError("past the deadline");
-    }
+    if (Cancelled()) return absl::CancelledError("cancelled");
+    if (PastDeadline()) return absl::DeadlineExceededError("past the deadline");
     return absl::OkStatus();
   }
-
-  // The two causes apart (a flow run ends on the first and returns its last iteration on the
-  // second).
-  bool Cancelled() const { return cancel_ != nullptr && cancel_->load(std::memory_order_relaxed); }
-  bool PastDeadline() const { return deadline_ != Clock::time_point::max() && Clock::now() >= deadline_; }
 
   Clock::time_point deadline() const { return deadline_; }
 
