@@ -10,9 +10,10 @@
 
 namespace meshsmooth::flows {
 
-AutoStop::AutoStop(const Mesh& mesh, const Topology& topo, const uint8_t* role, double h, int threads)
+AutoStop::AutoStop(const Mesh& mesh, const Topology& topo, const uint8_t* role, double h, int threads,
+                   const NoiseEstimate* given, const std::vector<uint8_t>* measured)
     : topo_(topo), role_(role), h_(h), threads_(threads), start_(mesh.positions) {
-  const NoiseEstimate noise = EstimateNoise(mesh, topo, h, threads);
+  const NoiseEstimate noise = given != nullptr ? *given : EstimateNoise(mesh, topo, h, threads);
   estimated_ = noise.reliable;
   const double floor2 = kEstimatorFloorH * kEstimatorFloorH;
   report_.noise_sigma_h = noise.sigma_h;
@@ -26,6 +27,7 @@ AutoStop::AutoStop(const Mesh& mesh, const Topology& topo, const uint8_t* role, 
   for (int32_t v = 0; v < n; ++v) {
     closed_ &= topo.kind[v] == VertexKind::kInterior || topo.kind[v] == VertexKind::kIsolated;
     if (role[v] != kFree || topo.kind[v] != VertexKind::kInterior) continue;
+    if (measured != nullptr && (*measured)[v] == 0) continue;
     const Vec3 normal = RingNormal(topo, start_.data(), v);
     const double len = Norm(normal);
     if (!(len > 0.0) || !std::isfinite(len)) continue;
@@ -184,7 +186,7 @@ double AutoStop::RmsNormalDisplacement(const Vec3* pos) const {
   ForBlocks(n, threads_, [&](int32_t b, int32_t begin, int32_t end) {
     double sum = 0.0;
     for (int32_t v = begin; v < end; ++v) {
-      if (v % stride_ != 0 || role_[v] != kFree || topo_.kind[v] != VertexKind::kInterior) continue;
+      if (v % stride_ != 0 || normal_[v] == Vec3{}) continue;  // the measured vertices
       const Vec3 normal = RingNormal(topo_, pos, v);
       const double len = Norm(normal);
       if (!(len > 0.0)) continue;

@@ -42,6 +42,7 @@
 #include <vector>
 
 #include "core/flows/flow.h"
+#include "core/measure/noise.h"
 
 namespace meshsmooth::flows {
 
@@ -86,9 +87,12 @@ inline constexpr double kFoldRepairReachH = 0.2;
 
 class AutoStop {
  public:
-  // Reads the noise of `mesh` (the run's input; its positions are copied as the reference).
-  // `role` is the run's vertex roles (core/flows/flow_kernel.h), one per vertex.
-  AutoStop(const Mesh& mesh, const Topology& topo, const uint8_t* role, double h, int threads);
+  // Reads the noise of `mesh` (the run's input; its positions are copied as the reference),
+  // or takes `noise` when it is not null. `role` is the run's vertex roles
+  // (core/flows/flow_kernel.h), one per vertex; `measured` (null: all) the vertices the
+  // estimate measures, among the free interior ones.
+  AutoStop(const Mesh& mesh, const Topology& topo, const uint8_t* role, double h, int threads,
+           const NoiseEstimate* noise, const std::vector<uint8_t>* measured);
 
   // True when the input has no noise to remove: the run does no iteration.
   bool nothing_to_do() const { return !estimated_ || report_.noise_to_remove_h < kNoNoiseH; }

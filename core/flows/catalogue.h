@@ -55,10 +55,10 @@ inline constexpr FlowId kDefaultFlow = FlowId::kBilaplacian;
 // The candidates of a job that chooses, by their estimated error: bilaplacian is the best on
 // scans, bilateral_normal on CAD parts and smooth shapes (docs/quality-method.md).
 inline constexpr FlowId kChoiceFlows[] = {FlowId::kBilaplacian, FlowId::kBilateralNormal};
-// Above this many vertices automatic stopping chooses the flow and the count on patches of the
-// mesh and runs the whole mesh once, at that count: the candidates and their probes would cost
-// several times the run itself.
-inline constexpr int32_t kMaxChoiceVertices = 100000;
+// Above this many vertices automatic iterations choose the flow and the count on patches of the
+// mesh and run the whole mesh once, at that count: the candidates and their probes on the whole
+// mesh would cost several times the run itself.
+inline constexpr int32_t kMaxChoiceVertices = 15000;
 
 // "bilaplacian and bilateral_normal": the candidates' names, for help texts.
 std::string ChoiceFlowNames();

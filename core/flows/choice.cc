@@ -1,41 +1,58 @@
 #include "core/flows/choice.h"
 
+#include <algorithm>
+#include <iterator>
 #include <optional>
 #include <utility>
 #include <vector>
 
-#include "core/measure/metrics.h"
+#include "absl/status/status.h"
+#include "core/measure/noise.h"
 
 namespace meshsmooth::flows {
+namespace {
 
-bool ChoosesFlow(const FlowParams& p) {
-  return !p.flow.has_value() && p.iterations == kAutoIterations && !p.step.has_value();
+// A sample holds one vertex in kSampleShare of the mesh's, at least kMinSample and at most
+// kMaxSample, in patches of at least kMinPatch vertices, at most kMaxPatches of them; the risk is
+// measured in the patches' cores, within kCorePercent of their radius (in rings) from the seed.
+// docs/decisions.md ("The default job chooses on a sample") has the figures behind them.
+constexpr int32_t kSampleShare = 16;
+constexpr int32_t kMinSample = 10000;
+constexpr int32_t kMaxSample = 20000;
+constexpr int32_t kMinPatch = 2500;
+constexpr int32_t kMaxPatches = 8;
+constexpr int32_t kCorePercent = 60;
+
+void Report(const RunControl& control, Phase phase, FlowId flow) {
+  if (!control.on_progress) return;
+  Progress progress;
+  progress.phase = phase;
+  progress.flow = flow;
+  control.on_progress(progress);
 }
 
-absl::StatusOr<FlowResult> SmoothChoosing(Mesh& mesh, const Topology& topo, const FlowParams& p,
-                                          const RunControl& control, double h) {
+// Every candidate (p.flow when set, else kChoiceFlows) on a copy of `mesh` with automatic
+// stopping; the least estimated error gives the result (the first candidate's estimate decides
+// whether there is anything to do). Progress: one kChoosing report per candidate.
+absl::StatusOr<FlowResult> Choose(Mesh& mesh, const Topology& topo, const FlowParams& p, const RunControl& control,
+                                  double h, const NoiseEstimate& noise,
+                                  const std::vector<uint8_t>* measured = nullptr) {
+  std::vector<FlowId> candidates(std::begin(kChoiceFlows), std::end(kChoiceFlows));
+  if (p.flow) candidates.assign(1, *p.flow);
+  RunControl quiet = control;
+  quiet.on_progress = nullptr;
   std::optional<FlowResult> best;
   std::vector<Vec3> best_positions;
-  // Progress counts the iterations of every candidate so far; the deadline is the whole
-  // choice's.
-  int done = 0;
-  RunControl each = control;
-  if (control.on_progress) {
-    each.on_progress = [&done, &control](const Progress& progress) {
-      Progress total = progress;
-      total.iteration += done;
-      control.on_progress(total);
-    };
-  }
-  for (FlowId flow : kChoiceFlows) {
+  for (FlowId flow : candidates) {
+    Report(control, Phase::kChoosing, flow);
     Mesh copy = mesh;
     FlowParams q = p;
     q.flow = flow;
-    absl::StatusOr<FlowResult> r = SmoothOneFlow(copy, topo, q, each, h, /*fixed_auto_iterations=*/0);
-    if (r.ok()) done += r->last.iteration;
+    absl::StatusOr<FlowResult> r = SmoothOneFlow(copy, topo, q, quiet, h, AutoPlan{0, &noise, measured});
     if (!r.ok()) {
-      // A candidate that diverges is not chosen; cancellation and the like end the job.
-      if (r.status().code() == absl::StatusCode::kFailedPrecondition) continue;
+      // A candidate that diverges is not chosen (unless it is the only one); cancellation and
+      // the like end the job.
+      if (r.status().code() == absl::StatusCode::kFailedPrecondition && candidates.size() > 1) continue;
       return r.status();
     }
     const bool idle = r->iterations_run == 0;
@@ -50,24 +67,31 @@ absl::StatusOr<FlowResult> SmoothChoosing(Mesh& mesh, const Topology& topo, cons
   return *std::move(best);
 }
 
-namespace {
+struct Sample {
+  Mesh mesh;
+  // Per sample vertex: in a patch's core (at most kCorePercent of the patch's radius, in rings,
+  // from its seed), where the patch's fixed rim hardly reaches.
+  std::vector<uint8_t> core;
+};
 
-// Up to kSampleVertices vertices of `mesh` in patches grown breadth-first from seeds spread
-// over the vertex order, and the faces among them: a sample of the surface on which automatic
-// stopping chooses for the whole mesh. The patches' rims are boundaries (fixed in the runs).
-Mesh SamplePatches(const Mesh& mesh, const Topology& topo) {
-  constexpr int kPatches = 8;
+// About `size` vertices of `mesh` in patches grown breadth-first from seeds spread over the
+// vertex order, and the faces among them. The patches' rims are boundaries (fixed in the runs).
+Sample SamplePatches(const Mesh& mesh, const Topology& topo, int32_t size) {
+  const int patches = std::clamp(size / kMinPatch, 1, kMaxPatches);
   const int32_t n = topo.num_vertices();
   std::vector<int32_t> index(n, -1);  // vertex -> sample vertex
-  Mesh sample;
-  std::vector<int32_t> queue;
-  for (int i = 0; i < kPatches; ++i) {
-    const auto budget = static_cast<size_t>(kSampleVertices) * (i + 1) / kPatches;
-    const int32_t seed = static_cast<int32_t>(static_cast<int64_t>(n) * i / kPatches);
+  Sample out;
+  Mesh& sample = out.mesh;
+  std::vector<int32_t> queue, depth;  // depth: per sample vertex, rings from its seed
+  for (int i = 0; i < patches; ++i) {
+    const auto budget = static_cast<size_t>(size) * (i + 1) / patches;
+    const int32_t seed = static_cast<int32_t>(static_cast<int64_t>(n) * i / patches);
     if (index[seed] >= 0 || topo.kind[seed] == VertexKind::kIsolated) continue;
     queue.assign(1, seed);
-    index[seed] = static_cast<int32_t>(sample.positions.size());
+    const size_t first = sample.positions.size();
+    index[seed] = static_cast<int32_t>(first);
     sample.positions.push_back(mesh.positions[seed]);
+    depth.push_back(0);
     for (size_t head = 0; head < queue.size() && sample.positions.size() < budget; ++head) {
       const int32_t v = queue[head];
       for (int32_t k = topo.ring_offsets[v]; k < topo.ring_offsets[v + 1] && sample.positions.size() < budget; ++k) {
@@ -75,9 +99,12 @@ Mesh SamplePatches(const Mesh& mesh, const Topology& topo) {
         if (index[w] >= 0) continue;
         index[w] = static_cast<int32_t>(sample.positions.size());
         sample.positions.push_back(mesh.positions[w]);
+        depth.push_back(depth[index[v]] + 1);
         queue.push_back(w);
       }
     }
+    const int32_t radius = depth.back();
+    for (size_t s = first; s < depth.size(); ++s) out.core.push_back(depth[s] * 100 <= radius * kCorePercent);
   }
   for (int32_t f : topo.faces) {
     const Triangle& t = mesh.triangles[f];
@@ -85,30 +112,48 @@ Mesh SamplePatches(const Mesh& mesh, const Topology& topo) {
       sample.triangles.push_back({index[t[0]], index[t[1]], index[t[2]]});
     }
   }
-  return sample;
+  return out;
 }
 
 }  // namespace
 
-absl::StatusOr<FlowResult> SmoothSampled(Mesh& mesh, const Topology& topo, const FlowParams& p,
-                                         const RunControl& control, double h) {
-  Mesh sample = SamplePatches(mesh, topo);
-  const Topology sample_topo = BuildTopology(sample);
-  RunControl quiet = control;
-  quiet.on_progress = nullptr;
+int32_t SampleSize(int32_t n) {
+  if (n <= kMaxChoiceVertices) return n;
+  return std::min(n, std::clamp(n / kSampleShare, kMinSample, kMaxSample));
+}
+
+bool ChoosesFlow(const FlowParams& p) {
+  return !p.flow.has_value() && p.iterations == kAutoIterations && !p.step.has_value();
+}
+
+absl::StatusOr<FlowResult> SmoothAutomatic(Mesh& mesh, const Topology& topo, const FlowParams& p,
+                                           const RunControl& control, double h) {
   FlowParams q = p;
-  q.locked.clear();  // the sample's vertices are not the mesh's
-  const bool choose = ChoosesFlow(p);
-  if (!choose) q.flow = p.flow.value_or(kDefaultFlow);
-  const double sample_h = MeanEdgeLength(sample, sample_topo);
-  absl::StatusOr<FlowResult> chosen = choose ? SmoothChoosing(sample, sample_topo, q, quiet, sample_h)
-                                             : SmoothOneFlow(sample, sample_topo, q, quiet, sample_h, 0);
+  if (!ChoosesFlow(p)) q.flow = p.flow.value_or(kDefaultFlow);
+  Report(control, Phase::kNoiseEstimate, q.flow.value_or(kDefaultFlow));
+  const int32_t n = mesh.num_vertices();
+  const NoiseEstimate noise = EstimateNoise(mesh, topo, h, ThreadsFor(n, p));
+  const int32_t size = SampleSize(n);
+  if (size >= n) return Choose(mesh, topo, q, control, h, noise);
+
+  Sample sample = SamplePatches(mesh, topo, size);
+  const Topology sample_topo = BuildTopology(sample.mesh);
+  FlowParams on_sample = q;
+  on_sample.locked.clear();                 // the sample's vertices are not the mesh's
+  on_sample.reorder = ReorderMode::kNever;  // `core` is in the sample's order
+  // The sample runs with the mesh's h (the step of a curvature flow scales with it): its count
+  // is then a count of the same iterations.
+  absl::StatusOr<FlowResult> chosen = Choose(sample.mesh, sample_topo, on_sample, control, h, noise, &sample.core);
   if (!chosen.ok()) return chosen.status();
-  FlowParams whole = p;
+  FlowParams whole = q;
   whole.flow = chosen->flow;
-  // An idle sample (no noise, or no estimate) leaves the decision to the whole mesh's own
-  // estimate and stopping (nothing to do on a clean mesh: as cheap as the sample).
-  absl::StatusOr<FlowResult> result = SmoothOneFlow(mesh, topo, whole, control, h, chosen->iterations_run);
+  if (chosen->iterations_run == 0) {
+    // An idle sample (no noise, or no estimate on it) leaves the decision to the whole mesh's
+    // own estimate and stopping (nothing to do on a clean mesh: as cheap as the sample).
+    return Choose(mesh, topo, whole, control, h, noise);
+  }
+  absl::StatusOr<FlowResult> result =
+      SmoothOneFlow(mesh, topo, whole, control, h, AutoPlan{chosen->iterations_run, &noise});
   if (result.ok() && result->iterations_run > 0) {
     result->stop_reason = chosen->stop_reason;
     if (result->auto_stop && chosen->auto_stop) result->auto_stop->risk_h2 = chosen->auto_stop->risk_h2;

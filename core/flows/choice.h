@@ -1,39 +1,37 @@
-// Internal to core/flows: the default job's choice. A job whose FlowParams name no flow, with
-// automatic iterations and no step, runs every candidate flow with automatic stopping and keeps
-// the one whose estimated error to the noise-free surface is least; meshes above
-// kMaxChoiceVertices (catalogue.h) make that choice, and automatic stopping's count, on patches of themselves
-// and then run once. Smooth() (smooth.cc) is the only caller.
+// Internal to core/flows: automatic iterations, and the default job's choice of flow. Smooth()
+// (smooth.cc) hands every run with automatic iterations to SmoothAutomatic.
+//
+// The input's noise is read once. A mesh of more than kMaxChoiceVertices (catalogue.h) vertices then chooses on
+// a sample of itself, patches of SampleSize(n) vertices in all: every candidate flow (one when
+// the job names it) runs there with automatic stopping (auto_stop.h), the least estimated error
+// gives the flow and its count, and the whole mesh runs once, at that count, with no risk
+// estimate. A smaller mesh is its own sample: the best candidate's run is the result. Progress
+// names the phase (Phase in flow.h): iteration numbers come only from the final run, whose
+// count is known before it starts.
 #pragma once
 
 #include <cstdint>
 
 #include "absl/status/statusor.h"
+#include "core/flows/driver.h"
 #include "core/flows/flow.h"
 
 namespace meshsmooth::flows {
 
-// The patches of a mesh above kMaxChoiceVertices (catalogue.h) hold this many vertices in all.
-inline constexpr int32_t kSampleVertices = 20000;
+// The vertices of the sample a mesh of n vertices chooses on (n when it chooses on itself).
+int32_t SampleSize(int32_t n);
 
 // True when `p` leaves the flow to the estimated error: no flow named, automatic iterations, no
 // step.
 bool ChoosesFlow(const FlowParams& p);
 
-// Every candidate on a copy of the input with automatic stopping; the least estimated error
-// gives the result (the first candidate's estimate decides whether there is anything to do).
-// `p` is valid; h is the input's mean edge length.
-absl::StatusOr<FlowResult> SmoothChoosing(Mesh& mesh, const Topology& topo, const FlowParams& p,
-                                          const RunControl& control, double h);
+// A valid `p` with automatic iterations (flow named or not); h is the input's mean edge length.
+absl::StatusOr<FlowResult> SmoothAutomatic(Mesh& mesh, const Topology& topo, const FlowParams& p,
+                                           const RunControl& control, double h);
 
-// Automatic stopping on a large mesh: the flow (if ChoosesFlow) and the count from its patches,
-// then one run of the whole mesh at that count.
-absl::StatusOr<FlowResult> SmoothSampled(Mesh& mesh, const Topology& topo, const FlowParams& p,
-                                         const RunControl& control, double h);
-
-// One flow (p.flow set, p valid) in the vertex order that pays (reorder.h). With automatic
-// iterations, `fixed_auto_iterations` > 0 runs exactly that many (a count chosen on a sample)
-// with no risk estimate, then repairs folds and keeps the volume as usual. Defined in smooth.cc.
+// One flow (p.flow set, p valid) in the vertex order that pays (reorder.h), with `plan` for
+// automatic iterations. Defined in smooth.cc.
 absl::StatusOr<FlowResult> SmoothOneFlow(Mesh& mesh, const Topology& topo, const FlowParams& p,
-                                         const RunControl& control, double h, int fixed_auto_iterations);
+                                         const RunControl& control, double h, const AutoPlan& plan);
 
 }  // namespace meshsmooth::flows

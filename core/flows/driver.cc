@@ -127,10 +127,11 @@ class FlowRun {
   }
 
   // The progress report of an iteration from its statistics.
-  Progress ToProgress(int it, const BlockStats& total) const {
+  Progress ToProgress(int it, const BlockStats& total, int iterations) const {
     Progress progress;
+    progress.flow = row_.id;
     progress.iteration = it;
-    progress.total = p_.iterations;  // 0 when the run stops automatically
+    progress.total = iterations;
     progress.max_displacement = std::sqrt(total.max_sq);
     progress.mean_displacement = movable_ > 0 ? total.sum / static_cast<double>(movable_) : 0.0;
     progress.moved_share = movable_ > 0 ? static_cast<double>(total.moved) / static_cast<double>(movable_) : 0.0;
@@ -260,7 +261,7 @@ VectorIsa BestVectorIsa() {
 }
 
 absl::StatusOr<FlowResult> RunIterations(Mesh& mesh, const Topology& topo, const FlowParams& p,
-                                         const RunControl& control, double h, int fixed_auto_iterations) {
+                                         const RunControl& control, double h, const AutoPlan& plan) {
   const absl::StatusOr<double> diagonal = CheckInput(mesh, topo, h);
   if (!diagonal.ok()) return diagonal.status();
   FlowResult result;
@@ -275,18 +276,18 @@ absl::StatusOr<FlowResult> RunIterations(Mesh& mesh, const Topology& topo, const
   std::optional<AutoStop> auto_stop;
   int last_iteration = p.iterations;
   if (p.iterations == kAutoIterations) {
-    auto_stop.emplace(mesh, topo, run.roles(), h, run.threads());
+    auto_stop.emplace(mesh, topo, run.roles(), h, run.threads(), plan.noise, plan.measured);
     result.auto_stop = auto_stop->report();
     if (auto_stop->nothing_to_do()) {
       result.stop_reason = auto_stop->idle_reason();
       return result;
     }
     last_iteration = std::min(p.max_auto_iterations, kMaxAutoIterations);
-    if (fixed_auto_iterations > 0) last_iteration = std::min(last_iteration, fixed_auto_iterations);
+    if (plan.fixed_iterations > 0) last_iteration = std::min(last_iteration, plan.fixed_iterations);
     result.stop_reason = StopReason::kIterations;
   }
   // A count chosen on a sample of the mesh (choice.h) runs as it is: no probe, no estimate.
-  const bool estimate_risk = auto_stop && fixed_auto_iterations == 0;
+  const bool estimate_risk = auto_stop && plan.fixed_iterations == 0;
   const int32_t n = mesh.num_vertices();
   std::vector<Vec3> cur = std::move(mesh.positions), next(n), mid;
   if (run.passes() > 1) mid.resize(n);
@@ -311,7 +312,7 @@ absl::StatusOr<FlowResult> RunIterations(Mesh& mesh, const Topology& topo, const
     }
     std::vector<Vec3>* out = &next;
     const BlockStats total = run.Iterate(it, cur, next, mid, out);
-    const Progress progress = run.ToProgress(it, total);
+    const Progress progress = run.ToProgress(it, total, estimate_risk ? 0 : last_iteration);
     if (absl::Status s = run.CheckDivergence(it, total, progress); !s.ok()) {
       mesh.positions = std::move(cur);  // the last iteration before the failure
       return s;

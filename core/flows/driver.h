@@ -2,8 +2,12 @@
 // the mesh is in the order it runs in (core/flows/reorder.h).
 #pragma once
 
+#include <cstdint>
+#include <vector>
+
 #include "absl/status/statusor.h"
 #include "core/flows/flow.h"
+#include "core/measure/noise.h"
 
 namespace meshsmooth::flows {
 
@@ -17,10 +21,22 @@ int ThreadsFor(int32_t n, const FlowParams& p);
 
 // The iterations of a valid `p` (its flow set) on `mesh`: roles (free, fixed, boundary curve),
 // the Jacobi double buffer, eq. (14)'s threshold, stopping, progress and the divergence checks.
-// `h` is the input's mean edge length. With automatic iterations, `fixed_auto_iterations` > 0
-// runs that many with no risk estimate (a count chosen on a sample, choice.h). Errors as
+// How a run with automatic iterations stops.
+struct AutoPlan {
+  // > 0: exactly this many iterations (a count chosen on a sample, choice.h), with no risk
+  // estimate; the folds are repaired and the volume kept as usual.
+  int fixed_iterations = 0;
+  // The input's noise, read once by the caller (a job that tries several flows reads it once);
+  // null: the run reads it.
+  const NoiseEstimate* noise = nullptr;
+  // Per vertex: non-zero where the risk estimate measures (the cores of a sample's patches,
+  // away from their fixed rims); null: every free interior vertex.
+  const std::vector<uint8_t>* measured = nullptr;
+};
+
+// `h` is the input's mean edge length; `plan` applies with automatic iterations. Errors as
 // Smooth()'s; the mesh always gets back the positions of the last accepted iteration.
 absl::StatusOr<FlowResult> RunIterations(Mesh& mesh, const Topology& topo, const FlowParams& p,
-                                         const RunControl& control, double h, int fixed_auto_iterations);
+                                         const RunControl& control, double h, const AutoPlan& plan);
 
 }  // namespace meshsmooth::flows

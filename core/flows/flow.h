@@ -123,9 +123,24 @@ struct FlowParams {
   ReorderMode reorder = ReorderMode::kAuto;
 };
 
+// What a run is doing when it reports progress. A job with automatic iterations reads the
+// noise, chooses the flow (when none is named) and the count, on a sample of the mesh or on all
+// of it, then runs the chosen flow at that count; the server then writes the result.
+enum class Phase {
+  kSmoothing,      // the chosen (or named) flow; `iteration` rises to `total`
+  kNoiseEstimate,  // reading the input's noise
+  kChoosing,       // trying `flow` to choose the flow and the count; no iteration numbers
+  kWriting,        // encoding the result (reported by the server)
+};
+
+// "smoothing", "noise estimate", "choosing the flow", "writing".
+std::string_view PhaseName(Phase phase);
+
 struct Progress {
-  int iteration = 0;  // 1-based, iterations done so far
-  int total = 0;
+  Phase phase = Phase::kSmoothing;
+  FlowId flow = kDefaultFlow;      // the flow running (kSmoothing) or tried (kChoosing)
+  int iteration = 0;               // 1-based, iterations done so far (kSmoothing)
+  int total = 0;                   // the iterations the run will do: asked for, or chosen (automatic)
   double max_displacement = 0.0;   // largest |P_new - P_old| of this iteration (mesh units)
   double mean_displacement = 0.0;  // over the vertices that may move
   double moved_share = 0.0;        // share of movable vertices that moved (adaptive: < 1)

@@ -47,6 +47,20 @@ std::string_view StopReasonName(StopReason reason) {
   return "iterations";
 }
 
+std::string_view PhaseName(Phase phase) {
+  switch (phase) {
+    case Phase::kSmoothing:
+      return "smoothing";
+    case Phase::kNoiseEstimate:
+      return "noise estimate";
+    case Phase::kChoosing:
+      return "choosing the flow";
+    case Phase::kWriting:
+      return "writing";
+  }
+  return "smoothing";
+}
+
 absl::Status ValidateFlowParams(const FlowParams& p, int32_t num_vertices) {
   // The cotangent kernel addresses coordinates as int32 3 * vertex (operators.h, MeanCurvatureLanes).
   if (num_vertices > std::numeric_limits<int32_t>::max() / 3) {
@@ -116,34 +130,31 @@ absl::StatusOr<FlowResult> Smooth(Mesh& mesh, const Topology& topo, const FlowPa
     return absl::InvalidArgumentError("the topology was built for another mesh");
   }
   const double h = MeanEdgeLength(mesh, topo);
-  if (p.iterations == kAutoIterations && n > kMaxChoiceVertices) {
-    return flows::SmoothSampled(mesh, topo, p, control, h);
-  }
-  if (flows::ChoosesFlow(p)) return flows::SmoothChoosing(mesh, topo, p, control, h);
+  if (p.iterations == kAutoIterations) return flows::SmoothAutomatic(mesh, topo, p, control, h);
   FlowParams q = p;
   q.flow = p.flow.value_or(kDefaultFlow);
-  return flows::SmoothOneFlow(mesh, topo, q, control, h, /*fixed_auto_iterations=*/0);
+  return flows::SmoothOneFlow(mesh, topo, q, control, h, flows::AutoPlan{});
 }
 
 namespace flows {
 
 absl::StatusOr<FlowResult> SmoothOneFlow(Mesh& mesh, const Topology& topo, const FlowParams& p,
-                                         const RunControl& control, double h, int fixed_auto_iterations) {
+                                         const RunControl& control, double h, const AutoPlan& plan) {
   const int32_t n = mesh.num_vertices();
   const int iterations = p.iterations != kAutoIterations ? p.iterations
-                         : fixed_auto_iterations > 0     ? fixed_auto_iterations
+                         : plan.fixed_iterations > 0     ? plan.fixed_iterations
                                                          : kTypicalAutoIterations;
   const bool reorder = p.reorder == ReorderMode::kAlways
                            ? ReorderableSize(n)
                            : p.reorder == ReorderMode::kAuto &&
                                  MortonOrderPaysOff(topo, iterations * PassesPerIteration(p));  // validated: below 2^25
-  if (!reorder) return RunIterations(mesh, topo, p, control, h, fixed_auto_iterations);
+  if (!reorder) return RunIterations(mesh, topo, p, control, h, plan);
 
   const int threads = ThreadsFor(n, p);
   ReorderedMesh local = ReorderByMorton(mesh, topo, p.locked, threads);
   FlowParams q = p;
   q.locked = std::move(local.locked);
-  absl::StatusOr<FlowResult> result = RunIterations(local.mesh, local.topo, q, control, h, fixed_auto_iterations);
+  absl::StatusOr<FlowResult> result = RunIterations(local.mesh, local.topo, q, control, h, plan);
   // The positions as the run left them (the last good iteration on failure).
   RestoreOrder(local, mesh, threads);
   return result;

@@ -194,7 +194,7 @@ TEST(AutoStopTest, FoldRepairUnfoldsNeedlesWithinItsReach) {
   std::vector<uint8_t> role(clean.num_vertices(), flows::kFree);
   Mesh noisy = clean;
   AddNormalNoise(noisy, 0.1, 1);
-  const flows::AutoStop stop(noisy, topo, role.data(), h, 1);
+  const flows::AutoStop stop(noisy, topo, role.data(), h, 1, /*noise=*/nullptr, /*measured=*/nullptr);
 
   Mesh folded = clean;  // each needle's apex as far across its base edge as it was before it
   const size_t sphere_faces = Icosphere(3).triangles.size();  // the needles are faces 0, 5, 10, ...
