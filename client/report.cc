@@ -28,6 +28,28 @@ ProgressPrinter::ProgressPrinter(bool quiet) : quiet_(quiet), tty_(isatty(STDERR
 
 void ProgressPrinter::operator()(const v1::Progress& p) {
   if (quiet_) return;
+  if (p.phase() != v1::PROGRESS_PHASE_SMOOTHING && p.phase() != v1::PROGRESS_PHASE_UNSPECIFIED) {
+    if (bar_shown_) std::fprintf(stderr, "\n");
+    bar_shown_ = false;
+    switch (p.phase()) {
+      case v1::PROGRESS_PHASE_NOISE_ESTIMATE:
+        std::fprintf(stderr, "reading the noise\n");
+        break;
+      case v1::PROGRESS_PHASE_CHOOSING:
+        std::fprintf(stderr, "choosing the flow and the count: trying %s\n", p.flow().c_str());
+        break;
+      default:
+        std::fprintf(stderr, "writing the result (%.2fs)\n", p.elapsed_seconds());
+        break;
+    }
+    return;
+  }
+  if (p.iteration() == 1 || p.flow() != smoothing_flow_) {
+    if (bar_shown_) std::fprintf(stderr, "\n");
+    bar_shown_ = false;
+    smoothing_flow_ = p.flow();
+    if (!smoothing_flow_.empty()) std::fprintf(stderr, "smoothing with %s\n", smoothing_flow_.c_str());
+  }
   if (p.total() == 0) {  // automatic stopping: no total to count down to
     std::fprintf(stderr,
                  tty_ ? "\riteration %u (automatic stop)  max move %.3g  mean %.3g  elapsed %.1fs "

@@ -2,6 +2,8 @@
 // flow list on stdout.
 #pragma once
 
+#include <string>
+
 #include "meshsmooth/v1/smoothing.pb.h"
 
 namespace meshsmooth::client {
@@ -16,6 +18,7 @@ class ProgressPrinter {
 
  private:
   bool quiet_, tty_, bar_shown_ = false;
+  std::string smoothing_flow_;  // the flow of the smoothing phase reported last
 };
 
 // The job summary as a before/after table, the displacement, features and timings.

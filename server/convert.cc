@@ -152,7 +152,23 @@ void ToProto(const MeshMetrics& m, v1::MeshMetrics* out) {
   out->set_share_angles_below_10deg(m.share_angles_below_10deg);
 }
 
+v1::ProgressPhase ToProto(Phase phase) {
+  switch (phase) {
+    case Phase::kSmoothing:
+      return v1::PROGRESS_PHASE_SMOOTHING;
+    case Phase::kNoiseEstimate:
+      return v1::PROGRESS_PHASE_NOISE_ESTIMATE;
+    case Phase::kChoosing:
+      return v1::PROGRESS_PHASE_CHOOSING;
+    case Phase::kWriting:
+      return v1::PROGRESS_PHASE_WRITING;
+  }
+  return v1::PROGRESS_PHASE_UNSPECIFIED;
+}
+
 void ToProto(const Progress& p, v1::Progress* out) {
+  out->set_phase(ToProto(p.phase));
+  out->set_flow(std::string(FlowName(p.flow)));
   out->set_iteration(static_cast<uint32_t>(p.iteration));
   out->set_total(static_cast<uint32_t>(p.total));
   out->set_max_displacement(p.max_displacement);

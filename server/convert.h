@@ -68,6 +68,7 @@ grpc::Status ToGrpc(const absl::Status& s);
 
 void ToProto(const ValidationReport& r, v1::ValidationReport* out);
 void ToProto(const MeshMetrics& m, v1::MeshMetrics* out);
+v1::ProgressPhase ToProto(Phase phase);
 void ToProto(const Progress& p, v1::Progress* out);
 void ToProto(const ParameterInfo& p, v1::ParameterInfo* out);
 void ToProto(const JobParams& params, const FlowResult& result, v1::EffectiveParameters* out);

@@ -122,9 +122,13 @@ absl::StatusOr<FlowResult> SmoothJob::SmoothMesh(Mesh& mesh, const Topology& top
   control.stop = stop;                                            // the job's cancel flag and what is left of its time
   Clock::time_point last_progress = decoded - kProgressInterval;  // the first iteration is reported
   control.on_progress = [&](const Progress& p) {
-    report.flow.iterations_run = p.iteration;  // what the log says if the run ends early
+    const bool smoothing = p.phase == Phase::kSmoothing;
+    if (smoothing) report.flow.iterations_run = p.iteration;  // what the log says if the run ends early
     const Clock::time_point now = Clock::now();
-    if (now - last_progress < kProgressInterval && p.iteration != p.total) return;
+    // Every change of phase, a smoothing's first and last iteration, and at most one report an
+    // interval between.
+    const bool milestone = !smoothing || p.iteration == 1 || p.iteration == p.total;
+    if (now - last_progress < kProgressInterval && !milestone) return;
     last_progress = now;
     v1::Progress msg;
     ToProto(p, &msg);
@@ -232,6 +236,13 @@ void SmoothJob::Run() {
   // the input's topology serves), sent as generic attributes.
   absl::StatusOr<std::vector<GenericAttribute>> attributes = DetectFeaturesIfAsked(mesh, topo, stop, report);
   if (!attributes.ok()) return Fail(report, attributes.status());
+  {
+    v1::Progress writing;
+    writing.set_phase(v1::PROGRESS_PHASE_WRITING);
+    writing.set_flow(std::string(FlowName(result->flow)));
+    writing.set_elapsed_seconds(Seconds(decoded, Clock::now()));
+    Emit([&](JobSink& sink) { sink.OnProgress(writing); });
+  }
   absl::StatusOr<std::string> encoded = EncodeAndMeasure(*draco, mesh, topo, input, *attributes, stop, report);
   const Clock::time_point done = Clock::now();
   report.encode_seconds = Seconds(smoothed, done);

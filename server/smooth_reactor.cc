@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <deque>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -146,8 +147,13 @@ class SmoothReactor final : public grpc::ServerBidiReactor<v1::SmoothRequest, v1
   void OnProgress(const v1::Progress& progress) override {
     {
       std::lock_guard<std::mutex> lock(mu_);
-      if (!pending_progress_) pending_progress_.emplace();
-      *pending_progress_->mutable_progress() = progress;
+      // A newer report of the same phase and flow replaces one not yet written; a change of
+      // phase or flow is kept, so the client sees every phase.
+      const bool replaces = !pending_progress_.empty() &&
+                            pending_progress_.back().progress().phase() == progress.phase() &&
+                            pending_progress_.back().progress().flow() == progress.flow();
+      if (!replaces) pending_progress_.emplace_back();
+      *pending_progress_.back().mutable_progress() = progress;
     }
     Pump();
   }
@@ -209,9 +215,9 @@ class SmoothReactor final : public grpc::ServerBidiReactor<v1::SmoothRequest, v1
     } else if (pending_) {
       out_ = std::move(*pending_);
       pending_.reset();
-    } else if (pending_progress_) {  // progress precedes the result it led to
-      out_ = std::move(*pending_progress_);
-      pending_progress_.reset();
+    } else if (!pending_progress_.empty()) {  // progress precedes the result it led to
+      out_ = std::move(pending_progress_.front());
+      pending_progress_.pop_front();
     } else if (have_result_ && result_offset_ < result_.size()) {
       const size_t n = std::min<size_t>(kResultChunkBytes, result_.size() - result_offset_);
       out_.Clear();
@@ -256,8 +262,9 @@ class SmoothReactor final : public grpc::ServerBidiReactor<v1::SmoothRequest, v1
   std::mutex mu_;  // guards everything below
   std::shared_ptr<SmoothJob> job_;
   v1::SmoothResponse out_;
-  std::optional<v1::SmoothResponse> pending_;           // accepted
-  std::optional<v1::SmoothResponse> pending_progress_;  // newest only
+  std::optional<v1::SmoothResponse> pending_;  // accepted
+  // Per phase (and flow) of the job, its newest report not yet written: a few at most.
+  std::deque<v1::SmoothResponse> pending_progress_;
   std::string result_;
   size_t result_offset_ = 0;
   std::optional<v1::Summary> summary_;

@@ -207,11 +207,20 @@ def check_accepted(responses):
     require(rep.closed, "input.closed is false")
 
 
+# ProgressPhase values of meshsmooth.v1 (smoothing.proto).
+PROGRESS_PHASE_SMOOTHING = 1
+PROGRESS_PHASE_WRITING = 4
+
+
 def check_progress(responses):
     progress = [r.progress for r in responses if r.WhichOneof("kind") == "progress"]
-    for p in progress:
+    smoothing = [p for p in progress if p.phase == PROGRESS_PHASE_SMOOTHING]
+    require(smoothing, f"no progress of the smoothing phase: {[(p.phase, p.iteration, p.total) for p in progress]}")
+    for p in smoothing:
         require(p.total == 10, f"progress.total {p.total}, expected 10")
         require(p.iteration <= p.total, f"progress.iteration {p.iteration} > total {p.total}")
+    require(progress[-1].phase == PROGRESS_PHASE_WRITING,
+            f"the last progress is phase {progress[-1].phase}, not writing")
     return len(progress)
 
 

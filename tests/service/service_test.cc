@@ -75,6 +75,50 @@ TEST(ServiceTest, ProgressIsThrottled) {
   EXPECT_LT(out->progress_events, 5000 / 10);
 }
 
+// A streamed default job names every phase, in order; iteration numbers come only from the
+// smoothing with the chosen flow, rise to its count and stop there, at the summary's count. A
+// small mesh is its own sample: its choice is the result, and no smoothing phase follows.
+TEST(ServiceTest, DefaultJobProgressNamesEveryPhaseAndEndsAtTheSummarysCount) {
+  auto server = StartServer();
+  for (int level : {4, 6}) {  // 2,562 vertices, 40,962 (chooses on a sample)
+    SCOPED_TRACE(level);
+    const std::string draco = *EncodeDraco(FloatMesh(NoisySphere(level)));
+    std::vector<v1::Progress> events;
+    auto stub = v1::MeshSmoother::NewStub(server->InProcessChannel());
+    grpc::ClientContext ctx;
+    ctx.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(120));
+    const v1::JobSpec spec;  // the default job: no parameters
+    absl::StatusOr<SmoothOutcome> out = CallSmooth(
+        *stub, ctx, spec, draco, [&](const v1::Progress& p) { events.push_back(p); }, 256 << 10);
+    ASSERT_TRUE(out.ok()) << out.status();
+    const uint32_t count = out->summary.parameters().iterations_run();
+    const std::string flow = out->summary.parameters().flow();
+    ASSERT_GT(count, 0u);
+    ASSERT_GE(events.size(), 3u);
+    EXPECT_EQ(events.front().phase(), v1::PROGRESS_PHASE_NOISE_ESTIMATE);
+    EXPECT_EQ(events.back().phase(), v1::PROGRESS_PHASE_WRITING);
+    std::vector<std::string> tried;
+    uint32_t last = 0;
+    for (const v1::Progress& e : events) {
+      EXPECT_NE(e.phase(), v1::PROGRESS_PHASE_UNSPECIFIED);
+      EXPECT_LE(e.iteration(), count);
+      if (e.phase() == v1::PROGRESS_PHASE_CHOOSING) {
+        EXPECT_EQ(last, 0u) << "choosing after smoothing began";
+        EXPECT_EQ(e.iteration(), 0u);
+        tried.push_back(e.flow());
+      }
+      if (e.phase() == v1::PROGRESS_PHASE_SMOOTHING) {
+        EXPECT_EQ(e.flow(), flow);
+        EXPECT_EQ(e.total(), count);
+        EXPECT_GT(e.iteration(), last);
+        last = e.iteration();
+      }
+    }
+    EXPECT_EQ(tried, (std::vector<std::string>{"bilaplacian", "bilateral_normal"}));
+    EXPECT_EQ(last, level == 4 ? 0u : count);
+  }
+}
+
 TEST(ServiceTest, MeshAbove20MiBGoesThrough) {
   Mesh big = TwoRatePlane(1000, 760);  // 762,761 vertices
   AddUniformNoise(big, 0.3, 3);
