@@ -123,7 +123,10 @@ absl::StatusOr<FlowResult> SmoothJob::SmoothMesh(Mesh& mesh, const Topology& top
   Clock::time_point last_progress = decoded - kProgressInterval;  // the first iteration is reported
   control.on_progress = [&](const Progress& p) {
     const bool smoothing = p.phase == Phase::kSmoothing;
-    if (smoothing) report.flow.iterations_run = p.iteration;  // what the log says if the run ends early
+    if (smoothing) {  // what the log says if the run ends early
+      report.flow.flow = p.flow;
+      report.flow.iterations_run = p.iteration;
+    }
     const Clock::time_point now = Clock::now();
     // Every change of phase, a smoothing's first and last iteration, and at most one report an
     // interval between.

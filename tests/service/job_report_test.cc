@@ -44,6 +44,11 @@ TEST(JobReportTest, LogLineNamesTheJobItsFlowAndItsTimes) {
   EXPECT_EQ(JobLogLine(r, params),
             "meshsmoothd job=5f3a-7 flow=bilaplacian vertices=2562 iterations=12/auto status=OK decode=0.012s "
             "queue=0.500s smooth=1.250s encode=0.062s");
+  // A default job logs the flow it chose, not the default flow.
+  r.flow.flow = FlowId::kBilateralNormal;
+  EXPECT_EQ(JobLogLine(r, params),
+            "meshsmoothd job=5f3a-7 flow=bilateral_normal vertices=2562 iterations=12/auto status=OK decode=0.012s "
+            "queue=0.500s smooth=1.250s encode=0.062s");
 }
 
 TEST(JobReportTest, SummaryCarriesWhatTheJobMeasured) {
