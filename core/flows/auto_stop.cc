@@ -210,6 +210,14 @@ std::optional<StopReason> AutoStop::After(int it, const Vec3* pos, const Vec3* p
     report_.displacement_h = RmsNormalDisplacement(pos) / h_;
     report_.risk_h2 = (risk - sigma_ * sigma_) / (h_ * h_);
   }
+  if (rival_ && it >= 2 * kRivalWindow) {
+    const double last = risks_[it - 1 - kRivalWindow] - risk;
+    const double before = risks_[it - 1 - 2 * kRivalWindow] - risks_[it - 1 - kRivalWindow];
+    if (last > 0.0 && before > last) {
+      const double rate = last / before;  // the geometric series of the decreases to come
+      if (risk - kRivalReach * last * rate / (1.0 - rate) > *rival_) return StopReason::kNoiseRemoved;
+    }
+  }
   const int stretch = std::max(kPatience, it / 2);
   if (it - best_it_ >= std::max(kPatience, best_it_ / 2)) return StopReason::kNoiseRemoved;
   if (it > stretch && risks_[it - 1 - stretch] - best_risk_ < kConvergedShare * sigma_ * sigma_) {

@@ -73,6 +73,13 @@ inline constexpr double kFoldAngleDeg = 120.0;
 // mesh): over 50,000 of them it is within ~0.5% of the whole mesh's, at a fraction of the cost
 // of an iteration.
 inline constexpr int32_t kMaxMeasured = 50000;
+// A run with a rival (SetRival) gives up once its estimate, less kRivalReach times what it would
+// still fall if its decrease over the last kRivalWindow iterations kept shrinking at the rate
+// it shrank from the kRivalWindow before, stays above the rival's: a candidate that loses stops
+// after a few iterations instead of running to its own minimum (docs/decisions.md, "The default
+// job chooses on a sample"). A shorter window reads the estimate's own jitter as a slowdown.
+inline constexpr int kRivalWindow = 4;
+inline constexpr double kRivalReach = 2.0;
 // At most this many rounds of fold repair.
 inline constexpr int kFoldRepairRounds = 20;
 // The fold repair moves no vertex further than this (in h) from where the run left it. A fold
@@ -125,6 +132,10 @@ class AutoStop {
 
   const AutoStopReport& report() const { return report_; }
 
+  // After() stops the run ("noise_removed") once its estimate cannot reach `risk_h2` (a
+  // rival's AutoStopReport::risk_h2 on the same input): the run then loses to the rival.
+  void SetRival(double risk_h2) { rival_ = risk_h2 * h_ * h_ + sigma_ * sigma_; }
+
  private:
   double RmsNormalDisplacement(const Vec3* pos) const;
   // SURE of `pos` less its constant n sigma^2, a vertex, over the measured vertices.
@@ -152,7 +163,8 @@ class AutoStop {
   double best_risk_ = 0.0;
   int best_it_ = 0;
   bool improved_ = false;
-  std::vector<double> risks_;  // of every iteration so far
+  std::vector<double> risks_;    // of every iteration so far
+  std::optional<double> rival_;  // SetRival's, in Risk()'s units
   AutoStopReport report_;
 };
 

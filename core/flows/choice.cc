@@ -48,7 +48,9 @@ absl::StatusOr<FlowResult> Choose(Mesh& mesh, const Topology& topo, const FlowPa
     Mesh copy = mesh;
     FlowParams q = p;
     q.flow = flow;
-    absl::StatusOr<FlowResult> r = SmoothOneFlow(copy, topo, q, quiet, h, AutoPlan{0, &noise, measured});
+    AutoPlan plan{0, &noise, measured, std::nullopt};
+    if (best && best->auto_stop && best->iterations_run > 0) plan.rival_risk_h2 = best->auto_stop->risk_h2;
+    absl::StatusOr<FlowResult> r = SmoothOneFlow(copy, topo, q, quiet, h, plan);
     if (!r.ok()) {
       // A candidate that diverges is not chosen (unless it is the only one); cancellation and
       // the like end the job.
@@ -153,7 +155,7 @@ absl::StatusOr<FlowResult> SmoothAutomatic(Mesh& mesh, const Topology& topo, con
     return Choose(mesh, topo, whole, control, h, noise);
   }
   absl::StatusOr<FlowResult> result =
-      SmoothOneFlow(mesh, topo, whole, control, h, AutoPlan{chosen->iterations_run, &noise});
+      SmoothOneFlow(mesh, topo, whole, control, h, AutoPlan{chosen->iterations_run, &noise, nullptr, std::nullopt});
   if (result.ok() && result->iterations_run > 0) {
     result->stop_reason = chosen->stop_reason;
     if (result->auto_stop && chosen->auto_stop) result->auto_stop->risk_h2 = chosen->auto_stop->risk_h2;

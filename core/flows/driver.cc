@@ -277,6 +277,7 @@ absl::StatusOr<FlowResult> RunIterations(Mesh& mesh, const Topology& topo, const
   int last_iteration = p.iterations;
   if (p.iterations == kAutoIterations) {
     auto_stop.emplace(mesh, topo, run.roles(), h, run.threads(), plan.noise, plan.measured);
+    if (plan.rival_risk_h2) auto_stop->SetRival(*plan.rival_risk_h2);
     result.auto_stop = auto_stop->report();
     if (auto_stop->nothing_to_do()) {
       result.stop_reason = auto_stop->idle_reason();

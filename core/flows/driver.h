@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include "absl/status/statusor.h"
@@ -32,6 +33,9 @@ struct AutoPlan {
   // Per vertex: non-zero where the risk estimate measures (the cores of a sample's patches,
   // away from their fixed rims); null: every free interior vertex.
   const std::vector<uint8_t>* measured = nullptr;
+  // The estimated error (risk_h2) of a rival run on the same input: the run gives up once its
+  // own estimate can no longer fall below it (AutoStop::SetRival).
+  std::optional<double> rival_risk_h2;
 };
 
 // `h` is the input's mean edge length; `plan` applies with automatic iterations. Errors as

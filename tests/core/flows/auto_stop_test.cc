@@ -4,12 +4,14 @@
 #include <cmath>
 #include <cstdio>
 #include <numbers>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "core/flows/auto_stop.h"
 #include "core/flows/choice.h"
+#include "core/flows/driver.h"
 #include "core/flows/flow.h"
 #include "core/flows/flow_kernel.h"
 #include "core/io/mesh_io.h"
@@ -181,6 +183,34 @@ void RunOnNoisySharedMesh(const char* file, double sigma, const FlowParams& p, N
   const absl::StatusOr<Quality> after = truth.Evaluate(m);
   ASSERT_TRUE(before.ok() && after.ok());
   *out = {*std::move(r), *before, *after};
+}
+
+// A candidate with a rival it cannot beat gives up after a few iterations, its estimate above
+// the rival's; one whose rival it beats at once runs exactly as it would alone.
+TEST(AutoStopTest, RunGivesUpOnceItCannotBeatItsRival) {
+  const Mesh noisy = testing::NoisySphere(4);
+  const Topology topo = BuildTopology(noisy);
+  const double h = MeanEdgeLength(noisy, topo);
+  FlowParams p;
+  p.flow = FlowId::kBilateralNormal;  // automatic iterations
+  auto run = [&](std::optional<double> rival, Mesh& m) {
+    m = noisy;
+    return flows::RunIterations(m, topo, p, {}, h, flows::AutoPlan{0, nullptr, nullptr, rival});
+  };
+  Mesh alone_mesh, beaten_mesh, beating_mesh;
+  const absl::StatusOr<FlowResult> alone = run(std::nullopt, alone_mesh);
+  ASSERT_TRUE(alone.ok() && alone->auto_stop);
+  ASSERT_GT(alone->last.iteration, 4 * flows::kRivalWindow);
+  const double risk = alone->auto_stop->risk_h2;
+  const absl::StatusOr<FlowResult> beaten = run(risk - 1.0, beaten_mesh);
+  ASSERT_TRUE(beaten.ok() && beaten->auto_stop);
+  EXPECT_LE(beaten->last.iteration, 3 * flows::kRivalWindow);
+  EXPECT_GE(beaten->last.iteration, 2 * flows::kRivalWindow);
+  EXPECT_GT(beaten->auto_stop->risk_h2, risk - 1.0);
+  const absl::StatusOr<FlowResult> beating = run(risk + 1.0, beating_mesh);
+  ASSERT_TRUE(beating.ok());
+  EXPECT_EQ(beating->iterations_run, alone->iterations_run);
+  EXPECT_EQ(beating_mesh.positions, alone_mesh.positions);
 }
 
 // The fold repair on the needles of SphereWithNeedles, each apex mirrored across its needle's
