@@ -1,6 +1,6 @@
-// Built when CMake does not find CGAL: no CGAL rows in the benchmark.
+// Built when CMake does not find CGAL: no CGAL rows in the benchmarks.
 #include "bench/peers.h"
 
 namespace meshsmooth::bench {
-std::vector<Peer> CgalPeers() { return {}; }
+std::vector<Peer> CgalPeers(double) { return {}; }
 }  // namespace meshsmooth::bench

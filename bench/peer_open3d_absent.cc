@@ -1,4 +1,4 @@
-// Built when CMake does not find Open3D: no Open3D rows in the benchmark.
+// Built when CMake does not find Open3D: no Open3D rows in the benchmarks.
 #include "bench/peers.h"
 
 namespace meshsmooth::bench {
