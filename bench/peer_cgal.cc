@@ -76,14 +76,14 @@ double MeanEdgeLength(const SurfaceMesh& sm) {
 
 std::vector<Peer> CgalPeers(double smooth_shape_time) {
   return {
-      {"cgal_tangential_relaxation", "CGAL tangential_relaxation (5.5)", "mcf_tangential",
+      {"cgal_tangential_relaxation", "cgal", "CGAL tangential_relaxation (5.5)", "mcf_tangential",
        [](const Mesh& mesh, int it) {
          Converted c = ToSurfaceMesh(mesh);
          return Run(mesh, c, [&] {
            PMP::tangential_relaxation(c.sm, CGAL::parameters::number_of_iterations(static_cast<unsigned>(it)));
          });
        }},
-      {"cgal_smooth_shape", absl::StrFormat("CGAL smooth_shape, time %g h^2 (5.5)", smooth_shape_time), "",
+      {"cgal_smooth_shape", "cgal", absl::StrFormat("CGAL smooth_shape, time %g h^2 (5.5)", smooth_shape_time), "",
        [smooth_shape_time](const Mesh& mesh, int it) {
          Converted c = ToSurfaceMesh(mesh);
          const double h = MeanEdgeLength(c.sm);

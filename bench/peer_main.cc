@@ -3,6 +3,10 @@
 //
 //   build/bench/meshsmooth_peer [--time T] PEER ITERATIONS IN OUT
 //
+// meshsmooth_peer knows every peer of the build; meshsmooth_peer_openmesh, _open3d and _cgal are
+// this same file linked with one library each, so that a process loads only what a user of that
+// library would (bench/CMakeLists.txt).
+//
 // Reads IN with our readers (OBJ, PLY, OFF, STL, Draco), runs PEER for ITERATIONS iterations,
 // writes OUT with our writer (format by extension; vertex i of OUT is vertex i of IN) and prints
 // one line, "PEER: N iterations; time: read Rs, smooth Ss, write Ws", S being the peer's
@@ -31,15 +35,15 @@ constexpr int kExitUsage = 2;
 constexpr int kMaxIterations = 100000;
 constexpr std::uintmax_t kHugePagesMinInputBytes = 4u << 20;  // the CLI's threshold (client/main.cc)
 
-void PrintUsage(std::FILE* to) {
+void PrintUsage(std::FILE* to, const char* self) {
   std::fprintf(to,
-               "usage: meshsmooth_peer [--time T] PEER ITERATIONS IN OUT\n"
+               "usage: %s [--time T] PEER ITERATIONS IN OUT\n"
                "  Runs one other library's smoother on IN (OBJ, PLY, OFF, STL or .drc) for ITERATIONS\n"
                "  (0..%d) iterations and writes OUT (format by extension), vertex for vertex; prints\n"
                "  \"PEER: N iterations; time: read Rs, smooth Ss, write Ws\" (S: the smoothing call alone).\n"
                "  --time T  cgal_smooth_shape's time step in squared mean edge lengths (default %g)\n"
-               "PEER, in this build:\n",
-               kMaxIterations, kSmoothShapeTime);
+               "PEER, in this program:\n",
+               std::filesystem::path(self).filename().c_str(), kMaxIterations, kSmoothShapeTime);
   for (const Peer& p : AllPeers()) std::fprintf(to, "  %-28s %s\n", p.id.c_str(), p.name.c_str());
   std::fprintf(to, "Exit codes: 0 success, 1 IN unreadable or OUT unwritable, 2 bad command line.\n");
 }
@@ -59,7 +63,7 @@ int Main(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
     const std::string_view a = argv[i];
     if (a == "--help" || a == "-h") {
-      PrintUsage(stdout);
+      PrintUsage(stdout, argv[0]);
       return 0;
     }
     if (a == "--time") {
@@ -74,13 +78,13 @@ int Main(int argc, char** argv) {
     args.emplace_back(a);
   }
   if (args.size() != 4) {
-    PrintUsage(stderr);
+    PrintUsage(stderr, argv[0]);
     return kExitUsage;
   }
   const std::vector<Peer> peers = AllPeers(time);
   const Peer* peer = FindPeer(peers, args[0]);
   if (peer == nullptr) {
-    std::fprintf(stderr, "meshsmooth_peer: unknown peer \"%s\" (--help lists the peers of this build)\n",
+    std::fprintf(stderr, "meshsmooth_peer: unknown peer \"%s\" (--help lists the peers of this program)\n",
                  args[0].c_str());
     return kExitUsage;
   }

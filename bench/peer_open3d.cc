@@ -37,12 +37,12 @@ PeerRun Run(Filter&& filter) {
 
 std::vector<Peer> Open3dPeers() {
   return {
-      {"open3d_laplacian", "Open3D FilterSmoothLaplacian (0.16)", "laplacian U1",
+      {"open3d_laplacian", "open3d", "Open3D FilterSmoothLaplacian (0.16)", "laplacian U1",
        [](const Mesh& mesh, int it) {
          const auto m = ToOpen3d(mesh);
          return Run([&] { return m.FilterSmoothLaplacian(it, 0.5); });
        }},
-      {"open3d_taubin", "Open3D FilterSmoothTaubin (0.16)", "taubin U1",
+      {"open3d_taubin", "open3d", "Open3D FilterSmoothTaubin (0.16)", "taubin U1",
        [](const Mesh& mesh, int it) {
          const auto m = ToOpen3d(mesh);
          return Run([&] { return m.FilterSmoothTaubin(it, 0.5, -0.53); });

@@ -47,11 +47,11 @@ PeerRun Run(const Mesh& mesh, int iterations, Smoother::Component component, Smo
 
 std::vector<Peer> OpenMeshPeers() {
   return {
-      {"openmesh_c0", "OpenMesh JacobiLaplace uniform C0", "laplacian U0",
+      {"openmesh_c0", "openmesh", "OpenMesh JacobiLaplace uniform C0", "laplacian U0",
        [](const Mesh& m, int it) { return Run(m, it, Smoother::Tangential_and_Normal, Smoother::C0); }},
-      {"openmesh_c1", "OpenMesh JacobiLaplace uniform C1", "",
+      {"openmesh_c1", "openmesh", "OpenMesh JacobiLaplace uniform C1", "",
        [](const Mesh& m, int it) { return Run(m, it, Smoother::Tangential_and_Normal, Smoother::C1); }},
-      {"openmesh_cotangent", "OpenMesh JacobiLaplace cotangent Normal C0", "mcf",
+      {"openmesh_cotangent", "openmesh", "OpenMesh JacobiLaplace cotangent Normal C0", "mcf",
        [](const Mesh& m, int it) { return Run(m, it, Smoother::Normal, Smoother::C0); }},
   };
 }

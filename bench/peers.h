@@ -21,8 +21,9 @@ struct PeerRun {
 };
 
 struct Peer {
-  std::string id;    // the name meshsmooth_peer takes, e.g. "openmesh_c0"
-  std::string name;  // e.g. "OpenMesh JacobiLaplace uniform C0"
+  std::string id;       // the name meshsmooth_peer takes, e.g. "openmesh_c0"
+  std::string library;  // "openmesh", "open3d" or "cgal": meshsmooth_peer_LIBRARY links it alone
+  std::string name;     // e.g. "OpenMesh JacobiLaplace uniform C0"
   // The flow meshsmooth_bench's per-iteration table compares it with, e.g. "laplacian U0";
   // empty for a peer that table leaves out.
   std::string ours;
@@ -38,12 +39,13 @@ struct Peer {
 // times the time), 0.1 h^2 overshot after one.
 inline constexpr double kSmoothShapeTime = 0.03;
 
+// Each list is empty in a program built without that library (peer_*_absent.cc).
 std::vector<Peer> OpenMeshPeers();
-std::vector<Peer> Open3dPeers();  // empty when Open3D was not found
-// tangential_relaxation and smooth_shape at `smooth_shape_time` h^2; empty when CGAL was not found.
+std::vector<Peer> Open3dPeers();
+// tangential_relaxation and smooth_shape at `smooth_shape_time` h^2.
 std::vector<Peer> CgalPeers(double smooth_shape_time = kSmoothShapeTime);
 
-// Every peer this build has, OpenMesh's first.
+// Every peer the program has, OpenMesh's first.
 std::vector<Peer> AllPeers(double smooth_shape_time = kSmoothShapeTime);
 
 // The peer called `id` in `peers`; nullptr when there is none.
