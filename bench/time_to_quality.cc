@@ -84,7 +84,8 @@ constexpr char kUsage[] =
     "                 of --scale-sigma h along the normals: time and peak memory per vertex, beside\n"
     "                 the dragon's at the same sigma when this run has it; --scale-only: only that\n"
     "  --cli PATH     the meshsmooth CLI (default: ../client/meshsmooth beside this program)\n"
-    "  --peer-program PATH  meshsmooth_peer (default: beside this program)\n"
+    "  --peer-program PATH  the program that runs every peer (default: meshsmooth_peer_LIBRARY beside\n"
+    "                 this program, the one linking only the peer's own library)\n"
     "  --shared DIR   the folder holding data/meshes (default: ../shared beside the source tree)\n"
     "  --workdir DIR  where the inputs and results are written (default: a new directory in the\n"
     "                 system's temporary directory, removed at the end)\n"
@@ -107,9 +108,17 @@ struct Options {
   double smooth_shape_time = kSmoothShapeTime;
   bool scale = false;
   double scale_sigma = 0.2;
-  fs::path cli, peer_program, workdir;
+  fs::path cli, workdir;
+  fs::path peer_program;  // empty: meshsmooth_peer_LIBRARY beside this program, per peer (PeerProgram)
   fs::path shared = fs::path(MESHSMOOTH_SOURCE_DIR) / ".." / "shared";
+  fs::path self_dir;  // where this program is
 };
+
+// The program that runs `peer` as a whole process: --peer-program, else the one linking only the
+// peer's library, so that its process loads no other library's code.
+fs::path PeerProgram(const Options& opt, const Peer& peer) {
+  return opt.peer_program.empty() ? opt.self_dir / ("meshsmooth_peer_" + peer.library) : opt.peer_program;
+}
 
 // A finished child process.
 struct Process {
@@ -128,9 +137,8 @@ std::string ReadText(const fs::path& path) {
 }
 
 // Runs `argv` with stdin from /dev/null and stdout, stderr into files of `dir`; the time is from
-// just before the spawn to the return of wait4. posix_spawn rather than fork: no copy of this
-// process's page tables (it holds the ground truth of the largest mesh) inside the time.
-Process RunProcess(const std::vector<std::string>& argv, const fs::path& dir) {
+// just before the spawn to the return of wait4. Fills all of `p` but its output.
+void SpawnAndWait(const std::vector<std::string>& argv, const fs::path& dir, Process& p) {
   const std::string out_path = (dir / "stdout.txt").string(), err_path = (dir / "stderr.txt").string();
   posix_spawn_file_actions_t actions;
   posix_spawn_file_actions_init(&actions);
@@ -140,15 +148,11 @@ Process RunProcess(const std::vector<std::string>& argv, const fs::path& dir) {
   std::vector<char*> args;
   for (const std::string& a : argv) args.push_back(const_cast<char*>(a.c_str()));
   args.push_back(nullptr);
-  Process p;
   const Clock::time_point t0 = Clock::now();
   pid_t pid = 0;
   const int spawned = posix_spawn(&pid, args[0], &actions, nullptr, args.data(), environ);
   posix_spawn_file_actions_destroy(&actions);
-  if (spawned != 0) {
-    p.err = absl::StrFormat("cannot start %s: %s", argv[0], std::strerror(spawned));
-    return p;
-  }
+  if (spawned != 0) return;  // exit_code stays -1; the stderr file says nothing, the caller does
   int status = 0;
   rusage usage{};
   while (wait4(pid, &status, 0, &usage) < 0 && errno == EINTR) {
@@ -156,10 +160,114 @@ Process RunProcess(const std::vector<std::string>& argv, const fs::path& dir) {
   p.seconds = Seconds(t0, Clock::now());
   p.max_rss_bytes = 1024.0 * static_cast<double>(usage.ru_maxrss);  // Linux: kilobytes
   if (WIFEXITED(status)) p.exit_code = WEXITSTATUS(status);
-  p.out = ReadText(out_path);
-  p.err = ReadText(err_path);
-  return p;
 }
+
+bool WriteAll(int fd, const void* data, size_t size) {
+  const char* c = static_cast<const char*>(data);
+  while (size > 0) {
+    const ssize_t n = write(fd, c, size);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) return false;
+    c += n;
+    size -= static_cast<size_t>(n);
+  }
+  return true;
+}
+
+bool ReadAll(int fd, void* data, size_t size) {
+  char* c = static_cast<char*>(data);
+  while (size > 0) {
+    const ssize_t n = read(fd, c, size);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) return false;
+    c += n;
+    size -= static_cast<size_t>(n);
+  }
+  return true;
+}
+
+// Starts the measured processes from a small process forked before this one grows. A child's
+// ru_maxrss is at least the high-water mark of the address space it was started from (exec
+// keeps the larger of the two, and posix_spawn's child starts in its parent's address space), so
+// children started from this process would all report its own peak: the ground truth of the
+// largest mesh so far. The helper's own peak is a few MB.
+class Spawner {
+ public:
+  // Forks the helper; call it first thing, before any thread exists. False if that failed.
+  bool Start() {
+    int to[2], from[2];
+    if (pipe(to) != 0 || pipe(from) != 0) return false;
+    pid_ = fork();
+    if (pid_ < 0) return false;
+    if (pid_ == 0) {
+      close(to[1]);
+      close(from[0]);
+      Serve(to[0], from[1]);
+      _exit(0);  // not exit(): the parent's stdio buffers are not the helper's to flush
+    }
+    close(to[0]);
+    close(from[1]);
+    to_ = to[1];
+    from_ = from[0];
+    return true;
+  }
+
+  ~Spawner() {
+    if (pid_ <= 0) return;
+    close(to_);  // the helper reads end of file and exits
+    close(from_);
+    int status = 0;
+    waitpid(pid_, &status, 0);
+  }
+
+  // `argv` run by the helper (SpawnAndWait), with its output read back.
+  Process Run(const std::vector<std::string>& argv, const fs::path& dir) {
+    Process p;
+    std::vector<std::string> request = argv;
+    request.push_back(dir.string());
+    const uint32_t count = static_cast<uint32_t>(request.size());
+    bool ok = WriteAll(to_, &count, sizeof count);
+    for (const std::string& a : request) {
+      const uint32_t size = static_cast<uint32_t>(a.size());
+      ok = ok && WriteAll(to_, &size, sizeof size) && WriteAll(to_, a.data(), a.size());
+    }
+    ok = ok && ReadAll(from_, &p.exit_code, sizeof p.exit_code) && ReadAll(from_, &p.seconds, sizeof p.seconds) &&
+         ReadAll(from_, &p.max_rss_bytes, sizeof p.max_rss_bytes);
+    if (!ok) {
+      p.exit_code = -1;
+      p.err = "the helper process that starts the programs is gone";
+      return p;
+    }
+    p.out = ReadText(dir / "stdout.txt");
+    p.err = ReadText(dir / "stderr.txt");
+    if (p.exit_code == -1 && p.err.empty()) p.err = absl::StrFormat("%s did not start or did not exit", argv[0]);
+    return p;
+  }
+
+ private:
+  static void Serve(int in, int out) {
+    for (uint32_t count = 0; ReadAll(in, &count, sizeof count);) {
+      std::vector<std::string> request(count);
+      for (std::string& a : request) {
+        uint32_t size = 0;
+        if (!ReadAll(in, &size, sizeof size)) return;
+        a.resize(size);
+        if (!ReadAll(in, a.data(), size)) return;
+      }
+      const fs::path dir = request.back();
+      request.pop_back();
+      Process p;
+      SpawnAndWait(request, dir, p);
+      if (!WriteAll(out, &p.exit_code, sizeof p.exit_code) || !WriteAll(out, &p.seconds, sizeof p.seconds) ||
+          !WriteAll(out, &p.max_rss_bytes, sizeof p.max_rss_bytes)) {
+        return;
+      }
+    }
+  }
+
+  pid_t pid_ = -1;
+  int to_ = -1, from_ = -1;
+};
 
 // The seconds of "smooth Xs" in a job summary or a meshsmooth_peer line.
 std::optional<double> SmoothSeconds(const std::string& out) {
@@ -187,7 +295,7 @@ struct Row {
   std::string out;      // the first process's stdout
 };
 
-Row RunRow(const std::string& label, const std::vector<std::string>& argv, const fs::path& output,
+Row RunRow(Spawner& spawner, const std::string& label, const std::vector<std::string>& argv, const fs::path& output,
            const GroundTruth& truth, int runs, const fs::path& dir) {
   Row row;
   row.label = label;
@@ -195,7 +303,7 @@ Row RunRow(const std::string& label, const std::vector<std::string>& argv, const
   for (int r = 0; r < runs; ++r) {
     std::error_code ignored;
     fs::remove(output, ignored);
-    const Process p = RunProcess(argv, dir);
+    const Process p = spawner.Run(argv, dir);
     if (!p.ok()) {
       row.failure = absl::StrFormat("exit %d: %s", p.exit_code, absl::StripAsciiWhitespace(p.err));
       std::fprintf(stderr, "  %s failed (%s)\n", absl::StrJoin(argv, " ").c_str(), row.failure.c_str());
@@ -267,8 +375,8 @@ struct CaseResult {
   bool failed() const { return !row.failure.empty(); }
 };
 
-CaseResult MeshCase(const Options& opt, const Subject& subject, double sigma, const std::vector<const Peer*>& peers,
-                    const fs::path& dir) {
+CaseResult MeshCase(Spawner& spawner, const Options& opt, const Subject& subject, double sigma,
+                    const std::vector<const Peer*>& peers, const fs::path& dir) {
   const GroundTruth& truth = *subject.truth;
   const Case c{Noise::kNormal, sigma};
   const std::string stem = absl::StrFormat("%s-%g", subject.name, sigma);
@@ -299,8 +407,8 @@ CaseResult MeshCase(const Options& opt, const Subject& subject, double sigma, co
 
   const std::string cli = opt.cli.string();
   std::fprintf(stderr, "%s, sigma %g: default job\n", subject.name.c_str(), sigma);
-  job.row = RunRow("meshsmooth default job", {cli, "smooth", input.string(), "-o", output.string()}, output, truth,
-                   opt.runs, dir);
+  job.row = RunRow(spawner, "meshsmooth default job", {cli, "smooth", input.string(), "-o", output.string()}, output,
+                   truth, opt.runs, dir);
   const std::optional<std::pair<std::string, int>> chosen = ChosenFlow(job.row.out);
   if (job.row.failure.empty() && !chosen) job.row.failure = "no `job ...: FLOW, N iterations` line in its output";
   if (chosen) {
@@ -313,7 +421,7 @@ CaseResult MeshCase(const Options& opt, const Subject& subject, double sigma, co
   if (chosen) {
     std::fprintf(stderr, "%s, sigma %g: %s, %d iterations\n", subject.name.c_str(), sigma, chosen->first.c_str(),
                  chosen->second);
-    expl = RunRow(absl::StrFormat("chosen flow, explicit: %s", chosen->first),
+    expl = RunRow(spawner, absl::StrFormat("chosen flow, explicit: %s", chosen->first),
                   {cli, "smooth", input.string(), "-o", output.string(), "--flow", chosen->first, "--iterations",
                    absl::StrFormat("%d", chosen->second)},
                   output, truth, opt.runs, dir);
@@ -332,8 +440,8 @@ CaseResult MeshCase(const Options& opt, const Subject& subject, double sigma, co
       row.label = peer->name;
       row.failure = "no finite result at any count";
     } else {
-      row = RunRow(peer->name,
-                   {opt.peer_program.string(), "--time", absl::StrFormat("%g", opt.smooth_shape_time), peer->id,
+      row = RunRow(spawner, peer->name,
+                   {PeerProgram(opt, *peer).string(), "--time", absl::StrFormat("%g", opt.smooth_shape_time), peer->id,
                     absl::StrFormat("%d", count), input.string(), output.string()},
                    output, truth, opt.runs, dir);
     }
@@ -391,7 +499,7 @@ void SummaryTable(const std::vector<CaseResult>& cases) {
 }
 
 // False when the CLI failed or the input could not be written.
-bool ScaleSection(const Options& opt, const std::vector<CaseResult>& jobs, const fs::path& dir) {
+bool ScaleSection(Spawner& spawner, const Options& opt, const std::vector<CaseResult>& jobs, const fs::path& dir) {
   std::fprintf(stderr, "scale: icosphere level %d\n", kScaleLevel);
   Mesh clean = Icosphere(kScaleLevel);
   Mesh noisy = clean;
@@ -418,7 +526,7 @@ bool ScaleSection(const Options& opt, const std::vector<CaseResult>& jobs, const
   Row row;
   std::vector<double> smooth, process, rss;
   for (int r = 0; r < opt.runs; ++r) {
-    const Process p = RunProcess({opt.cli.string(), "smooth", input.string(), "-o", output.string()}, dir);
+    const Process p = spawner.Run({opt.cli.string(), "smooth", input.string(), "-o", output.string()}, dir);
     if (!p.ok()) {
       std::fprintf(stderr, "scale: the CLI failed (exit %d): %s\n", p.exit_code, p.err.c_str());
       std::printf("| icosphere | %d | failed (exit %d) | | | | | |\n", n, p.exit_code);
@@ -543,22 +651,24 @@ int Main(int argc, char** argv) {
   // The programs this one runs: beside it in the build tree unless given.
   const fs::path self_dir = fs::read_symlink("/proc/self/exe").parent_path();
   if (opt.cli.empty()) opt.cli = self_dir.parent_path() / "client" / "meshsmooth";
-  if (opt.peer_program.empty()) opt.peer_program = self_dir / "meshsmooth_peer";
-  for (const fs::path& program : {opt.cli, opt.peer_program}) {
+  opt.self_dir = self_dir;
+  const std::vector<Peer> all = AllPeers(opt.smooth_shape_time);
+  std::vector<const Peer*> peers;
+  std::vector<std::string> missing;
+  std::vector<fs::path> programs = {opt.cli};
+  for (const std::string& id : opt.peers) {
+    if (const Peer* p = FindPeer(all, id)) {
+      peers.push_back(p);
+      programs.push_back(PeerProgram(opt, *p));
+    } else {
+      missing.push_back(id);
+    }
+  }
+  for (const fs::path& program : programs) {
     if (access(program.c_str(), X_OK) != 0) {
       std::fprintf(stderr, "meshsmooth_time_to_quality: %s is not an executable program (--cli, --peer-program)\n",
                    program.c_str());
       return kExitFailed;
-    }
-  }
-  const std::vector<Peer> all = AllPeers(opt.smooth_shape_time);
-  std::vector<const Peer*> peers;
-  std::vector<std::string> missing;
-  for (const std::string& id : opt.peers) {
-    if (const Peer* p = FindPeer(all, id)) {
-      peers.push_back(p);
-    } else {
-      missing.push_back(id);
     }
   }
 
@@ -580,6 +690,14 @@ int Main(int argc, char** argv) {
     }
   }
 
+  Spawner spawner;
+  if (!spawner.Start()) {
+    std::fprintf(stderr, "meshsmooth_time_to_quality: cannot fork: %s\n", std::strerror(errno));
+    return kExitFailed;
+  }
+  // What any process started this way reports as its peak, however small it is.
+  const double rss_floor = spawner.Run({"/bin/true"}, opt.workdir).max_rss_bytes;
+
   std::vector<std::string> command;
   for (int i = 0; i < argc; ++i) command.emplace_back(argv[i]);
   std::printf("## Time to a good mesh\n\n");
@@ -587,6 +705,8 @@ int Main(int argc, char** argv) {
               std::thread::hardware_concurrency());
   std::printf("Times are medians of %d processes; the peers' counts come from the sweep %s.\n", opt.runs,
               absl::StrJoin(opt.counts, ",").c_str());
+  std::printf("Peak RSS is the process's ru_maxrss (wait4); /bin/true started the same way reports %.1f MB.\n",
+              rss_floor / 1e6);
   if (!missing.empty()) {
     std::printf("Not in this build (left out): %s.\n", absl::StrJoin(missing, ", ").c_str());
   }
@@ -603,12 +723,12 @@ int Main(int argc, char** argv) {
       continue;
     }
     for (double sigma : opt.sigmas) {
-      jobs.push_back(MeshCase(opt, *subject, sigma, peers, opt.workdir));
+      jobs.push_back(MeshCase(spawner, opt, *subject, sigma, peers, opt.workdir));
       if (jobs.back().failed()) status = kExitFailed;
     }
   }
   if (!jobs.empty()) SummaryTable(jobs);
-  if (opt.scale && !ScaleSection(opt, jobs, opt.workdir)) status = kExitFailed;
+  if (opt.scale && !ScaleSection(spawner, opt, jobs, opt.workdir)) status = kExitFailed;
   if (own_workdir) {
     std::error_code ignored;
     fs::remove_all(opt.workdir, ignored);
