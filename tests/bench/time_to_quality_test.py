@@ -1,6 +1,7 @@
 #!/usr/bin/python3
 """The time-to-quality programs as a user runs them: meshsmooth_peer (each peer of the build
-brings a noisy sphere closer to the sphere, its line, its exit codes) and
+brings a noisy sphere closer to the sphere, its line, its exit codes; meshsmooth_peer_LIBRARY
+beside it runs that library's peers and no other's) and
 meshsmooth_time_to_quality (help, argument errors, and a whole run on the benchmark's synthetic
 sphere, whose table must show the default job and a peer below the noisy input's distance).
 
@@ -52,7 +53,7 @@ def peers_of(peer):
     """The peer names `meshsmooth_peer --help` lists for this build."""
     r = run([peer, "--help"])
     require(r.returncode == 0, f"--help exited {r.returncode}: {r.stderr}")
-    lines = r.stdout.split("PEER, in this build:\n", 1)
+    lines = r.stdout.split("PEER, in this program:\n", 1)
     require(len(lines) == 2, f"no peer list in --help:\n{r.stdout}")
     return [line.split()[0] for line in lines[1].splitlines() if line.startswith("  ")]
 
@@ -96,6 +97,25 @@ def main():
 
         for name in peers or []:
             checks.check(f"peer: {name} brings the noisy sphere closer (or moves it, if tangential)", smooths, name)
+
+        def one_library_each():
+            folder = os.path.dirname(os.path.abspath(args.peer))
+            seen = []
+            for library in ("openmesh", "open3d", "cgal"):
+                program = os.path.join(folder, f"meshsmooth_peer_{library}")
+                if not os.path.exists(program):
+                    require(not any(p.startswith(library + "_") for p in peers), f"no {program}")
+                    continue
+                names = peers_of(program)
+                require(names and all(n.startswith(library + "_") for n in names), f"{program} runs {names}")
+                seen += names
+                out = os.path.join(tmp, f"{library}.obj")
+                r = run([program, names[0], "1", noisy, out])
+                require(r.returncode == 0 and os.path.exists(out), f"{program} {names[0]}: {r.stderr}")
+            require(seen == peers, f"the per-library programs run {seen}, meshsmooth_peer {peers}")
+
+        checks.check("peer: each meshsmooth_peer_LIBRARY runs its own library's peers, together all of them",
+                     one_library_each)
 
         def writes_ply():
             out = os.path.join(tmp, "out.ply")
@@ -145,7 +165,8 @@ def main():
                       "--shared", tmp, "--runs", "1", "--peers", "openmesh_c0"], 1, "no-such-mesh")
 
         def whole_run():
-            r = run([ttq, "--cli", args.cli, "--peer-program", args.peer, "--meshes", "sphere", "--sigmas",
+            # No --peer-program: the benchmark finds meshsmooth_peer_openmesh beside itself.
+            r = run([ttq, "--cli", args.cli, "--meshes", "sphere", "--sigmas",
                      str(SIGMA), "--runs", "1", "--counts", "1,2,3,5,8", "--peers", "openmesh_c0,no_such_peer",
                      "--workdir", os.path.join(tmp, "work")], timeout=300)
             require(r.returncode == 0, f"exit {r.returncode}: {r.stderr[-2000:]}")
