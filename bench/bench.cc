@@ -112,7 +112,7 @@ void MeshSection(const NamedMesh& nm, const Options& opt, const std::vector<Peer
       if (!ours_1t.count(peer.ours)) continue;
       std::vector<double> t;
       const int peer_iterations = std::max(1, iterations / 4);
-      for (int r = 0; r < opt.runs; ++r) t.push_back(peer.run(nm.mesh, peer_iterations) / peer_iterations);
+      for (int r = 0; r < opt.runs; ++r) t.push_back(peer.run(nm.mesh, peer_iterations).ms / peer_iterations);
       const double theirs = Median(t), ours = ours_1t[peer.ours];
       std::printf("| %s | %.2f | %s | %.2f | %.1fx |\n", peer.name.c_str(), theirs, peer.ours.c_str(), ours,
                   theirs / ours);
@@ -217,11 +217,7 @@ int main(int argc, char** argv) {
   if (opt.default_job_only) return 0;
 
   std::vector<Peer> peers;
-  if (opt.peers) {
-    for (auto&& list : {OpenMeshPeers(), Open3dPeers(), CgalPeers()}) {
-      peers.insert(peers.end(), list.begin(), list.end());
-    }
-  }
+  if (opt.peers) peers = AllPeers();
   for (const NamedMesh& nm : meshes) MeshSection(nm, opt, peers, bw2, hw, self);
   if (opt.service) {
     std::printf("\n## Through the service (loopback TCP, laplacian U0, 10 iterations, lossless sequential Draco)\n\n");

@@ -4,6 +4,7 @@
 #include <open3d/geometry/TriangleMesh.h>
 
 #include <chrono>
+#include <memory>
 
 #include "bench/peers.h"
 
@@ -20,26 +21,31 @@ open3d::geometry::TriangleMesh ToOpen3d(const Mesh& mesh) {
   return m;
 }
 
-template <typename Fn>
-double Time(Fn&& fn) {
+// Times `filter` (a call returning the smoothed copy) and takes its vertices.
+template <typename Filter>
+PeerRun Run(Filter&& filter) {
+  PeerRun run;
   const auto t0 = std::chrono::steady_clock::now();
-  fn();
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  const std::shared_ptr<open3d::geometry::TriangleMesh> out = filter();
+  run.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  run.positions.reserve(out->vertices_.size());
+  for (const Eigen::Vector3d& p : out->vertices_) run.positions.push_back({p.x(), p.y(), p.z()});
+  return run;
 }
 
 }  // namespace
 
 std::vector<Peer> Open3dPeers() {
   return {
-      {"Open3D FilterSmoothLaplacian (0.16)", "laplacian U1",
+      {"open3d_laplacian", "open3d", "Open3D FilterSmoothLaplacian (0.16)", "laplacian U1",
        [](const Mesh& mesh, int it) {
          const auto m = ToOpen3d(mesh);
-         return Time([&] { m.FilterSmoothLaplacian(it, 0.5); });
+         return Run([&] { return m.FilterSmoothLaplacian(it, 0.5); });
        }},
-      {"Open3D FilterSmoothTaubin (0.16)", "taubin U1",
+      {"open3d_taubin", "open3d", "Open3D FilterSmoothTaubin (0.16)", "taubin U1",
        [](const Mesh& mesh, int it) {
          const auto m = ToOpen3d(mesh);
-         return Time([&] { m.FilterSmoothTaubin(it, 0.5, -0.53); });
+         return Run([&] { return m.FilterSmoothTaubin(it, 0.5, -0.53); });
        }},
   };
 }

@@ -1,4 +1,5 @@
-// Built when CMake does not find Open3D: no Open3D rows in the benchmark.
+// Built when CMake does not find Open3D (no Open3D rows in the benchmarks), and linked into the
+// peer programs of the other libraries.
 #include "bench/peers.h"
 
 namespace meshsmooth::bench {

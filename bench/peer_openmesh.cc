@@ -1,5 +1,7 @@
-// OpenMesh 9's JacobiLaplaceSmootherT: uniform weights with Tangential_and_Normal, cotangent
-// weights (computed once, in initialize) with Normal; both C0, on a double-precision mesh.
+// OpenMesh 9's JacobiLaplaceSmootherT on a double-precision mesh: uniform weights with
+// Tangential_and_Normal, C0 (one umbrella step of 0.5) and C1 (a step along the umbrella of
+// the umbrellas, OpenMesh's bi-Laplacian); cotangent weights (computed once, in initialize)
+// with Normal, C0. Boundary vertices stay fixed (OpenMesh's active set).
 #include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
 #include <OpenMesh/Tools/Smoother/JacobiLaplaceSmootherT.hh>
 #include <chrono>
@@ -16,7 +18,7 @@ struct DoubleTraits : OpenMesh::DefaultTraits {
 using OMesh = OpenMesh::TriMesh_ArrayKernelT<DoubleTraits>;
 using Smoother = OpenMesh::Smoother::JacobiLaplaceSmootherT<OMesh>;
 
-double Run(const Mesh& mesh, int iterations, Smoother::Component component) {
+PeerRun Run(const Mesh& mesh, int iterations, Smoother::Component component, Smoother::Continuity continuity) {
   OMesh om;
   std::vector<OMesh::VertexHandle> vh;
   vh.reserve(mesh.positions.size());
@@ -28,20 +30,29 @@ double Run(const Mesh& mesh, int iterations, Smoother::Component component) {
   om.request_face_normals();
   om.update_normals();
   Smoother smoother(om);
-  smoother.initialize(component, Smoother::C0);
+  smoother.initialize(component, continuity);
+  PeerRun run;
   const auto t0 = std::chrono::steady_clock::now();
   smoother.smooth(static_cast<unsigned>(iterations));
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  run.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  run.positions.reserve(vh.size());
+  for (const OMesh::VertexHandle v : vh) {
+    const OMesh::Point& p = om.point(v);
+    run.positions.push_back({p[0], p[1], p[2]});
+  }
+  return run;
 }
 
 }  // namespace
 
 std::vector<Peer> OpenMeshPeers() {
   return {
-      {"OpenMesh JacobiLaplace uniform C0", "laplacian U0",
-       [](const Mesh& m, int it) { return Run(m, it, Smoother::Tangential_and_Normal); }},
-      {"OpenMesh JacobiLaplace cotangent Normal C0", "mcf",
-       [](const Mesh& m, int it) { return Run(m, it, Smoother::Normal); }},
+      {"openmesh_c0", "openmesh", "OpenMesh JacobiLaplace uniform C0", "laplacian U0",
+       [](const Mesh& m, int it) { return Run(m, it, Smoother::Tangential_and_Normal, Smoother::C0); }},
+      {"openmesh_c1", "openmesh", "OpenMesh JacobiLaplace uniform C1", "",
+       [](const Mesh& m, int it) { return Run(m, it, Smoother::Tangential_and_Normal, Smoother::C1); }},
+      {"openmesh_cotangent", "openmesh", "OpenMesh JacobiLaplace cotangent Normal C0", "mcf",
+       [](const Mesh& m, int it) { return Run(m, it, Smoother::Normal, Smoother::C0); }},
   };
 }
 

@@ -25,7 +25,7 @@ packages=(
 )
 if [ "$preset" != image ]; then
   packages+=(
-    grpc-proto draco libopenmesh-dev libgtest-dev libgmock-dev libbenchmark-dev
+    grpc-proto draco libopenmesh-dev libgtest-dev libgmock-dev libbenchmark-dev libopen3d-dev libcgal-dev
     python3-grpcio python3-protobuf python3-numpy python3-scipy python3-yaml openssl
     nginx clang-format
   )
