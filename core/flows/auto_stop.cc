@@ -210,7 +210,7 @@ std::optional<StopReason> AutoStop::After(int it, const Vec3* pos, const Vec3* p
     report_.displacement_h = RmsNormalDisplacement(pos) / h_;
     report_.risk_h2 = (risk - sigma_ * sigma_) / (h_ * h_);
   }
-  if (rival_ && it >= 2 * kRivalWindow) {
+  if (rival_ && it > 2 * kRivalWindow) {  // two full windows of decreases
     const double last = risks_[it - 1 - kRivalWindow] - risk;
     const double before = risks_[it - 1 - 2 * kRivalWindow] - risks_[it - 1 - kRivalWindow];
     if (last > 0.0 && before > last) {
