@@ -118,10 +118,14 @@ FaceGraph BuildFaceGraph(const Mesh& mesh, const Topology& topo, int threads) {
   }
   for (int32_t v = 0; v < n; ++v) g.vertex_offsets[v + 1] += g.vertex_offsets[v];
   g.vertex_faces.resize(g.vertex_offsets[n]);
+  g.corner_entry.resize(nf);
   {
     std::vector<int32_t> at(g.vertex_offsets.begin(), g.vertex_offsets.end() - 1);
     for (int32_t f = 0; f < nf; ++f) {
-      for (int32_t v : g.faces[f]) g.vertex_faces[at[v]++] = f;
+      for (int k = 0; k < 3; ++k) {
+        g.corner_entry[f][k] = at[g.faces[f][k]]++;
+        g.vertex_faces[g.corner_entry[f][k]] = f;
+      }
     }
   }
 
@@ -215,7 +219,8 @@ Vec3 NormalFilterKernel::FilteredNormal(int32_t i, const std::vector<Vec3>& g) c
 }
 
 void NormalFilterKernel::Prepare(const StepContext& c, const Vec3* cur, int32_t n, int threads) {
-  if (pass_++ % passes() == 0) {  // the vertex passes of a round keep its normals
+  const int pass = pass_++ % passes();
+  if (pass == 0) {  // the vertex passes of a round keep its normals
     ComputeGeometry(cur);
     filtered_.resize(normal_.size());
     for (int k = 0; k < p_.normal_iterations; ++k) {
@@ -224,7 +229,12 @@ void NormalFilterKernel::Prepare(const StepContext& c, const Vec3* cur, int32_t 
     }
     FitFaces(cur);
   }
-  UpdateVertices(c, cur, n, threads);
+  if (!UpdateVertices(c, cur, n, threads, pass > 0)) {
+    // `cur` is not where the pass before left the vertices (target_): the faces are fitted to it.
+    FitFaces(cur);
+    UpdateVertices(c, cur, n, threads, false);
+  }
+  GuardOrientation(cur, n, threads, pass + 1 < passes());
 }
 
 }  // namespace meshsmooth::flows

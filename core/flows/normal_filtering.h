@@ -34,6 +34,8 @@ struct FaceGraph {
   std::vector<Triangle> faces;
   // The faces around each vertex (indices into `faces`), ascending, CSR.
   std::vector<int32_t> vertex_offsets, vertex_faces;
+  // Per face: the entry of vertex_faces that lists it for each of its corners.
+  std::vector<std::array<int32_t, 3>> corner_entry;
   // The faces sharing a vertex with each face, the face itself included, ascending, CSR.
   std::vector<int32_t> offsets, neighbours;
   // The face across each edge (v0 v1, v1 v2, v2 v0), or -1 on a boundary or non-manifold edge.
@@ -71,6 +73,12 @@ inline double NegExp(double x) {
 // from it and implements FilterOnce.
 class NormalFilterKernel : public FlowKernel {
  public:
+  // A face's term of the vertex update at one of its corners v.
+  struct Term {
+    Vec3 move;    // A_f n_f (n_f . (c_f - x_v)); zero for a face without normal
+    double area;  // A_f, negative when the face opposes its filtered normal; 0 without normal
+  };
+
   explicit NormalFilterKernel(const NormalFilterParams& p) : p_(p) {}
   int passes() const override { return p_.vertex_iterations; }
   void Bind(const Mesh& mesh, const Topology& topo, int threads) override;
@@ -113,27 +121,32 @@ class NormalFilterKernel : public FlowKernel {
   // Normals, areas and the spatial weights of the positions `pos`; a face whose normal
   // opposes the area-weighted normal of its neighbours takes theirs.
   void ComputeGeometry(const Vec3* pos);
-  // Each face's plane offset and orientation (FaceState) in the positions `pos`.
+  // Each face's orientation (FaceState) in the positions `pos`, and its terms of the next
+  // vertex pass.
   void FitFaces(const Vec3* pos);
-  // One pass of the vertex update from `cur` into target_.
-  void UpdateVertices(const StepContext& c, const Vec3* cur, int32_t n, int threads);
+  // One pass of the vertex update from `cur` into target_; returns false (and leaves target_
+  // unfinished) when `cur` is not the positions the terms in term_ were written for.
+  bool UpdateVertices(const StepContext& c, const Vec3* cur, int32_t n, int threads, bool check_start);
   // Damps the moves in target_ until no face turns against its filtered normal, and leaves
-  // offset_ and state_ for the positions target_ holds then.
-  void GuardOrientation(const Vec3* cur, int32_t n, int threads);
+  // state_ and cosine_ for the positions target_ holds then; with `terms`, the terms of the
+  // next pass too.
+  void GuardOrientation(const Vec3* cur, int32_t n, int threads, bool terms);
 
-  int pass_ = 0;                     // passes prepared so far
-  std::vector<Vec3> target_;         // per vertex: the pass's result
-  std::vector<double> offset_;       // per face: n_f . c_f in the pass's positions
-  std::vector<uint8_t> state_;       // per face: FaceState in the pass's positions
-  std::vector<double> cosine_;       // per face: between it and its filtered normal, ditto
-  std::vector<double> next_offset_;  // the same in target_, for the next pass of the round
+  int pass_ = 0;                // passes prepared so far
+  std::vector<Vec3> target_;    // per vertex: the pass's result
+  std::vector<uint8_t> state_;  // per face: FaceState in the pass's positions
+  std::vector<double> cosine_;  // per face: between it and its filtered normal, ditto
   std::vector<uint8_t> next_state_;
   std::vector<double> next_cosine_;
-  std::vector<uint8_t> turned_;   // per face: the guard's first round found it turned
-  std::vector<uint8_t> damping_;  // per vertex: 0 full move, 1 half, 2 none
-  std::vector<int64_t> capped_;   // per block of kBlock vertices: moves capped at max_step_sq
-  std::vector<int32_t> stamp_;    // per vertex: the guard round that last listed it
-  int32_t round_ = 0;             // guard rounds so far
+  // The vertex update's terms, one per entry of graph_.vertex_faces (Term): written by the
+  // face loops, summed by each vertex over its own contiguous entries, in ascending face order.
+  std::vector<Term> term_;
+  std::vector<std::vector<int32_t>> turned_;  // per block of faces: those the guard's first round found turned
+  std::vector<uint8_t> damping_;              // per vertex: 0 full move, 1 half, 2 none
+  std::vector<int64_t> capped_;               // per block of kBlock vertices: moves capped at max_step_sq
+  std::vector<uint8_t> moved_on_;             // per block of kBlock vertices: `cur` was not target_
+  std::vector<int32_t> stamp_;                // per vertex: the guard round that last listed it
+  int32_t round_ = 0;                         // guard rounds so far
 };
 
 }  // namespace meshsmooth::flows
