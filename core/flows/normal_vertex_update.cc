@@ -2,10 +2,11 @@
 // folded faces; docs/normal-filtering.md ("The vertex update", "Folded faces") gives the
 // equations and why each guard is there.
 //
-// A pass is one loop over the faces and one over the vertices. The face loop fits each face to
-// the pass's positions (the guard's check of the pass before) and writes its term of the update
-// at each corner into that corner's entry of the vertex's face list; each vertex then sums its
-// own entries, contiguous and in ascending face order, with no gather.
+// The update's sum over the faces of v, sum_f A_f n_f (n_f . (c_f - x_v)), is computed as
+// sum_f q_f - M_v x_v with q_f = A_f (n_f . c_f) n_f and M_v = sum_f A_f n_f n_f^T: a pass is
+// then one loop over the faces, which fits each face to the pass's positions (its orientation,
+// the guard's check of the pass before, and q_f) and one over the vertices, which sums q_f over
+// its faces; M_v and sum_f A_f are the round's, summed in its first pass.
 #include <algorithm>
 #include <cmath>
 
@@ -18,79 +19,29 @@ namespace {
 // The tangential relaxation of a folded face's vertices, as a share of the umbrella (eq. 3).
 constexpr double kUnfoldStep = 0.5;
 
-// A face's orientation against its filtered normal in a pass's positions.
-enum FaceState : uint8_t {
-  kNoNormal = 0,  // no filtered normal (no area at the round's start)
-  kAgrees = 1,    // its normal . the filtered normal > 0: a pass keeps it so
-  kOpposes = 2,   // folded: its vertices relax tangentially
-};
-
-// FaceState of face f with cross product `cross` against the filtered normal n.
-uint8_t StateOf(double area, const Vec3& cross, const Vec3& n) {
-  return area == 0.0 ? kNoNormal : Dot(cross, n) > 0.0 ? kAgrees : kOpposes;
-}
-
-// The cosine between a face with cross product `cross` and the filtered normal n; -2 (below
-// any cosine) for a face that has collapsed.
-double CosineTo(const Vec3& cross, const Vec3& n) {
-  const double len = Norm(cross);
-  return len > 0.0 ? Dot(cross, n) / len : -2.0;
-}
-
-}  // namespace
-
-namespace {
-
-// Writes the update's terms of a face (corners t at p0, p1, p2; filtered normal n, area a, plane
-// offset `offset`, FaceState `state`) to its corners' entries: what UpdateVertices sums.
-__attribute__((always_inline)) inline void WriteTerms(const std::array<int32_t, 3>& entry, const Vec3& p0,
-                                                      const Vec3& p1, const Vec3& p2, const Vec3& n, double a,
-                                                      double offset, uint8_t state, NormalFilterKernel::Term* term) {
-  if (state == kNoNormal) {
-    for (int32_t e : entry) term[e] = {};
-    return;
-  }
-  const double signed_area = state == kOpposes ? -a : a;
-  term[entry[0]] = {n * (a * (offset - Dot(n, p0))), signed_area};
-  term[entry[1]] = {n * (a * (offset - Dot(n, p1))), signed_area};
-  term[entry[2]] = {n * (a * (offset - Dot(n, p2))), signed_area};
-}
-
 }  // namespace
 
 void NormalFilterKernel::FitFaces(const Vec3* pos) {
-  const int32_t nf = static_cast<int32_t>(graph_.faces.size());
-  state_.resize(nf);
-  cosine_.resize(nf);
-  term_.resize(graph_.vertex_faces.size());
-  ForBlocks(nf, threads_, [&](int32_t, int32_t begin, int32_t end) {
-    const Triangle* const faces = graph_.faces.data();
-    for (int32_t f = begin; f < end; ++f) {
-      const Triangle& t = faces[f];
-      const Vec3 &p0 = pos[t[0]], &p1 = pos[t[1]], &p2 = pos[t[2]];
-      const Vec3 n = normal_[f];
-      const double a = area_[f];
-      const Vec3 cross = Cross(p1 - p0, p2 - p0);
-      const double offset = Dot(n, (p0 + p1 + p2) * (1.0 / 3.0));
-      const uint8_t state = StateOf(a, cross, n);
-      state_[f] = state;
-      if (state == kOpposes) cosine_[f] = CosineTo(cross, n);  // read for folded faces only
-      WriteTerms(graph_.corner_entry[f], p0, p1, p2, n, a, offset, state, term_.data());
-    }
+  ForFaces([&](int32_t f) {
+    const Triangle& t = graph_.faces[f];
+    FitFace(f, normal_[f], FaceCross(pos, t), Centroid(pos, t), false, false);
   });
 }
 
-bool NormalFilterKernel::UpdateVertices(const StepContext& c, const Vec3* cur, int32_t n, int threads,
+bool NormalFilterKernel::UpdateVertices(const StepContext& c, const Vec3* cur, int32_t n, int threads, bool round_start,
                                         bool check_start) {
   target_.resize(n);
+  planes_.resize(n);
   damping_.assign(n, 0);
   const int32_t blocks = (n + kBlock - 1) / kBlock;
   capped_.assign(blocks, 0);
   moved_on_.assign(blocks, 0);
   const double lambda = c.lambda;
   ForBlocks(n, threads, [&](int32_t b, int32_t begin, int32_t end) {
-    const Term* const term = term_.data();
     const int32_t* const first = graph_.vertex_offsets.data();
+    const int32_t* const faces = graph_.vertex_faces.data();
+    const uint8_t* const state = state_.data();
+    const Vec3* const q = q_.data();
     for (int32_t v = begin; v < end; ++v) {
       const Vec3 x = cur[v];
       if (check_start && !(target_[v] == x)) moved_on_[b] = 1;
@@ -98,30 +49,45 @@ bool NormalFilterKernel::UpdateVertices(const StepContext& c, const Vec3* cur, i
         target_[v] = x;
         continue;
       }
-      // The sum over the faces in ascending order; a face without normal adds zeros.
-      Vec3 f;
-      double weight = 0.0;
+      Vec3 sum;
       bool folded = false;
-      for (int32_t k = first[v]; k < first[v + 1]; ++k) {
-        f += term[k].move;
-        weight += std::fabs(term[k].area);
-        folded |= term[k].area < 0.0;
+      VertexPlanes& m = planes_[v];
+      if (round_start) {
+        m = {};
+        for (int32_t k = first[v]; k < first[v + 1]; ++k) {
+          const int32_t face = faces[k];
+          if (state[face] == kNoNormal) continue;
+          const Vec3 nf = normal_[face];
+          const double a = area_[face];
+          const Vec3 an = nf * a;
+          m.xx += an.x * nf.x, m.xy += an.x * nf.y, m.xz += an.x * nf.z;
+          m.yy += an.y * nf.y, m.yz += an.y * nf.z, m.zz += an.z * nf.z;
+          m.weight += a;
+          sum += q[face];
+          folded |= state[face] == kOpposes;
+        }
+      } else {
+        for (int32_t k = first[v]; k < first[v + 1]; ++k) {
+          sum += q[faces[k]];  // zero for a face without normal
+          folded |= state[faces[k]] == kOpposes;
+        }
       }
-      if (weight > 0.0) f *= 1.0 / weight;
+      Vec3 f{sum.x - (m.xx * x.x + m.xy * x.y + m.xz * x.z), sum.y - (m.xy * x.x + m.yy * x.y + m.yz * x.z),
+             sum.z - (m.xz * x.x + m.yz * x.y + m.zz * x.z)};
+      if (m.weight > 0.0) f *= 1.0 / m.weight;
       // A folded face's vertices also move tangentially towards the centroid of their ring (the
       // umbrella of eq. 3 without its normal part): the projection alone keeps a fold.
       if (folded && c.role[v] == kFree && c.offsets[v + 1] > c.offsets[v]) {
         Vec3 normal;
         for (int32_t k = first[v]; k < first[v + 1]; ++k) {
-          const int32_t face = graph_.vertex_faces[k];
-          if (state_[face] != kNoNormal) normal += normal_[face] * area_[face];
+          if (state[faces[k]] != kNoNormal) normal += normal_[faces[k]] * area_[faces[k]];
         }
         Vec3 centre;
         for (int32_t k = c.offsets[v]; k < c.offsets[v + 1]; ++k) centre += cur[c.ring[k]];
         const Vec3 u = centre * (1.0 / (c.offsets[v + 1] - c.offsets[v])) - x;
         const double len = Norm(normal);
-        const Vec3 m = len > 0.0 ? normal * (1.0 / len) : Vec3{};
-        f += (u - m * Dot(m, u)) * kUnfoldStep;
+        const Vec3 dir = len > 0.0 ? normal * (1.0 / len) : Vec3{};
+        f += (u - dir * Dot(dir, u)) * kUnfoldStep;
       }
       if (c.threshold != nullptr) f = Threshold(f, c.threshold[v]);
       Vec3 step = f * lambda;
@@ -147,28 +113,18 @@ void NormalFilterKernel::GuardOrientation(const Vec3* cur, int32_t n, int thread
   const int32_t nf = static_cast<int32_t>(graph_.faces.size());
   next_state_.resize(nf);
   next_cosine_.resize(nf);
-  // Fits face f to target_ (its state and terms for the next pass) and tells whether the moves
-  // turned it. A face's cosine is read only while it is folded: now (state_) or in the next pass
-  // (next_state_); the square root is skipped for the others, whose entry is not written.
+  // Fits face f to target_ for the next pass and tells whether the moves turned it.
   auto fit = [&](int32_t f) __attribute__((always_inline)) {
     const Triangle& t = graph_.faces[f];
     const Vec3 &p0 = target[t[0]], &p1 = target[t[1]], &p2 = target[t[2]];
-    const Vec3 nrm = normal_[f];
-    const double a = area_[f];
     const Vec3 cross = Cross(p1 - p0, p2 - p0);
-    const uint8_t was = state_[f], state = StateOf(a, cross, nrm);
-    next_state_[f] = state;
-    bool turned = was == kAgrees && state != kAgrees;
-    if (state == kOpposes || was == kOpposes) {
-      const double cosine = CosineTo(cross, nrm);
-      next_cosine_[f] = cosine;
-      turned |= was == kOpposes && cosine < cosine_[f];
+    const uint8_t was = state_[f];
+    if (!terms) {  // the round's last pass: only whether it turned
+      if (was == kAgrees) return !(Dot(cross, normal_[f]) > 0.0);
+      return was == kOpposes && CosineTo(cross, normal_[f]) < cosine_[f];
     }
-    if (terms) {
-      WriteTerms(graph_.corner_entry[f], p0, p1, p2, nrm, a, Dot(nrm, (p0 + p1 + p2) * (1.0 / 3.0)), state,
-                 term_.data());
-    }
-    return turned;
+    const double cosine = FitFace(f, normal_[f], cross, (p0 + p1 + p2) * (1.0 / 3.0), true, was == kOpposes);
+    return was == kAgrees ? next_state_[f] != kAgrees : was == kOpposes && cosine < cosine_[f];
   };
   auto turns = [&](int32_t f) {
     if (state_[f] == kNoNormal) return false;
@@ -220,6 +176,7 @@ void NormalFilterKernel::GuardOrientation(const Vec3* cur, int32_t n, int thread
       }
     }
   }
+  if (!terms) return;              // the next pass starts a round: it fits the faces again
   for (int32_t f : refit) fit(f);  // faces whose corners the guard moved back
   state_.swap(next_state_);
   cosine_.swap(next_cosine_);
