@@ -190,6 +190,8 @@ class NormalFilterKernel : public FlowKernel {
   std::vector<int64_t> capped_;               // per block of kBlock vertices: moves capped at max_step_sq
   std::vector<uint8_t> moved_on_;             // per block of kBlock vertices: `cur` was not target_
   std::vector<int32_t> stamp_;                // per vertex: the guard round that last listed it
+  std::vector<int32_t> refit_stamp_;          // per face: the pass whose guard last listed it to fit again
+  std::vector<uint8_t> damped_;               // per vertex the guard looks at: a face of it turns
   int32_t round_ = 0;                         // guard rounds so far
 };
 

@@ -133,6 +133,7 @@ void NormalFilterKernel::GuardOrientation(const Vec3* cur, int32_t n, int thread
   };
   auto movable = [&](int32_t v) { return damping_[v] < 2 && !(target_[v] == cur[v]); };
   turned_.resize((nf + kBlock - 1) / kBlock);
+  refit_stamp_.resize(nf, -1);
   ForBlocks(nf, threads, [&](int32_t b, int32_t begin, int32_t end) {
     turned_[b].clear();
     for (int32_t f = begin; f < end; ++f) {
@@ -159,21 +160,32 @@ void NormalFilterKernel::GuardOrientation(const Vec3* cur, int32_t n, int thread
       ++damping_[v];
       target_[v] = damping_[v] == 1 ? cur[v] + (target_[v] - cur[v]) * 0.5 : cur[v];
       for (int32_t k = graph_.vertex_offsets[v]; k < graph_.vertex_offsets[v + 1]; ++k) {
-        refit.push_back(graph_.vertex_faces[k]);
-        for (int32_t u : graph_.faces[graph_.vertex_faces[k]]) {
+        const int32_t f = graph_.vertex_faces[k];
+        if (refit_stamp_[f] != pass_) refit_stamp_[f] = pass_, refit.push_back(f);
+        for (int32_t u : graph_.faces[f]) {
           if (stamp_[u] != round_) stamp_[u] = round_, around.push_back(u);
         }
       }
     }
     damp.clear();
-    for (int32_t u : around) {
-      if (!movable(u)) continue;
-      for (int32_t k = graph_.vertex_offsets[u]; k < graph_.vertex_offsets[u + 1]; ++k) {
-        if (turns(graph_.vertex_faces[k])) {
-          damp.push_back(u);
-          break;
+    // Which of them a face of theirs now turns: each on its own, on all threads when many.
+    const int32_t count = static_cast<int32_t>(around.size());
+    damped_.resize(count);
+    ForBlocks(count, count > kBlock ? threads : 1, [&](int32_t, int32_t begin, int32_t end) {
+      for (int32_t i = begin; i < end; ++i) {
+        const int32_t u = around[i];
+        damped_[i] = 0;
+        if (!movable(u)) continue;
+        for (int32_t k = graph_.vertex_offsets[u]; k < graph_.vertex_offsets[u + 1]; ++k) {
+          if (turns(graph_.vertex_faces[k])) {
+            damped_[i] = 1;
+            break;
+          }
         }
       }
+    });
+    for (int32_t i = 0; i < count; ++i) {
+      if (damped_[i]) damp.push_back(around[i]);
     }
   }
   if (!terms) return;              // the next pass starts a round: it fits the faces again
