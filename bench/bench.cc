@@ -2,10 +2,12 @@
 // and through the service. Prints Markdown; docs/performance.md is its output.
 //
 //   build/bench/meshsmooth_bench [--quick] [--runs 5] [--no-service] [--no-peers]
-//                                [--levels 6,7,8,9] [--only LABEL,...] [FILE ...]
+//                                [--levels 6,7,8,9] [--only LABEL,...] [--normal-filter-table] [FILE ...]
 //
 // --levels picks the icosphere levels (none: "--levels ''"); --only keeps the flows whose
 // label contains one of the given words (e.g. --only "U0,mcf") and the peers compared with them.
+// --normal-filter-table prints only the table of bilateral_normal's iteration against laplacian
+// U0 on each mesh (normal_filter_speed.h), which the full run prints for the files given.
 //
 // Meshes: noisy icospheres of 40,962 / 163,842 / 655,362 / 2,621,442 vertices (levels 6-9,
 // deterministic), plus any mesh file given. Every time is the median of --runs runs.
@@ -44,7 +46,7 @@ namespace {
 
 struct Options {
   int runs = 5;
-  bool quick = false, service = true, peers = true, default_job_only = false;
+  bool quick = false, service = true, peers = true, default_job_only = false, normal_filter_table = false;
   std::vector<int> levels = {6, 7, 8, 9};
   std::vector<std::string> only;  // empty: every flow
   std::vector<std::string> files;
@@ -151,12 +153,14 @@ int main(int argc, char** argv) {
       opt.peers = false;
     } else if (a == "--default-job-only") {
       opt.default_job_only = true;
+    } else if (a == "--normal-filter-table") {
+      opt.normal_filter_table = true;
     } else if (a == "--peak-child" && i + 1 < argc) {
       return PeakChild(argv[i + 1]);
     } else if (a == "--help" || a == "-h") {
       std::printf(
           "usage: %s [--quick] [--runs N] [--no-service] [--no-peers] [--levels 6,7,8,9] [--only LABEL,...] "
-          "[--default-job-only] [MESH_FILE ...]\n",
+          "[--default-job-only] [--normal-filter-table] [MESH_FILE ...]\n",
           argv[0]);
       return 0;
     } else {
@@ -165,6 +169,7 @@ int main(int argc, char** argv) {
   }
   std::setvbuf(stdout, nullptr, _IOLBF, 0);  // rows appear as they are measured
   if (opt.default_job_only) opt.levels.clear();
+  if (opt.normal_filter_table) opt.service = false;
   char self_buf[4096] = {};
   const ssize_t self_len = readlink("/proc/self/exe", self_buf, sizeof self_buf - 1);
   const std::string self = self_len > 0 ? std::string(self_buf, self_len) : std::string(argv[0]);
@@ -174,7 +179,7 @@ int main(int argc, char** argv) {
   std::printf("`. Times are medians of %d runs.\n", opt.runs);
 
   double bw2 = 0.0;
-  if (!opt.default_job_only) {
+  if (!opt.default_job_only && !opt.normal_filter_table) {
     std::printf(
         "\n## Memory bandwidth (STREAM-like triad, 24 bytes per element)\n\n| arrays | 1 thread | 2 threads "
         "|\n|---|---|---|\n");
@@ -215,6 +220,17 @@ int main(int argc, char** argv) {
     }
   }
   if (opt.default_job_only) return 0;
+  // bilateral_normal's iteration against laplacian U0, on the files given (or every mesh with
+  // --normal-filter-table).
+  const size_t first_table_mesh = opt.normal_filter_table ? 0 : opt.levels.size();
+  if (opt.Wanted("bilateral_normal") && first_table_mesh < meshes.size()) {
+    std::printf("\n## bilateral_normal's iteration against laplacian U0\n");
+    NormalFilterIterationHeader();
+    for (size_t i = first_table_mesh; i < meshes.size(); ++i) {
+      NormalFilterIterationRow(meshes[i].name, meshes[i].mesh, BuildTopology(meshes[i].mesh), hw, opt.runs);
+    }
+  }
+  if (opt.normal_filter_table) return 0;
 
   std::vector<Peer> peers;
   if (opt.peers) peers = AllPeers();

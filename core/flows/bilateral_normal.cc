@@ -18,9 +18,7 @@ class BilateralNormal final : public NormalFilterKernel {
   using NormalFilterKernel::NormalFilterKernel;
 
  protected:
-  void FilterOnce(std::vector<Vec3>& out) override {
-    ForFaces([&](int32_t i) { out[i] = FilteredNormal(i, normal_); });
-  }
+  void FilterOnce(std::vector<Vec3>& out) override { Filter(normal_, out); }
 };
 
 std::unique_ptr<FlowKernel> MakeBilateralNormal(const FlowParams& p, double) {

@@ -58,7 +58,7 @@ class GuidedNormal final : public NormalFilterKernel {
       }
       guide_[i] = chosen < 0 ? normal_[i] : patch_mean_[chosen];
     });
-    ForFaces([&](int32_t i) { out[i] = FilteredNormal(i, guide_); });
+    Filter(guide_, out);
   }
 
  private:

@@ -4,7 +4,9 @@
 #include <cmath>
 
 #include "absl/strings/str_format.h"
+#include "core/flows/lanes.h"
 #include "core/flows/reorder.h"
+#include "core/flows/step_loops.h"
 
 namespace meshsmooth::flows {
 namespace {
@@ -45,20 +47,6 @@ int32_t FaceAcross(const FaceGraph& g, int32_t f, int32_t a, int32_t b) {
   return count == 1 ? other : -1;
 }
 
-// exp(-x) on a table (NegExp in normal_filtering.h).
-class NegExpTable {
- public:
-  NegExpTable() {
-    for (int i = 0; i <= kSize + 1; ++i) value_[i] = std::exp(-static_cast<double>(i) / kScale);
-  }
-  const double* values() const { return value_; }
-
- private:
-  static constexpr int kSize = internal::kNegExpSize;
-  static constexpr double kScale = internal::kNegExpScale;
-  double value_[kSize + 2];
-};
-
 // The faces sharing a vertex with face f (f included), ascending, into `out` (null: only
 // counted); returns their number. vertex_faces lists each vertex's faces ascending.
 int32_t NeighbourFaces(const FaceGraph& g, int32_t f, int32_t* out) {
@@ -70,11 +58,6 @@ int32_t NeighbourFaces(const FaceGraph& g, int32_t f, int32_t* out) {
 }
 
 }  // namespace
-
-namespace internal {
-const NegExpTable kNegExpTable;
-const double* const kNegExpValues = kNegExpTable.values();
-}  // namespace internal
 
 absl::Status ValidateNormalFilter(const FlowParams& p, double /*step*/) {
   const NormalFilterParams& q = p.normal_filter;
@@ -161,6 +144,8 @@ void NormalFilterKernel::Bind(const Mesh& mesh, const Topology& topo, int thread
   threads_ = threads;
   graph_ = BuildFaceGraph(mesh, topo, threads);
   inv_two_sigma_r2_ = 1.0 / (2.0 * p_.sigma_range * p_.sigma_range);
+  const double sigma_s = p_.sigma_spatial * graph_.mean_centroid_distance;
+  inv_two_sigma_s2_ = sigma_s > 0.0 ? 1.0 / (2.0 * sigma_s * sigma_s) : 0.0;
 }
 
 void NormalFilterKernel::ComputeGeometry(const Vec3* pos) {
@@ -169,7 +154,9 @@ void NormalFilterKernel::ComputeGeometry(const Vec3* pos) {
   std::vector<Vec3>& raw = raw_;
   std::vector<Vec3>& centroid = centroid_;
   raw.resize(nf);
+  weighted_.resize(nf);
   centroid.resize(nf);
+  cross_.resize(nf);
   area_.resize(nf);
   ForFaces([&](int32_t f) {
     const Triangle& t = graph_.faces[f];
@@ -179,22 +166,19 @@ void NormalFilterKernel::ComputeGeometry(const Vec3* pos) {
     // A face without area (or a needle whose cross product is all rounding) has no normal.
     const bool ok = 1e-12 * (SquaredNorm(ab) + SquaredNorm(ac)) < len && std::isfinite(len);
     raw[f] = ok ? cross * (1.0 / len) : Vec3{};
+    cross_[f] = cross;
     area_[f] = ok ? 0.5 * len : 0.0;
+    weighted_[f] = raw[f] * area_[f];
     centroid[f] = Centroid(pos, t);
   });
-  const double sigma_s = p_.sigma_spatial * graph_.mean_centroid_distance;
-  const double inv_two_sigma_s2 = sigma_s > 0.0 ? 1.0 / (2.0 * sigma_s * sigma_s) : 0.0;
-  spatial_.resize(graph_.neighbours.size());
   normal_.resize(nf);
   ForFaces([&](int32_t i) {
     Vec3 around;
-    const Vec3 ci = centroid[i];
     for (int32_t k = graph_.offsets[i]; k < graph_.offsets[i + 1]; ++k) {
       const int32_t j = graph_.neighbours[k];
-      spatial_[k] = static_cast<float>(area_[j] * NegExp(SquaredNorm(ci - centroid[j]) * inv_two_sigma_s2));
-      around += raw[j] * area_[j];
+      around += weighted_[j];
     }
-    around -= raw[i] * area_[i];
+    around -= weighted_[i];
     // Noise folds thin faces over: a folded face's own normal would keep it folded, since the
     // range weight shuts out every neighbour on the other side; it takes its neighbours'.
     const double len = Norm(around);
@@ -202,29 +186,97 @@ void NormalFilterKernel::ComputeGeometry(const Vec3* pos) {
   });
 }
 
-Vec3 NormalFilterKernel::FilteredNormal(int32_t i, const std::vector<Vec3>& g) const {
-  if (area_[i] == 0.0) return normal_[i];
-  const Vec3 gi = g[i];
-  Vec3 sum;
-  for (int32_t k = graph_.offsets[i]; k < graph_.offsets[i + 1]; ++k) {
-    const int32_t j = graph_.neighbours[k];
-    sum += normal_[j] * (spatial_[k] * NegExp(SquaredNorm(gi - g[j]) * inv_two_sigma_r2_));
-  }
-  const double len = Norm(sum);
-  return len > 0.0 && std::isfinite(len) ? sum * (1.0 / len) : normal_[i];
+void NormalFilterKernel::Filter(const std::vector<Vec3>& g, std::vector<Vec3>& out) {
+  const int32_t nf = static_cast<int32_t>(graph_.faces.size());
+  const bool separate = &g != &normal_;  // guidance normals: the filtered normals are another array
+  ForBlocks(nf, threads_, [&](int32_t, int32_t begin, int32_t end) {
+    RunWithIsa(
+        isa_, [&](auto width) __attribute__((always_inline)) {
+          constexpr int W = decltype(width)::value;
+          using V = typename VertexLanesOf<W>::type;
+          using I = typename IndexLanesOf<W>::type;
+          const double* const centroid = &centroid_[0].x;
+          const double* const guide = &g[0].x;
+          const double* const normal = &normal_[0].x;
+          const double* const area = area_.data();
+          const int32_t* const offsets = graph_.offsets.data();
+          const int32_t* const neighbours = graph_.neighbours.data();
+          const V zero = V{} + 0.0;
+          I lane;
+          for (int l = 0; l < W; ++l) lane[l] = l;  // a constant
+          alignas(8 * W) double sum_of[3][W];
+          // W faces at a time, one per lane; each lane sums its own entries in order, so its bits are
+          // those of the face summed alone, whatever W. A lane with fewer entries than the batch's
+          // most adds zeros (a face past `end` repeats the batch's first).
+          for (int32_t first = begin; first < end; first += W) {
+            const int32_t count = std::min<int32_t>(W, end - first);
+            const I self = lane < count ? first + lane : first + I{};
+            I at, stop;
+            for (int l = 0; l < W; ++l) at[l] = offsets[self[l]], stop[l] = offsets[self[l] + 1];
+            int32_t most = 0;
+            for (int l = 0; l < W; ++l) most = std::max(most, stop[l] - at[l]);
+            const I self3 = 3 * self;
+            V cix, ciy, ciz, gix, giy, giz;
+            GatherXyzLanes<W>(centroid, self3, cix, ciy, ciz);
+            GatherXyzLanes<W>(guide, self3, gix, giy, giz);
+            const V entries = __builtin_convertvector(stop - at, V);
+            V sx = zero, sy = zero, sz = zero;
+            for (int32_t k = 0; k < most; ++k, at += 1) {
+              const auto live = at < stop;
+              const I j = GatherIndexLanes<W>(neighbours, at, live, self);
+              const I j3 = 3 * j;
+              V cx, cy, cz, gx, gy, gz;
+              GatherXyzLanes<W>(centroid, j3, cx, cy, cz);
+              GatherXyzLanes<W>(guide, j3, gx, gy, gz);
+              V nx = gx, ny = gy, nz = gz;
+              if (separate) GatherXyzLanes<W>(normal, j3, nx, ny, nz);
+              const V dcx = cix - cx, dcy = ciy - cy, dcz = ciz - cz;
+              const V dgx = gix - gx, dgy = giy - gy, dgz = giz - gz;
+              // W_s W_r as one exponential.
+              const V x = (dcx * dcx + dcy * dcy + dcz * dcz) * inv_two_sigma_s2_ +
+                          (dgx * dgx + dgy * dgy + dgz * dgz) * inv_two_sigma_r2_;
+              const V w = GatherLanes<W>(area, j) * NegExpLanes<W>(x);
+              const V weight = zero + k < entries ? w : zero;
+              sx += nx * weight, sy += ny * weight, sz += nz * weight;
+            }
+            std::memcpy(sum_of[0], &sx, sizeof sx);
+            std::memcpy(sum_of[1], &sy, sizeof sy);
+            std::memcpy(sum_of[2], &sz, sizeof sz);
+            for (int32_t l = 0; l < count; ++l) {
+              const int32_t i = first + l;
+              const Vec3 sum{sum_of[0][l], sum_of[1][l], sum_of[2][l]};
+              const double len = Norm(sum);
+              out[i] = area_[i] > 0.0 && len > 0.0 && std::isfinite(len) ? sum * (1.0 / len) : normal_[i];
+              if (fit_) FitFace(i, out[i], cross_[i], centroid_[i], false, false);
+            }
+          }
+          return BlockStats{};
+        });
+  });
 }
 
 void NormalFilterKernel::Prepare(const StepContext& c, const Vec3* cur, int32_t n, int threads) {
-  if (pass_++ % passes() == 0) {  // the vertex passes of a round keep its normals
+  isa_ = c.isa;
+  const int pass = pass_++ % passes();
+  if (pass == 0) {  // the vertex passes of a round keep its normals
     ComputeGeometry(cur);
     filtered_.resize(normal_.size());
+    state_.resize(normal_.size());
+    cosine_.resize(normal_.size());
+    q_.resize(normal_.size());
     for (int k = 0; k < p_.normal_iterations; ++k) {
+      fit_ = k + 1 == p_.normal_iterations;  // FitFace reads normal_: written after the swap below
       FilterOnce(filtered_);
       normal_.swap(filtered_);
     }
-    FitFaces(cur);
+    fit_ = false;
   }
-  UpdateVertices(c, cur, n, threads);
+  if (!UpdateVertices(c, cur, n, threads, pass == 0, pass > 0)) {
+    // `cur` is not where the pass before left the vertices (target_): the faces are fitted to it.
+    FitFaces(cur);
+    UpdateVertices(c, cur, n, threads, false, false);
+  }
+  GuardOrientation(cur, n, threads, pass + 1 < passes());
 }
 
 }  // namespace meshsmooth::flows

@@ -1,6 +1,12 @@
 // The vertex update of the normal-filtering flows (normal_filtering.h) and its guards against
 // folded faces; docs/normal-filtering.md ("The vertex update", "Folded faces") gives the
 // equations and why each guard is there.
+//
+// The update's sum over the faces of v, sum_f A_f n_f (n_f . (c_f - x_v)), is computed as
+// sum_f q_f - M_v x_v with q_f = A_f (n_f . c_f) n_f and M_v = sum_f A_f n_f n_f^T: a pass is
+// then one loop over the faces, which fits each face to the pass's positions (its orientation,
+// the guard's check of the pass before, and q_f) and one over the vertices, which sums q_f over
+// its faces; M_v and sum_f A_f are the round's, summed in its first pass.
 #include <algorithm>
 #include <cmath>
 
@@ -13,81 +19,75 @@ namespace {
 // The tangential relaxation of a folded face's vertices, as a share of the umbrella (eq. 3).
 constexpr double kUnfoldStep = 0.5;
 
-// A face's orientation against its filtered normal in a pass's positions.
-enum FaceState : uint8_t {
-  kNoNormal = 0,  // no filtered normal (no area at the round's start)
-  kAgrees = 1,    // its normal . the filtered normal > 0: a pass keeps it so
-  kOpposes = 2,   // folded: its vertices relax tangentially
-};
-
-}  // namespace
-
-namespace {
-
-// FaceState of face f with cross product `cross` against the filtered normal n.
-uint8_t StateOf(double area, const Vec3& cross, const Vec3& n) {
-  return area == 0.0 ? kNoNormal : Dot(cross, n) > 0.0 ? kAgrees : kOpposes;
-}
-
-// The cosine between a face with cross product `cross` and the filtered normal n; -2 (below
-// any cosine) for a face that has collapsed.
-double CosineTo(const Vec3& cross, const Vec3& n) {
-  const double len = Norm(cross);
-  return len > 0.0 ? Dot(cross, n) / len : -2.0;
-}
-
 }  // namespace
 
 void NormalFilterKernel::FitFaces(const Vec3* pos) {
-  const int32_t nf = static_cast<int32_t>(graph_.faces.size());
-  offset_.resize(nf);
-  state_.resize(nf);
-  cosine_.resize(nf);
   ForFaces([&](int32_t f) {
     const Triangle& t = graph_.faces[f];
-    const Vec3 cross = FaceCross(pos, t);
-    offset_[f] = Dot(normal_[f], Centroid(pos, t));
-    state_[f] = StateOf(area_[f], cross, normal_[f]);
-    cosine_[f] = state_[f] == kOpposes ? CosineTo(cross, normal_[f]) : 1.0;  // read for folded faces only
+    FitFace(f, normal_[f], FaceCross(pos, t), Centroid(pos, t), false, false);
   });
 }
 
-void NormalFilterKernel::UpdateVertices(const StepContext& c, const Vec3* cur, int32_t n, int threads) {
+bool NormalFilterKernel::UpdateVertices(const StepContext& c, const Vec3* cur, int32_t n, int threads, bool round_start,
+                                        bool check_start) {
   target_.resize(n);
+  planes_.resize(n);
   damping_.assign(n, 0);
   const int32_t blocks = (n + kBlock - 1) / kBlock;
   capped_.assign(blocks, 0);
+  moved_on_.assign(blocks, 0);
   const double lambda = c.lambda;
   ForBlocks(n, threads, [&](int32_t b, int32_t begin, int32_t end) {
+    const int32_t* const first = graph_.vertex_offsets.data();
+    const int32_t* const faces = graph_.vertex_faces.data();
+    const uint8_t* const state = state_.data();
+    const Vec3* const q = q_.data();
     for (int32_t v = begin; v < end; ++v) {
       const Vec3 x = cur[v];
+      if (check_start && !(target_[v] == x)) moved_on_[b] = 1;
       if (c.role[v] == kFixed) {
         target_[v] = x;
         continue;
       }
-      Vec3 f, normal;
-      double weight = 0.0;
+      Vec3 sum;
       bool folded = false;
-      for (int32_t k = graph_.vertex_offsets[v]; k < graph_.vertex_offsets[v + 1]; ++k) {
-        const int32_t face = graph_.vertex_faces[k];
-        if (state_[face] == kNoNormal) continue;
-        const Vec3& nf = normal_[face];
-        const double a = area_[face];
-        f += nf * (a * (offset_[face] - Dot(nf, x)));
-        normal += nf * a;
-        weight += a;
-        folded |= state_[face] == kOpposes;
+      VertexPlanes& m = planes_[v];
+      if (round_start) {
+        m = {};
+        for (int32_t k = first[v]; k < first[v + 1]; ++k) {
+          const int32_t face = faces[k];
+          if (state[face] == kNoNormal) continue;
+          const Vec3 nf = normal_[face];
+          const double a = area_[face];
+          const Vec3 an = nf * a;
+          m.xx += an.x * nf.x, m.xy += an.x * nf.y, m.xz += an.x * nf.z;
+          m.yy += an.y * nf.y, m.yz += an.y * nf.z, m.zz += an.z * nf.z;
+          m.weight += a;
+          sum += q[face];
+          folded |= state[face] == kOpposes;
+        }
+      } else {
+        for (int32_t k = first[v]; k < first[v + 1]; ++k) {
+          sum += q[faces[k]];  // zero for a face without normal
+          folded |= state[faces[k]] == kOpposes;
+        }
       }
-      if (weight > 0.0) f *= 1.0 / weight;
+      Vec3 f{sum.x - (m.xx * x.x + m.xy * x.y + m.xz * x.z), sum.y - (m.xy * x.x + m.yy * x.y + m.yz * x.z),
+             sum.z - (m.xz * x.x + m.yz * x.y + m.zz * x.z)};
+      if (m.weight > 0.0) f *= 1.0 / m.weight;
       // A folded face's vertices also move tangentially towards the centroid of their ring (the
       // umbrella of eq. 3 without its normal part): the projection alone keeps a fold.
       if (folded && c.role[v] == kFree && c.offsets[v + 1] > c.offsets[v]) {
+        Vec3 normal;
+        for (int32_t k = first[v]; k < first[v + 1]; ++k) {
+          if (state[faces[k]] != kNoNormal) normal += normal_[faces[k]] * area_[faces[k]];
+        }
         Vec3 centre;
         for (int32_t k = c.offsets[v]; k < c.offsets[v + 1]; ++k) centre += cur[c.ring[k]];
         const Vec3 u = centre * (1.0 / (c.offsets[v + 1] - c.offsets[v])) - x;
         const double len = Norm(normal);
-        const Vec3 m = len > 0.0 ? normal * (1.0 / len) : Vec3{};
-        f += (u - m * Dot(m, u)) * kUnfoldStep;
+        const Vec3 dir = len > 0.0 ? normal * (1.0 / len) : Vec3{};
+        f += (u - dir * Dot(dir, u)) * kUnfoldStep;
       }
       if (c.threshold != nullptr) f = Threshold(f, c.threshold[v]);
       Vec3 step = f * lambda;
@@ -99,7 +99,7 @@ void NormalFilterKernel::UpdateVertices(const StepContext& c, const Vec3* cur, i
       target_[v] = x + step;
     }
   });
-  GuardOrientation(cur, n, threads);
+  return std::find(moved_on_.begin(), moved_on_.end(), 1) == moved_on_.end();
 }
 
 // A vertex of a face that the moves would turn against its filtered normal moves half as far,
@@ -108,21 +108,23 @@ void NormalFilterKernel::UpdateVertices(const StepContext& c, const Vec3* cur, i
 // damps some vertex further and the undamped positions (cur) turn no face. The first round
 // checks every face (and fits it in target_ for the next pass); later ones only the faces
 // around the vertices damped in the round before.
-void NormalFilterKernel::GuardOrientation(const Vec3* cur, int32_t n, int threads) {
+void NormalFilterKernel::GuardOrientation(const Vec3* cur, int32_t n, int threads, bool terms) {
   const Vec3* const target = target_.data();
   const int32_t nf = static_cast<int32_t>(graph_.faces.size());
-  next_offset_.resize(nf);
   next_state_.resize(nf);
   next_cosine_.resize(nf);
-  turned_.resize(nf);
-  // A face's cosine is read only while it is folded: now (state_) or in the next pass
-  // (next_state_); the square root is skipped for the others.
-  auto fit = [&](int32_t f) {
+  // Fits face f to target_ for the next pass and tells whether the moves turned it.
+  auto fit = [&](int32_t f) __attribute__((always_inline)) {
     const Triangle& t = graph_.faces[f];
-    next_offset_[f] = Dot(normal_[f], Centroid(target, t));
-    const Vec3 cross = FaceCross(target, t);
-    next_state_[f] = StateOf(area_[f], cross, normal_[f]);
-    next_cosine_[f] = next_state_[f] == kOpposes || state_[f] == kOpposes ? CosineTo(cross, normal_[f]) : 1.0;
+    const Vec3 &p0 = target[t[0]], &p1 = target[t[1]], &p2 = target[t[2]];
+    const Vec3 cross = Cross(p1 - p0, p2 - p0);
+    const uint8_t was = state_[f];
+    if (!terms) {  // the round's last pass: only whether it turned
+      if (was == kAgrees) return !(Dot(cross, normal_[f]) > 0.0);
+      return was == kOpposes && CosineTo(cross, normal_[f]) < cosine_[f];
+    }
+    const double cosine = FitFace(f, normal_[f], cross, (p0 + p1 + p2) * (1.0 / 3.0), true, was == kOpposes);
+    return was == kAgrees ? next_state_[f] != kAgrees : was == kOpposes && cosine < cosine_[f];
   };
   auto turns = [&](int32_t f) {
     if (state_[f] == kNoNormal) return false;
@@ -130,27 +132,27 @@ void NormalFilterKernel::GuardOrientation(const Vec3* cur, int32_t n, int thread
     return state_[f] == kAgrees ? !(Dot(cross, normal_[f]) > 0.0) : CosineTo(cross, normal_[f]) < cosine_[f];
   };
   auto movable = [&](int32_t v) { return damping_[v] < 2 && !(target_[v] == cur[v]); };
-  ForFaces([&](int32_t f) {
-    fit(f);
-    turned_[f] =
-        state_[f] == kAgrees ? next_state_[f] != kAgrees : state_[f] == kOpposes && next_cosine_[f] < cosine_[f];
-  });
-  const int32_t blocks = (n + kBlock - 1) / kBlock;
-  std::vector<std::vector<int32_t>> found(blocks);
-  ForBlocks(n, threads, [&](int32_t b, int32_t begin, int32_t end) {
-    for (int32_t v = begin; v < end; ++v) {
-      if (!movable(v)) continue;
-      for (int32_t k = graph_.vertex_offsets[v]; k < graph_.vertex_offsets[v + 1]; ++k) {
-        if (turned_[graph_.vertex_faces[k]]) {
-          found[b].push_back(v);
-          break;
-        }
-      }
+  turned_.resize((nf + kBlock - 1) / kBlock);
+  refit_stamp_.resize(nf, -1);
+  ForBlocks(nf, threads, [&](int32_t b, int32_t begin, int32_t end) {
+    turned_[b].clear();
+    for (int32_t f = begin; f < end; ++f) {
+      if (fit(f)) turned_[b].push_back(f);
     }
   });
-  std::vector<int32_t> damp, around, refit;
-  for (const std::vector<int32_t>& f : found) damp.insert(damp.end(), f.begin(), f.end());
+  // The movable corners of the turned faces, each once (the set, not its order, decides).
   stamp_.resize(n, 0);
+  std::vector<int32_t> damp, around, refit;
+  ++round_;
+  for (const std::vector<int32_t>& list : turned_) {
+    for (int32_t f : list) {
+      for (int32_t v : graph_.faces[f]) {
+        if (stamp_[v] == round_) continue;
+        stamp_[v] = round_;
+        if (movable(v)) damp.push_back(v);
+      }
+    }
+  }
   while (!damp.empty()) {
     ++round_;
     around.clear();
@@ -158,25 +160,36 @@ void NormalFilterKernel::GuardOrientation(const Vec3* cur, int32_t n, int thread
       ++damping_[v];
       target_[v] = damping_[v] == 1 ? cur[v] + (target_[v] - cur[v]) * 0.5 : cur[v];
       for (int32_t k = graph_.vertex_offsets[v]; k < graph_.vertex_offsets[v + 1]; ++k) {
-        refit.push_back(graph_.vertex_faces[k]);
-        for (int32_t u : graph_.faces[graph_.vertex_faces[k]]) {
+        const int32_t f = graph_.vertex_faces[k];
+        if (refit_stamp_[f] != pass_) refit_stamp_[f] = pass_, refit.push_back(f);
+        for (int32_t u : graph_.faces[f]) {
           if (stamp_[u] != round_) stamp_[u] = round_, around.push_back(u);
         }
       }
     }
     damp.clear();
-    for (int32_t u : around) {
-      if (!movable(u)) continue;
-      for (int32_t k = graph_.vertex_offsets[u]; k < graph_.vertex_offsets[u + 1]; ++k) {
-        if (turns(graph_.vertex_faces[k])) {
-          damp.push_back(u);
-          break;
+    // Which of them a face of theirs now turns: each on its own, on all threads when many.
+    const int32_t count = static_cast<int32_t>(around.size());
+    damped_.resize(count);
+    ForBlocks(count, count > kBlock ? threads : 1, [&](int32_t, int32_t begin, int32_t end) {
+      for (int32_t i = begin; i < end; ++i) {
+        const int32_t u = around[i];
+        damped_[i] = 0;
+        if (!movable(u)) continue;
+        for (int32_t k = graph_.vertex_offsets[u]; k < graph_.vertex_offsets[u + 1]; ++k) {
+          if (turns(graph_.vertex_faces[k])) {
+            damped_[i] = 1;
+            break;
+          }
         }
       }
+    });
+    for (int32_t i = 0; i < count; ++i) {
+      if (damped_[i]) damp.push_back(around[i]);
     }
   }
+  if (!terms) return;              // the next pass starts a round: it fits the faces again
   for (int32_t f : refit) fit(f);  // faces whose corners the guard moved back
-  offset_.swap(next_offset_);
   state_.swap(next_state_);
   cosine_.swap(next_cosine_);
 }

@@ -165,10 +165,10 @@ Mesh SplitEverySeventhFace(Mesh m) {
   return m;
 }
 
-// The cotangent flows run compiled for AVX2 or AVX-512 where the CPU has them
-// (flows::RunWithIsa), 4 or 8 vertices per register instead of 2: the positions must be the
-// bytes of the x86-64 baseline build. (On a CPU without AVX2 every run below is the baseline
-// and the test cannot tell them apart.)
+// The cotangent flows and the normal filters run compiled for AVX2 or AVX-512 where the CPU
+// has them (flows::RunWithIsa), 4 or 8 vertices (faces) per register instead of 2: the
+// positions must be the bytes of the x86-64 baseline build. (On a CPU without AVX2 every run
+// below is the baseline and the test cannot tell them apart.)
 TEST(FlowInvariantsTest, InstructionSetChangesNoPosition) {
   // The builds of the cotangent kernel this CPU can run, by MESHSMOOTH_VECTOR_ISA ("" = the
   // widest): SSE2 always, AVX2 and AVX-512 when the CPU has them.
@@ -188,9 +188,9 @@ TEST(FlowInvariantsTest, InstructionSetChangesNoPosition) {
   cases.push_back({"noisy icosphere(5), every 7th face split", split});
   for (const Case& c : cases) {
     const Topology topo = BuildTopology(c.mesh);
-    for (const char* flow : {"mcf", "mcf_tangential", "median"}) {
+    for (const char* flow : {"mcf", "mcf_tangential", "median", "bilateral_normal", "guided_normal"}) {
       SCOPED_TRACE(c.name + " / " + flow);
-      FlowParams p = Params(flow, 5);
+      FlowParams p = Params(flow, FlowOf(*ParseFlowName(flow)).kind == FlowKind::kNormalFilter ? 2 : 5);
       std::vector<Mesh> runs;
       for (const auto& [name, isa] : isas) {
         setenv("MESHSMOOTH_VECTOR_ISA", isa, 1);
