@@ -167,6 +167,10 @@ MeshMetrics ComputeMetrics(const Mesh& mesh, const Topology& topo, const StopTok
 
 MeshMetrics ComputeMetricsBeside(const Mesh& mesh, const Topology& topo, const std::function<void()>& beside,
                                  int threads, const StopToken& stop) {
+  if (topo.num_vertices() < kMetricsTeamMinVertices) {
+    beside();
+    return ComputeMetrics(mesh, topo, stop);
+  }
   MeshMetrics m;
   const int team = std::max(2, threads > 0 ? threads : omp_get_max_threads());
 #pragma omp parallel num_threads(team)

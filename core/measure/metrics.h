@@ -29,7 +29,11 @@ MeshMetrics ComputeMetrics(const Mesh& mesh, const Topology& topo, const StopTok
 // ComputeMetrics() while `beside` runs on one thread of the same team of max(2, threads)
 // threads (0 = hardware threads): the others start on the metrics' blocks, and the thread that
 // ran `beside` takes blocks too once it returns (a job encodes beside them). The same bits as
-// ComputeMetrics(): the blocks are merged in the same order.
+// ComputeMetrics(): the blocks are merged in the same order. Below kMetricsTeamMinVertices
+// vertices `beside` and then the metrics run on the calling thread: no
+// team is started (its threads would spin-wait after the job, beside the client's decode and
+// write on a small machine).
+inline constexpr int32_t kMetricsTeamMinVertices = 20000;
 MeshMetrics ComputeMetricsBeside(const Mesh& mesh, const Topology& topo, const std::function<void()>& beside,
                                  int threads = 0, const StopToken& stop = {});
 

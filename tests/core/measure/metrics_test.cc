@@ -49,34 +49,38 @@ TEST(MetricsTest, NeedleTrianglesCountBelowTenDegrees) {
 }
 
 // A job computes the "after" metrics beside its encoder: the blocks then run as tasks of a
-// team, and must give ComputeMetrics' bits whatever thread takes them; `beside` runs once.
+// team, and must give ComputeMetrics' bits whatever thread takes them; `beside` runs once. A
+// mesh below kMetricsTeamMinVertices takes the path without a team, with the same bits.
 TEST(MetricsTest, MetricsBesideOtherWorkKeepTheirBits) {
-  Mesh m = Icosphere(6);  // 82k faces: several blocks of faces and of vertices
-  AddUniformNoise(m, 0.3, 5);
-  const Topology topo = BuildTopology(m);
-  const MeshMetrics alone = ComputeMetrics(m, topo);
-  for (int threads : {0, 1, 3}) {
-    int ran = 0;
-    double beside_sum = 0.0;
-    const MeshMetrics beside = ComputeMetricsBeside(
-        m, topo,
-        [&] {
-          ++ran;
-          for (const Vec3& p : m.positions) beside_sum += p.x;
-        },
-        threads);
-    EXPECT_EQ(ran, 1) << threads;
-    EXPECT_NE(beside_sum, 0.0);
-    EXPECT_EQ(beside.area, alone.area) << threads;
-    EXPECT_EQ(beside.signed_volume, alone.signed_volume) << threads;
-    EXPECT_EQ(beside.edge_length_mean, alone.edge_length_mean) << threads;
-    EXPECT_EQ(beside.edge_length_cv, alone.edge_length_cv) << threads;
-    EXPECT_EQ(beside.min_angle_deg, alone.min_angle_deg) << threads;
-    EXPECT_EQ(beside.mean_angle_deg, alone.mean_angle_deg) << threads;
-    EXPECT_EQ(beside.share_angles_below_10deg, alone.share_angles_below_10deg) << threads;
+  for (int level : {6, 4}) {  // 82k faces: several blocks of faces and of vertices; 2,562 vertices
+    Mesh m = Icosphere(level);
+    AddUniformNoise(m, 0.3, 5);
+    const Topology topo = BuildTopology(m);
+    EXPECT_EQ(topo.num_vertices() < kMetricsTeamMinVertices, level == 4);
+    const MeshMetrics alone = ComputeMetrics(m, topo);
+    for (int threads : {0, 1, 3}) {
+      int ran = 0;
+      double beside_sum = 0.0;
+      const MeshMetrics beside = ComputeMetricsBeside(
+          m, topo,
+          [&] {
+            ++ran;
+            for (const Vec3& p : m.positions) beside_sum += p.x;
+          },
+          threads);
+      EXPECT_EQ(ran, 1) << level << " " << threads;
+      EXPECT_NE(beside_sum, 0.0);
+      EXPECT_EQ(beside.area, alone.area) << level << " " << threads;
+      EXPECT_EQ(beside.signed_volume, alone.signed_volume) << level << " " << threads;
+      EXPECT_EQ(beside.edge_length_mean, alone.edge_length_mean) << level << " " << threads;
+      EXPECT_EQ(beside.edge_length_cv, alone.edge_length_cv) << level << " " << threads;
+      EXPECT_EQ(beside.min_angle_deg, alone.min_angle_deg) << level << " " << threads;
+      EXPECT_EQ(beside.mean_angle_deg, alone.mean_angle_deg) << level << " " << threads;
+      EXPECT_EQ(beside.share_angles_below_10deg, alone.share_angles_below_10deg) << level << " " << threads;
+    }
+    EXPECT_GT(alone.area, 4.0 * kPi * 0.99);  // noise wrinkles the unit sphere: more area, not less
+    EXPECT_GT(alone.edge_length_cv, 0.0);
   }
-  EXPECT_GT(alone.area, 4.0 * kPi * 0.99);  // noise wrinkles the unit sphere: more area, not less
-  EXPECT_GT(alone.edge_length_cv, 0.0);
 }
 
 TEST(MetricsTest, DisplacementAndFlippedNormals) {
