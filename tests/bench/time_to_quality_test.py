@@ -186,6 +186,12 @@ def main():
             require("(oracle" in rows["OpenMesh JacobiLaplace uniform C0"][1], "no oracle count")
             require("Ratios: default smoothing / explicit smoothing" in r.stdout, "no ratios line")
             require("Not in this build (left out): no_such_peer" in r.stdout, "the unknown peer is not named")
+            # The summary's last column: the explicit run's whole process less its job's own total.
+            summary = [line for line in r.stdout.splitlines() if line.startswith("| sphere |")]
+            require(len(summary) == 1, f"summary rows {summary}")
+            beyond_ms = float(summary[0].strip("|").split("|")[-1])
+            explicit_s = float(rows["chosen flow, explicit"][5])
+            require(0 < beyond_ms < 1000 * explicit_s, f"CLI beyond its job {beyond_ms} ms, process {explicit_s} s")
 
         checks.check("time_to_quality: a run on the noisy sphere measures the default job and a peer", whole_run)
 
