@@ -74,9 +74,10 @@ int Server::Shutdown() {
   const int cut = service_->DrainAndStop(
       std::chrono::steady_clock::now() +
       std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(grace)));
-  // Every job has ended by now; what is left are calls finishing their last write and health
-  // watches, which gRPC cancels after this short deadline.
-  server_->Shutdown(std::chrono::system_clock::now() + std::chrono::milliseconds(200));
+  // Every job has ended by now. What is left are health watches and reflection streams, which
+  // gRPC cancels at once, and, when the grace cut jobs, their calls sending UNAVAILABLE, which
+  // get a short deadline first.
+  server_->Shutdown(std::chrono::system_clock::now() + std::chrono::milliseconds(cut > 0 ? 200 : 0));
   server_->Wait();
   return cut;
 }
