@@ -1,8 +1,8 @@
 #!/usr/bin/python3
 """meshsmoothd's shutdown ends with the work: SIGTERM while one job runs, with --grace-seconds 10,
 and the job ends OK with its whole result, then the process exits with status 0 within 0.5 s
-of the job's last message, in every one of --trials trials; a health watch held open by the
-client does not hold it. Then the other side: a job still running at the end of a 1 s grace is
+of the job's last message, in every one of --trials trials; a health watch and a reflection
+stream held open by the client do not hold it. Then the other side: a job still running at the end of a 1 s grace is
 cut with UNAVAILABLE and the exit status is 1.
 
 Run by ctest: shutdown_test.py --cli build/client/meshsmooth --server build/server/meshsmoothd
@@ -97,6 +97,27 @@ def watch_health(channel):
     threading.Thread(target=loop, daemon=True).start()
 
 
+def open_reflection(channel, replies):
+    """Holds a grpc.reflection.v1alpha stream open on a thread, as grpcurl or a debugger does:
+    one list_services request (field 7, empty), then nothing until the server ends the call.
+    Each reply goes to `replies`."""
+    stream = channel.stream_stream("/grpc.reflection.v1alpha.ServerReflection/ServerReflectionInfo",
+                                   request_serializer=lambda b: b, response_deserializer=lambda b: b)
+    never = threading.Event()
+
+    def requests():
+        yield b"\x3a\x00"
+        never.wait()
+
+    def loop():
+        try:
+            for reply in stream(requests(), timeout=120):
+                replies.append(reply)
+        except grpc.RpcError:
+            pass
+    threading.Thread(target=loop, daemon=True).start()
+
+
 def main():
     ap = parser(__doc__, required=("cli", "server", "proto-root"))
     ap.add_argument("--trials", type=int, default=20)
@@ -138,10 +159,13 @@ def shutdown_checks(a, check, tmp):
         server, channel, stub = start("--grace-seconds", "10")
         try:
             watch_health(channel)
+            replies = []
+            open_reflection(channel, replies)
             job = Job(pb2, stub, draco, iterations)
             job.start()
             require(job.accepted.wait(60) and job.code is None, f"the job did not start: {job.code} {job.details}")
             time.sleep(0.3)
+            require(replies and b"meshsmooth.v1.MeshSmoother" in replies[0], f"reflection answered {replies}")
             t_signal = time.monotonic()
             server.proc.send_signal(signal.SIGTERM)
             job.join(60)
@@ -170,7 +194,8 @@ def shutdown_checks(a, check, tmp):
         print(f"  {a.trials - len(late)} of {a.trials} trials exited 0 within {EXIT_AFTER_JOB_S} s of the job's end "
               f"(slowest {worst * 1000:.0f} ms)", flush=True)
         assert not late, f"trials (number, exit status, seconds after the job) that failed: {late}"
-    check(f"SIGTERM during a ~{JOB_SECONDS} s job, --grace-seconds 10, a health watch open: the job ends OK and the "
+    check(f"SIGTERM during a ~{JOB_SECONDS} s job, --grace-seconds 10, a health watch and a reflection stream "
+          f"open: the job ends OK and the "
           f"process exits 0 within {EXIT_AFTER_JOB_S} s of it, in {a.trials} of {a.trials} trials", all_trials)
 
     def grace_cuts():
