@@ -42,7 +42,8 @@ if [ ${#missing[@]} -gt 0 ]; then
   "${sudo_cmd[@]}" apt-get update -qq
   # Debian starts a packaged service as it installs it (nginx: a system daemon on port 80;
   # prometheus on 9090). The tests run their own, unprivileged; a policy-rc.d that refuses every
-  # start keeps the system ones stopped (one already there, as in Debian's container images, is left alone).
+  # start keeps the system ones stopped (one already there, as in Debian's container images, is
+  # left alone).
   if [ ! -e /usr/sbin/policy-rc.d ]; then
     printf '#!/bin/sh\nexit 101\n' | "${sudo_cmd[@]}" tee /usr/sbin/policy-rc.d >/dev/null
     "${sudo_cmd[@]}" chmod 755 /usr/sbin/policy-rc.d
