@@ -2,12 +2,15 @@
 // and through the service. Prints Markdown; docs/performance.md is its output.
 //
 //   build/bench/meshsmooth_bench [--quick] [--runs 5] [--no-service] [--no-peers]
-//                                [--levels 6,7,8,9] [--only LABEL,...] [--normal-filter-table] [FILE ...]
+//                                [--levels 6,7,8,9] [--only LABEL,...] [--normal-filter-table] [--service-only]
+//                                [--metrics] [FILE ...]
 //
 // --levels picks the icosphere levels (none: "--levels ''"); --only keeps the flows whose
 // label contains one of the given words (e.g. --only "U0,mcf") and the peers compared with them.
 // --normal-filter-table prints only the table of bilateral_normal's iteration against laplacian
 // U0 on each mesh (normal_filter_speed.h), which the full run prints for the files given.
+// --service-only prints only the service table ("Through the service"); --metrics runs its
+// servers with Prometheus metrics on (--metrics-listen), to compare with a run without.
 //
 // Meshes: noisy icospheres of 40,962 / 163,842 / 655,362 / 2,621,442 vertices (levels 6-9,
 // deterministic), plus any mesh file given. Every time is the median of --runs runs.
@@ -47,6 +50,7 @@ namespace {
 struct Options {
   int runs = 5;
   bool quick = false, service = true, peers = true, default_job_only = false, normal_filter_table = false;
+  bool service_only = false;
   std::vector<int> levels = {6, 7, 8, 9};
   std::vector<std::string> only;  // empty: every flow
   std::vector<std::string> files;
@@ -151,6 +155,10 @@ int main(int argc, char** argv) {
       opt.service = false;
     } else if (a == "--no-peers") {
       opt.peers = false;
+    } else if (a == "--service-only") {
+      opt.service_only = true;
+    } else if (a == "--metrics") {
+      SetServiceMetrics(true);
     } else if (a == "--default-job-only") {
       opt.default_job_only = true;
     } else if (a == "--normal-filter-table") {
@@ -160,7 +168,7 @@ int main(int argc, char** argv) {
     } else if (a == "--help" || a == "-h") {
       std::printf(
           "usage: %s [--quick] [--runs N] [--no-service] [--no-peers] [--levels 6,7,8,9] [--only LABEL,...] "
-          "[--default-job-only] [--normal-filter-table] [MESH_FILE ...]\n",
+          "[--default-job-only] [--normal-filter-table] [--service-only] [--metrics] [MESH_FILE ...]\n",
           argv[0]);
       return 0;
     } else {
@@ -170,6 +178,7 @@ int main(int argc, char** argv) {
   std::setvbuf(stdout, nullptr, _IOLBF, 0);  // rows appear as they are measured
   if (opt.default_job_only) opt.levels.clear();
   if (opt.normal_filter_table) opt.service = false;
+  if (opt.service_only) opt.default_job_only = false;
   char self_buf[4096] = {};
   const ssize_t self_len = readlink("/proc/self/exe", self_buf, sizeof self_buf - 1);
   const std::string self = self_len > 0 ? std::string(self_buf, self_len) : std::string(argv[0]);
@@ -179,7 +188,7 @@ int main(int argc, char** argv) {
   std::printf("`. Times are medians of %d runs.\n", opt.runs);
 
   double bw2 = 0.0;
-  if (!opt.default_job_only && !opt.normal_filter_table) {
+  if (!opt.default_job_only && !opt.normal_filter_table && !opt.service_only) {
     std::printf(
         "\n## Memory bandwidth (STREAM-like triad, 24 bytes per element)\n\n| arrays | 1 thread | 2 threads "
         "|\n|---|---|---|\n");
@@ -205,7 +214,7 @@ int main(int argc, char** argv) {
     meshes.push_back({f.substr(f.rfind('/') + 1), *std::move(m)});
   }
 
-  if (opt.service) {
+  if (opt.service && !opt.service_only) {
     std::printf(
         "\n## The default job through the service (loopback TCP, no JobSpec field set; clean, and with Gaussian "
         "noise of 0.2 h along the normals)\n\n| mesh | noise (h) | iterations, stop (noise estimate, h) | total ms | "
@@ -223,7 +232,7 @@ int main(int argc, char** argv) {
   // bilateral_normal's iteration against laplacian U0, on the files given (or every mesh with
   // --normal-filter-table).
   const size_t first_table_mesh = opt.normal_filter_table ? 0 : opt.levels.size();
-  if (opt.Wanted("bilateral_normal") && first_table_mesh < meshes.size()) {
+  if (!opt.service_only && opt.Wanted("bilateral_normal") && first_table_mesh < meshes.size()) {
     std::printf("\n## bilateral_normal's iteration against laplacian U0\n");
     NormalFilterIterationHeader();
     for (size_t i = first_table_mesh; i < meshes.size(); ++i) {
@@ -234,7 +243,9 @@ int main(int argc, char** argv) {
 
   std::vector<Peer> peers;
   if (opt.peers) peers = AllPeers();
-  for (const NamedMesh& nm : meshes) MeshSection(nm, opt, peers, bw2, hw, self);
+  if (!opt.service_only) {
+    for (const NamedMesh& nm : meshes) MeshSection(nm, opt, peers, bw2, hw, self);
+  }
   if (opt.service) {
     std::printf("\n## Through the service (loopback TCP, laplacian U0, 10 iterations, lossless sequential Draco)\n\n");
     std::printf(
@@ -247,6 +258,7 @@ int main(int argc, char** argv) {
       bare_ms[nm.name] = ServiceRow(nm, 10, opt.runs);
     }
     for (const NamedMesh& nm : meshes) {
+      if (opt.service_only) break;  // the table's rows only
       if (nm.mesh.num_vertices() < 600'000 || nm.mesh.num_vertices() >= 1'000'000) continue;
       ServiceBreakdown(nm, opt.runs);
       ServiceFloor(nm, opt.runs, bare_ms[nm.name]);

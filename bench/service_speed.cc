@@ -18,6 +18,8 @@
 namespace meshsmooth::bench {
 namespace {
 
+bool g_metrics = false;  // SetServiceMetrics
+
 // Times of `runs` calls of one job through a one-worker server on loopback TCP (ms), and what
 // the last call's summary says about its iterations.
 struct ServiceTimes {
@@ -32,6 +34,7 @@ absl::StatusOr<ServiceTimes> TimeThroughService(const std::string& draco, const 
   o.listen = "127.0.0.1:0";
   o.log_jobs = false;
   o.workers = 1;
+  if (g_metrics) o.metrics_listen = "127.0.0.1:0";
   auto server = server::Server::Start(o);
   if (!server.ok()) return server.status();
   auto channel =
@@ -62,6 +65,8 @@ absl::StatusOr<ServiceTimes> TimeThroughService(const std::string& draco, const 
 }
 
 }  // namespace
+
+void SetServiceMetrics(bool on) { g_metrics = on; }
 
 void DefaultJobRows(const NamedMesh& nm, const std::string& flow, int runs) {
   v1::JobSpec spec;

@@ -13,6 +13,10 @@ namespace meshsmooth::bench {
 // (seed 1), each the median of `runs` calls.
 void DefaultJobRows(const NamedMesh& nm, const std::string& flow, int runs);
 
+// With `on`, the servers these tables start serve Prometheus metrics (--metrics-listen on a free
+// loopback port), so that the rows show what counting every job costs. Off by default.
+void SetServiceMetrics(bool on);
+
 // Prints the row of the service table for laplacian U0 with `iterations` on `nm` (medians of
 // `runs`); returns Draco's bare decode + encode of its upload in ms, or -1 on failure.
 double ServiceRow(const NamedMesh& nm, int iterations, int runs);

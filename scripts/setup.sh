@@ -21,13 +21,13 @@ esac
 packages=(
   build-essential cmake ninja-build pkgconf
   libgrpc++-dev libgrpc-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler
-  libdraco-dev libabsl-dev libcli11-dev libeigen3-dev libpng-dev
+  libdraco-dev libabsl-dev libcli11-dev libeigen3-dev libpng-dev prometheus-cpp-dev
 )
 if [ "$preset" != image ]; then
   packages+=(
     grpc-proto draco libopenmesh-dev libgtest-dev libgmock-dev libbenchmark-dev libopen3d-dev libcgal-dev
     python3-grpcio python3-protobuf python3-numpy python3-scipy python3-yaml openssl
-    nginx clang-format
+    nginx prometheus clang-format
   )
 fi
 if [ "$preset" = fuzz ]; then packages+=(clang libfuzzer-14-dev libomp-dev); fi
@@ -40,9 +40,10 @@ if [ ${#missing[@]} -gt 0 ]; then
   sudo_cmd=()
   [ "$(id -u)" -eq 0 ] || sudo_cmd=(sudo)
   "${sudo_cmd[@]}" apt-get update -qq
-  # Debian starts a packaged service as it installs it (nginx: a system daemon on port 80). The
-  # tests run nginx of their own, unprivileged; a policy-rc.d that refuses every start keeps the
-  # system one stopped (one already there, as in Debian's container images, is left alone).
+  # Debian starts a packaged service as it installs it (nginx: a system daemon on port 80;
+  # prometheus on 9090). The tests run their own, unprivileged; a policy-rc.d that refuses every
+  # start keeps the system ones stopped (one already there, as in Debian's container images, is
+  # left alone).
   if [ ! -e /usr/sbin/policy-rc.d ]; then
     printf '#!/bin/sh\nexit 101\n' | "${sudo_cmd[@]}" tee /usr/sbin/policy-rc.d >/dev/null
     "${sudo_cmd[@]}" chmod 755 /usr/sbin/policy-rc.d

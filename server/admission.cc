@@ -53,6 +53,7 @@ void BudgetHold::Release() {
 absl::Status UploadBuffer::Append(std::string_view chunk) {
   const size_t size = bytes_.size() + chunk.size();
   if (static_cast<int64_t>(size) > max_bytes_) {
+    metrics_.Refused(Refusal::kUploadTooLarge);
     return absl::ResourceExhaustedError(
         absl::StrCat("the upload exceeds this server's limit of ", max_bytes_, " bytes"));
   }
@@ -60,6 +61,7 @@ absl::Status UploadBuffer::Append(std::string_view chunk) {
   if (size > capacity) {
     const size_t grown = std::min(std::max(size, 2 * capacity), static_cast<size_t>(max_bytes_));
     if (!hold_.TryGrow(static_cast<int64_t>(grown - capacity))) {
+      metrics_.Refused(Refusal::kMemoryBudget);
       return absl::ResourceExhaustedError(
           absl::StrCat("this server's memory budget for uploads and queued jobs is full (", budget_->held(), " of ",
                        budget_->limit(), " bytes held; --max-buffered-bytes); retry later"));
@@ -70,6 +72,7 @@ absl::Status UploadBuffer::Append(std::string_view chunk) {
     bytes_.swap(bigger);
   }
   bytes_.append(chunk);
+  metrics_.UploadReceived(static_cast<int64_t>(chunk.size()));
   return absl::OkStatus();
 }
 
@@ -104,8 +107,10 @@ grpc::Status ShuttingDown() {
 
 }  // namespace
 
-Admission::Admission(const ServerOptions& options)
-    : options_(options), budget_(options.max_buffered_bytes > 0 ? options.max_buffered_bytes : DefaultBufferedBytes()) {
+Admission::Admission(const ServerOptions& options, ServiceMetrics& metrics)
+    : options_(options),
+      metrics_(metrics),
+      budget_(options.max_buffered_bytes > 0 ? options.max_buffered_bytes : DefaultBufferedBytes()) {
   if (options.upload_idle_seconds > 0.0 || options.max_queue_wait_seconds > 0.0) {
     reaper_ = std::thread([this] { Reap(); });
   }
@@ -120,8 +125,12 @@ grpc::Status Admission::Open(AdmittedCall* call) {
     calls_.insert(call);
     open = calls_.size();
   }
-  if (draining_.load()) return ShuttingDown();
+  if (draining_.load()) {
+    metrics_.Refused(Refusal::kShuttingDown);
+    return ShuttingDown();
+  }
   if (static_cast<int64_t>(open) > options_.max_concurrent_streams) {
+    metrics_.Refused(Refusal::kTooManyCalls);
     return grpc::Status(
         grpc::StatusCode::RESOURCE_EXHAUSTED,
         absl::StrCat("too many concurrent Smooth calls (limit ", options_.max_concurrent_streams, "); retry later"));
@@ -134,27 +143,36 @@ void Admission::Close(AdmittedCall* call) {
   calls_.erase(call);
 }
 
-grpc::Status Admission::CheckNotDraining() const { return draining_.load() ? ShuttingDown() : grpc::Status::OK; }
+grpc::Status Admission::CheckNotDraining() const {
+  if (!draining_.load()) return grpc::Status::OK;
+  metrics_.Refused(Refusal::kShuttingDown);
+  return ShuttingDown();
+}
 
 grpc::Status Admission::QueueFull() const {
+  metrics_.Refused(Refusal::kQueueFull);
   return grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
                       absl::StrCat("the job queue is full (", options_.queue_depth, " jobs waiting); retry later"));
 }
 
-grpc::Status Admission::ChunkTooLarge(int64_t bytes) {
+grpc::Status Admission::ChunkTooLarge(int64_t bytes) const {
+  metrics_.Refused(Refusal::kChunkTooLarge);
   return grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
                       absl::StrCat("a mesh chunk of ", bytes, " bytes is above this server's limit of ", kMaxChunkBytes,
                                    " bytes per chunk"));
 }
 
-void Admission::Drain(Clock::time_point deadline) {
+int Admission::Drain(Clock::time_point deadline) {
   draining_.store(true);
   // Uploads and queued jobs end at once: their clients can send them to another replica now
   // rather than after the grace.
   {
     std::lock_guard<std::mutex> lock(mu_);
     for (AdmittedCall* c : calls_) {
-      if (!c->Running()) c->Abort(ShuttingDown());
+      if (!c->Running()) {
+        metrics_.Refused(Refusal::kShuttingDown);
+        c->Abort(ShuttingDown());
+      }
     }
   }
   for (;;) {
@@ -171,6 +189,7 @@ void Admission::Drain(Clock::time_point deadline) {
                       options_.grace_seconds));
   std::lock_guard<std::mutex> lock(mu_);
   for (AdmittedCall* c : calls_) c->Abort(after_grace);
+  return static_cast<int>(calls_.size());
 }
 
 void Admission::Reap() {
@@ -197,8 +216,10 @@ void Admission::Reap() {
     const Clock::time_point now = Clock::now();
     for (AdmittedCall* c : calls_) {  // a call is deleted only after Close
       if (idle > Clock::duration::zero() && c->IdleSince(now - idle)) {
+        metrics_.Refused(Refusal::kUploadIdle);
         c->Abort(idle_status);
       } else if (queue_wait > Clock::duration::zero() && c->QueuedSince(now - queue_wait)) {
+        metrics_.Refused(Refusal::kQueueWait);
         c->Abort(queue_status);
       }
     }

@@ -25,6 +25,7 @@
 
 #include "absl/status/status.h"
 #include "grpcpp/support/status.h"
+#include "server/metrics.h"
 #include "server/options.h"
 
 namespace meshsmooth::server {
@@ -72,10 +73,12 @@ class BudgetHold {
 // whose capacity is held against the budget.
 class UploadBuffer {
  public:
-  UploadBuffer(MemoryBudget* budget, int64_t max_bytes) : hold_(budget), budget_(budget), max_bytes_(max_bytes) {}
+  UploadBuffer(MemoryBudget* budget, int64_t max_bytes, ServiceMetrics& metrics = NoMetrics())
+      : hold_(budget), budget_(budget), max_bytes_(max_bytes), metrics_(metrics) {}
 
   // Appends `chunk`. ResourceExhausted, keeping nothing of it, when the upload would pass
-  // `max_bytes` or the budget has no room for the buffer it needs.
+  // `max_bytes` or the budget has no room for the buffer it needs. Counts the bytes kept, or the
+  // refusal, in the metrics.
   absl::Status Append(std::string_view chunk);
   bool empty() const { return bytes_.empty(); }
   // The bytes and their hold, for the job; the buffer is empty afterwards.
@@ -87,6 +90,7 @@ class UploadBuffer {
   BudgetHold hold_;  // bytes_'s capacity
   MemoryBudget* budget_;
   int64_t max_bytes_;
+  ServiceMetrics& metrics_;
 };
 
 // The default of --max-buffered-bytes: a quarter of the machine's memory (MemTotal in
@@ -113,7 +117,8 @@ class AdmittedCall {
 class Admission {
  public:
   using Clock = std::chrono::steady_clock;
-  explicit Admission(const ServerOptions& options);
+  // Every refusal is counted in `metrics` (which must outlive this).
+  explicit Admission(const ServerOptions& options, ServiceMetrics& metrics = NoMetrics());
   ~Admission();  // stops the reaper
   Admission(const Admission&) = delete;
   Admission& operator=(const Admission&) = delete;
@@ -130,21 +135,25 @@ class Admission {
   MemoryBudget& budget() { return budget_; }
   const MemoryBudget& budget() const { return budget_; }
 
+  ServiceMetrics& metrics() { return metrics_; }
+
   // The job queue is full: RESOURCE_EXHAUSTED.
   grpc::Status QueueFull() const;
   // A mesh chunk of `bytes` above kMaxChunkBytes: RESOURCE_EXHAUSTED, as gRPC's own answer to a
   // message above its receive limit.
-  static grpc::Status ChunkTooLarge(int64_t bytes);
+  grpc::Status ChunkTooLarge(int64_t bytes) const;
 
   // Shutdown, in order: refuse new calls and end every call whose job has not started; wait
-  // until `deadline` for the rest; end what is left with UNAVAILABLE.
-  void Drain(Clock::time_point deadline);
+  // until `deadline` for the rest, returning as soon as none is left; end what is left with
+  // UNAVAILABLE. Returns how many calls the deadline cut.
+  int Drain(Clock::time_point deadline);
 
  private:
   void Reap();
   void StopReaper();
 
   const ServerOptions options_;
+  ServiceMetrics& metrics_;
   MemoryBudget budget_;
   std::atomic<bool> draining_{false};
   std::mutex mu_;  // guards calls_ and reaper_stop_

@@ -250,16 +250,17 @@ v1::Summary MakeSummary(const JobReport& report, const JobParams& params) {
   return summary;
 }
 
+std::string_view JobFlowName(const JobReport& report, const JobParams& params) {
+  return FlowName(report.flow.iterations_run > 0 ? report.flow.flow : params.flow.flow.value_or(kDefaultFlow));
+}
+
 std::string JobLogLine(const JobReport& report, const JobParams& params) {
   // printf's own rounding of the times, as the log has always had it.
   char seconds[128];
   std::snprintf(seconds, sizeof seconds, "decode=%.3fs queue=%.3fs smooth=%.3fs encode=%.3fs", report.decode_seconds,
                 report.queue_seconds, report.smooth_seconds, report.encode_seconds);
   return absl::StrCat(
-      "meshsmoothd job=", report.job_id, " flow=",
-      // The flow that ran (a default job's choice) once it iterated; else the one asked for.
-      std::string(
-          FlowName(report.flow.iterations_run > 0 ? report.flow.flow : params.flow.flow.value_or(kDefaultFlow))),
+      "meshsmoothd job=", report.job_id, " flow=", std::string(JobFlowName(report, params)),
       " vertices=", report.vertices, " iterations=", report.flow.iterations_run, "/",
       params.flow.iterations == kAutoIterations ? std::string("auto") : absl::StrCat(params.flow.iterations),
       " status=", report.status, " ", seconds);

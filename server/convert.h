@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <string_view>
 
 #include "absl/status/statusor.h"
 #include "core/features/ridges.h"
@@ -52,6 +53,10 @@ struct JobReport {
 
 // The summary of a job that succeeded.
 v1::Summary MakeSummary(const JobReport& report, const JobParams& params);
+
+// The flow a job's log line and metrics name: the one that ran (a default job's choice) once it
+// iterated; else the one asked for.
+std::string_view JobFlowName(const JobReport& report, const JobParams& params);
 
 // The job's log line, without a newline: "meshsmoothd job=ID flow=NAME vertices=N
 // iterations=RUN/ASKED status=CODE decode=Ss queue=Ss smooth=Ss encode=Ss".

@@ -6,6 +6,10 @@
 
 namespace meshsmooth::server {
 
+// How meshsmoothd writes its log on stderr: text lines for a terminal, or one JSON object a
+// line for a log pipeline (server/log.h has the fields).
+enum class LogFormat { kText, kJson };
+
 struct ServerOptions {
   std::string listen = "127.0.0.1:50051";  // host:port; port 0 picks a free port
   int workers = 0;                         // smoothing jobs run at once; 0 = hardware threads
@@ -32,6 +36,9 @@ struct ServerOptions {
   std::string tls_cert_file, tls_key_file;  // both or neither
   std::string auth_token;                   // non-empty: calls need "authorization: Bearer <token>"
   bool log_jobs = true;                     // one line per job on stderr
+  LogFormat log_format = LogFormat::kText;
+  // host:port of the Prometheus endpoint (GET /metrics; port 0 picks a free one); empty: none.
+  std::string metrics_listen;
 };
 
 // Largest chunk a client may send; messages are limited to this plus framing.

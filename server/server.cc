@@ -26,9 +26,14 @@ absl::StatusOr<std::unique_ptr<Server>> Server::Start(const ServerOptions& optio
     ssl.pem_key_cert_pairs.push_back({*key, *cert});
     creds = grpc::SslServerCredentials(ssl);
   }
+  if (!options.metrics_listen.empty()) {
+    absl::StatusOr<std::unique_ptr<MetricsExporter>> metrics = MetricsExporter::Start(options.metrics_listen);
+    if (!metrics.ok()) return metrics.status();
+    s->metrics_ = *std::move(metrics);
+  }
   grpc::EnableDefaultHealthCheckService(true);
   grpc::reflection::InitProtoReflectionServerBuilderPlugin();
-  s->service_ = std::make_unique<MeshSmootherService>(options);
+  s->service_ = std::make_unique<MeshSmootherService>(options, s->metrics_ ? s->metrics_->events() : NoMetrics());
   grpc::ServerBuilder builder;
   if (listen) builder.AddListeningPort(options.listen, creds, &s->port_);
   builder.RegisterService(s->service_.get());
@@ -43,10 +48,16 @@ absl::StatusOr<std::unique_ptr<Server>> Server::Start(const ServerOptions& optio
     return absl::FailedPreconditionError(absl::StrCat("cannot listen on ", options.listen));
   }
   s->server_->GetHealthCheckService()->SetServingStatus(true);
+  if (s->metrics_) s->metrics_->SetGaugeSource([service = s->service_.get()] { return service->Gauges(); });
   return s;
 }
 
-Server::~Server() { Shutdown(); }
+Server::~Server() {
+  Shutdown();
+  if (metrics_) metrics_->SetGaugeSource(nullptr);  // before the service goes
+}
+
+int Server::metrics_port() const { return metrics_ ? metrics_->port() : 0; }
 
 std::shared_ptr<grpc::Channel> Server::InProcessChannel() {
   grpc::ChannelArguments args;
@@ -55,18 +66,20 @@ std::shared_ptr<grpc::Channel> Server::InProcessChannel() {
   return server_->InProcessChannel(args);
 }
 
-void Server::Shutdown() {
-  if (shut_down_ || server_ == nullptr) return;
+int Server::Shutdown() {
+  if (shut_down_ || server_ == nullptr) return 0;
   shut_down_ = true;
   const double grace = std::clamp(options_.grace_seconds, 0.0, 1e6);
   server_->GetHealthCheckService()->SetServingStatus(false);
-  service_->DrainAndStop(
+  const int cut = service_->DrainAndStop(
       std::chrono::steady_clock::now() +
       std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(grace)));
-  // Every job has ended by now; what is left are calls finishing their last write and health
-  // watches, which gRPC cancels after this short deadline.
-  server_->Shutdown(std::chrono::system_clock::now() + std::chrono::milliseconds(200));
+  // Every job has ended by now. What is left are health watches and reflection streams, which
+  // gRPC cancels at once, and, when the grace cut jobs, their calls sending UNAVAILABLE, which
+  // get a short deadline first.
+  server_->Shutdown(std::chrono::system_clock::now() + std::chrono::milliseconds(cut > 0 ? 200 : 0));
   server_->Wait();
+  return cut;
 }
 
 }  // namespace meshsmooth::server

@@ -19,9 +19,9 @@ int HardwareThreads() { return std::max(1u, std::thread::hardware_concurrency())
 
 }  // namespace
 
-MeshSmootherService::MeshSmootherService(const ServerOptions& options)
+MeshSmootherService::MeshSmootherService(const ServerOptions& options, ServiceMetrics& metrics)
     : options_(options),
-      admission_(options_),
+      admission_(options_, metrics),
       pool_(options.workers > 0 ? options.workers : HardwareThreads(), options.queue_depth),
       start_tag_(static_cast<uint64_t>(
           std::chrono::duration_cast<std::chrono::seconds>(std::chrono::system_clock::now().time_since_epoch())
@@ -48,7 +48,8 @@ std::string MeshSmootherService::NewJobId() { return absl::StrFormat("%x-%d", st
 
 grpc::ServerBidiReactor<v1::SmoothRequest, v1::SmoothResponse>* MeshSmootherService::Smooth(
     grpc::CallbackServerContext* context) {
-  return NewSmoothReactor(Authenticate(context), admission_, pool_, options_, [this] { return NewJobId(); });
+  return NewSmoothReactor(Authenticate(context), context->peer(), admission_, pool_, options_,
+                          [this] { return NewJobId(); });
 }
 
 grpc::ServerUnaryReactor* MeshSmootherService::ListFlows(grpc::CallbackServerContext* context,
@@ -73,9 +74,21 @@ grpc::ServerUnaryReactor* MeshSmootherService::ListFlows(grpc::CallbackServerCon
   return reactor;
 }
 
-void MeshSmootherService::DrainAndStop(Clock::time_point deadline) {
-  admission_.Drain(deadline);
+int MeshSmootherService::DrainAndStop(Clock::time_point deadline) {
+  const int cut = admission_.Drain(deadline);
   pool_.Stop();  // a cancelled job stops within one iteration
+  return cut;
+}
+
+ServiceGauges MeshSmootherService::Gauges() {
+  ServiceGauges g;
+  g.queued_jobs = pool_.queued();
+  g.running_jobs = pool_.running();
+  g.buffered_bytes = admission_.budget().held();
+  g.buffered_bytes_limit = admission_.budget().limit();
+  g.workers = pool_.workers();
+  g.queue_capacity = options_.queue_depth;
+  return g;
 }
 
 }  // namespace meshsmooth::server

@@ -9,6 +9,7 @@
 
 #include "meshsmooth/v1/smoothing.grpc.pb.h"
 #include "server/admission.h"
+#include "server/metrics.h"
 #include "server/options.h"
 #include "server/worker_pool.h"
 
@@ -16,7 +17,8 @@ namespace meshsmooth::server {
 
 class MeshSmootherService final : public v1::MeshSmoother::CallbackService {
  public:
-  explicit MeshSmootherService(const ServerOptions& options);
+  // Its events go to `metrics`, which must outlive it.
+  explicit MeshSmootherService(const ServerOptions& options, ServiceMetrics& metrics = NoMetrics());
   ~MeshSmootherService() override;
 
   grpc::ServerBidiReactor<v1::SmoothRequest, v1::SmoothResponse>* Smooth(grpc::CallbackServerContext* context) override;
@@ -24,8 +26,12 @@ class MeshSmootherService final : public v1::MeshSmoother::CallbackService {
                                       v1::ListFlowsResponse* response) override;
 
   // Shutdown, in order: refuse new calls, end uploads and queued jobs with UNAVAILABLE, wait
-  // until `deadline` for running jobs, then end the rest with UNAVAILABLE and stop the workers.
-  void DrainAndStop(std::chrono::steady_clock::time_point deadline);
+  // until `deadline` for running jobs (no longer than the last of them takes), then end the
+  // rest with UNAVAILABLE and stop the workers. Returns how many jobs the deadline cut.
+  int DrainAndStop(std::chrono::steady_clock::time_point deadline);
+
+  // The state a metrics scrape reads.
+  ServiceGauges Gauges();
 
   // Jobs waiting for a worker now (for tests).
   int queued_jobs() { return pool_.queued(); }

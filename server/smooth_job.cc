@@ -9,6 +9,7 @@
 #include "core/flows/flow.h"
 #include "core/measure/metrics.h"
 #include "core/topology.h"
+#include "server/log.h"
 
 namespace meshsmooth::server {
 namespace {
@@ -35,7 +36,7 @@ Clock::time_point Deadline(Clock::time_point start, double seconds) {
 }  // namespace
 
 SmoothJob::SmoothJob(std::string id, JobParams params, std::string upload, BudgetHold hold, Clock::time_point received,
-                     const ServerOptions& options, JobSink* sink)
+                     const ServerOptions& options, JobSink* sink, std::string peer, ServiceMetrics& metrics)
     : id_(std::move(id)),
       params_(std::move(params)),
       upload_(std::move(upload)),
@@ -43,6 +44,8 @@ SmoothJob::SmoothJob(std::string id, JobParams params, std::string upload, Budge
       received_(received),
       submitted_(received),
       options_(options),
+      peer_(std::move(peer)),
+      metrics_(metrics),
       sink_(sink) {}
 
 template <typename Fn>
@@ -60,7 +63,8 @@ void SmoothJob::Detach() {
 }
 
 void SmoothJob::Log(const JobReport& report) const {
-  if (options_.log_jobs) std::fprintf(stderr, "%s\n", JobLogLine(report, params_).c_str());
+  if (options_.log_jobs) LogJob(options_.log_format, report, params_, peer_);
+  metrics_.JobEnded(report, params_);
 }
 
 void SmoothJob::Fail(JobReport& report, const absl::Status& status) {
@@ -184,9 +188,10 @@ void SmoothJob::Run() {
   JobReport report;
   report.job_id = id_;
   report.queue_seconds = Seconds(submitted_.load(), start);
-  if (cancel_.load()) {
+  if (cancel_.load()) {  // given up while it waited: logged, not counted as a job run
     report.status = "CANCELLED";
-    return Log(report);
+    if (options_.log_jobs) LogJob(options_.log_format, report, params_, peer_);
+    return;
   }
 
   absl::StatusOr<DracoMesh> draco = DecodeUpload(stop);

@@ -19,6 +19,7 @@
 #include "meshsmooth/v1/smoothing.pb.h"
 #include "server/admission.h"
 #include "server/convert.h"
+#include "server/metrics.h"
 #include "server/options.h"
 
 namespace meshsmooth::server {
@@ -39,9 +40,10 @@ using Clock = std::chrono::steady_clock;
 class SmoothJob {
  public:
   // `hold` is the upload's share of the server's memory budget: given back once the upload is
-  // decoded and freed (or dropped by Detach()).
+  // decoded and freed (or dropped by Detach()). `peer` is the client's address, for the log; the
+  // job's end goes to `metrics` (which must outlive the job).
   SmoothJob(std::string id, JobParams params, std::string upload, BudgetHold hold, Clock::time_point received,
-            const ServerOptions& options, JobSink* sink);
+            const ServerOptions& options, JobSink* sink, std::string peer = "", ServiceMetrics& metrics = NoMetrics());
 
   const std::string& id() const { return id_; }
   void set_queue_position(int position) { queue_position_ = position; }
@@ -63,7 +65,7 @@ class SmoothJob {
   // Calls `fn(sink)` unless the job was detached.
   template <typename Fn>
   void Emit(Fn&& fn);
-  // The job's log line (unless options.log_jobs is off).
+  // The job has ended: its log entry (unless options.log_jobs is off) and its metrics.
   void Log(const JobReport& report) const;
   // Sends `status` to the sink and logs the job with its code.
   void Fail(JobReport& report, const absl::Status& status);
@@ -100,6 +102,8 @@ class SmoothJob {
   std::atomic<bool> started_{false};
   std::atomic<int> queue_position_{0};
   const ServerOptions& options_;
+  const std::string peer_;
+  ServiceMetrics& metrics_;
   std::atomic<bool> cancel_{false};
   std::mutex mu_;  // guards sink_, upload_ and upload_hold_
   JobSink* sink_;

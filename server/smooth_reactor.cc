@@ -26,17 +26,19 @@ class SmoothReactor final : public grpc::ServerBidiReactor<v1::SmoothRequest, v1
  public:
   // `authenticated`: OK, or the status the call ends with at once. `new_job_id` names a job
   // whose spec brings no id.
-  SmoothReactor(const grpc::Status& authenticated, Admission& admission, WorkerPool& pool, const ServerOptions& options,
-                std::function<std::string()> new_job_id)
-      : admission_(admission),
+  SmoothReactor(const grpc::Status& authenticated, std::string peer, Admission& admission, WorkerPool& pool,
+                const ServerOptions& options, std::function<std::string()> new_job_id)
+      : peer_(std::move(peer)),
+        admission_(admission),
         pool_(pool),
         options_(options),
         new_job_id_(std::move(new_job_id)),
         received_(Clock::now()),
-        upload_(&admission.budget(), options.max_upload_bytes),
+        upload_(&admission.budget(), options.max_upload_bytes, admission.metrics()),
         last_read_(received_) {
     // Registered whatever the answer: OnDone closes every call.
     const grpc::Status admitted = admission_.Open(this);
+    if (!authenticated.ok() && admitted.ok()) admission_.metrics().Refused(Refusal::kUnauthenticated);
     if (!authenticated.ok() || !admitted.ok()) {
       Abort(!authenticated.ok() ? authenticated : admitted);
       return;
@@ -79,7 +81,10 @@ class SmoothReactor final : public grpc::ServerBidiReactor<v1::SmoothRequest, v1
           return Abort(InvalidArgument("a second JobSpec arrived: send exactly one spec, first, then the mesh"));
         }
         absl::StatusOr<JobParams> params = FromProto(request_.spec(), options.max_iterations);
-        if (!params.ok()) return Abort(ToGrpc(params.status()));
+        if (!params.ok()) {
+          admission_.metrics().Refused(Refusal::kInvalidRequest);
+          return Abort(ToGrpc(params.status()));
+        }
         params_ = std::move(params).value();
         break;
       }
@@ -175,7 +180,9 @@ class SmoothReactor final : public grpc::ServerBidiReactor<v1::SmoothRequest, v1
   }
 
  private:
-  static grpc::Status InvalidArgument(const std::string& message) {
+  // A call that breaks the protocol: INVALID_ARGUMENT, counted as a refusal.
+  grpc::Status InvalidArgument(const std::string& message) {
+    admission_.metrics().Refused(Refusal::kInvalidRequest);
     return grpc::Status(grpc::StatusCode::INVALID_ARGUMENT, message);
   }
 
@@ -194,7 +201,7 @@ class SmoothReactor final : public grpc::ServerBidiReactor<v1::SmoothRequest, v1
     if (grpc::Status s = admission_.CheckNotDraining(); !s.ok()) return Abort(s);
     const std::string id = !params_->job_id.empty() ? params_->job_id : new_job_id_();
     auto job = std::make_shared<SmoothJob>(id, std::move(*params_), upload_.TakeBytes(), upload_.TakeHold(), received_,
-                                           options_, this);
+                                           options_, this, peer_, admission_.metrics());
     {
       std::lock_guard<std::mutex> lock(mu_);
       job_ = job;
@@ -246,6 +253,7 @@ class SmoothReactor final : public grpc::ServerBidiReactor<v1::SmoothRequest, v1
     StartWrite(&out_);
   }
 
+  const std::string peer_;
   Admission& admission_;
   WorkerPool& pool_;
   const ServerOptions& options_;
@@ -278,9 +286,9 @@ class SmoothReactor final : public grpc::ServerBidiReactor<v1::SmoothRequest, v1
 }  // namespace
 
 grpc::ServerBidiReactor<v1::SmoothRequest, v1::SmoothResponse>* NewSmoothReactor(
-    const grpc::Status& authenticated, Admission& admission, WorkerPool& pool, const ServerOptions& options,
-    std::function<std::string()> new_job_id) {
-  return new SmoothReactor(authenticated, admission, pool, options, std::move(new_job_id));
+    const grpc::Status& authenticated, std::string peer, Admission& admission, WorkerPool& pool,
+    const ServerOptions& options, std::function<std::string()> new_job_id) {
+  return new SmoothReactor(authenticated, std::move(peer), admission, pool, options, std::move(new_job_id));
 }
 
 }  // namespace meshsmooth::server

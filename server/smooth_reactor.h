@@ -16,10 +16,11 @@
 namespace meshsmooth::server {
 
 // A new Smooth call's reactor; it deletes itself when gRPC is done with the call.
-// `authenticated`: OK, or the status the call ends with at once. `new_job_id` names a job whose
-// spec brings no id. The references must outlive every call (the service owns them).
+// `authenticated`: OK, or the status the call ends with at once. `peer`: the client's address,
+// for the job's log. `new_job_id` names a job whose spec brings no id. The references must
+// outlive every call (the service owns them); events go to admission.metrics().
 grpc::ServerBidiReactor<v1::SmoothRequest, v1::SmoothResponse>* NewSmoothReactor(
-    const grpc::Status& authenticated, Admission& admission, WorkerPool& pool, const ServerOptions& options,
-    std::function<std::string()> new_job_id);
+    const grpc::Status& authenticated, std::string peer, Admission& admission, WorkerPool& pool,
+    const ServerOptions& options, std::function<std::string()> new_job_id);
 
 }  // namespace meshsmooth::server

@@ -4,10 +4,10 @@
 
 namespace meshsmooth::server {
 
-WorkerPool::WorkerPool(int workers, int queue_depth) : queue_depth_(std::max(0, queue_depth)) {
-  workers = std::max(1, workers);
-  threads_.reserve(workers);
-  for (int i = 0; i < workers; ++i) threads_.emplace_back([this] { Loop(); });
+WorkerPool::WorkerPool(int workers, int queue_depth)
+    : queue_depth_(std::max(0, queue_depth)), workers_(std::max(1, workers)) {
+  threads_.reserve(workers_);
+  for (int i = 0; i < workers_; ++i) threads_.emplace_back([this] { Loop(); });
 }
 
 WorkerPool::~WorkerPool() { Stop(); }
@@ -32,6 +32,11 @@ std::optional<int> WorkerPool::TrySubmit(std::function<void()> task, std::functi
 int WorkerPool::queued() {
   std::lock_guard<std::mutex> lock(mu_);
   return WaitingLocked();
+}
+
+int WorkerPool::running() {
+  std::lock_guard<std::mutex> lock(mu_);
+  return running_;
 }
 
 void WorkerPool::Stop() {
@@ -61,8 +66,11 @@ void WorkerPool::Loop() {
       if (stopping_) return;
       task = std::move(queue_.front());
       queue_.pop_front();
+      ++running_;
     }
     task.run();  // an abandoned task returns at once (and logs that it was)
+    std::lock_guard<std::mutex> lock(mu_);
+    --running_;
   }
 }
 

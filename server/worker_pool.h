@@ -31,6 +31,9 @@ class WorkerPool {
 
   // Tasks waiting for a worker now (abandoned ones not counted).
   int queued();
+  // Tasks a worker runs now.
+  int running();
+  int workers() const { return workers_; }
 
  private:
   struct Task {
@@ -42,10 +45,12 @@ class WorkerPool {
   int WaitingLocked() const;
 
   const int queue_depth_;
+  const int workers_;
   std::mutex mu_;
   std::condition_variable cv_;
   std::deque<Task> queue_;
   int idle_ = 0;
+  int running_ = 0;
   bool stopping_ = false;
   std::vector<std::thread> threads_;
 };

@@ -5,17 +5,21 @@
 itself (no schema): kinds and API versions, label selectors against the pod's labels, the gRPC
 probes and Services against the port the image listens on, every server flag against
 `meshsmoothd --help`, the termination grace against --grace-seconds, the memory limit against the
-measured peak per vertex, and the image's user. With kubectl on PATH, `kubectl kustomize` must
-also render the directory.
+measured peak per vertex, the image's user, and the metrics: the scrape annotations and the
+named port against --metrics-listen. With kubectl on PATH, `kubectl kustomize` must also render
+the directory. With --alerts, the PrometheusRule's rules pass `promtool check rules`, and
+`promtool test rules` fires each alert on made-up series (and not on healthy ones).
 
 Run by ctest: kubernetes_test.py --deploy deploy/kubernetes --dockerfile docker/Dockerfile
                                  --server build/server/meshsmoothd
+                                 --alerts deploy/prometheus/alerts.yaml
 Prints one line per check and ends with 'N passed, M failed'.
 """
 import os
 import re
 import shutil
 import sys
+import tempfile
 
 import yaml
 
@@ -47,8 +51,102 @@ def main():
     ap = parser(__doc__, required=("server",))
     ap.add_argument("--deploy", required=True, help="the folder of manifests, deploy/kubernetes")
     ap.add_argument("--dockerfile", required=True, help="docker/Dockerfile, for the image's port and user")
+    ap.add_argument("--alerts", help="the PrometheusRule file, deploy/prometheus/alerts.yaml")
     a = ap.parse_args()
-    return run_checks(lambda checks: manifest_checks(a, checks.check))
+
+    def body(checks):
+        manifest_checks(a, checks.check)
+        if a.alerts:
+            alert_checks(a.alerts, checks.check)
+    return run_checks(body)
+
+
+# Made-up series for `promtool test rules`: each alert fires on its own trouble after its `for`,
+# and none fires on a healthy replica.
+ALERT_TESTS = {
+    "evaluation_interval": "1m",
+    "tests": [{
+        "interval": "1m",
+        "input_series": [
+            {"series": 'meshsmooth_queue_capacity{instance="a:9464"}', "values": "8x30"},
+            {"series": 'meshsmooth_queue_depth{instance="a:9464"}', "values": "8x30"},
+            {"series": 'meshsmooth_queue_capacity{instance="b:9464"}', "values": "8x30"},
+            {"series": 'meshsmooth_queue_depth{instance="b:9464"}', "values": "1x30"},
+            {"series": 'meshsmooth_refusals_total{instance="a:9464",reason="queue_full"}', "values": "0+60x30"},
+            {"series": 'meshsmooth_refusals_total{instance="a:9464",reason="invalid_request"}', "values": "0+600x30"},
+            {"series": 'meshsmooth_jobs_total{instance="a:9464",flow="taubin",status="OK"}', "values": "0+60x30"},
+            {"series": 'meshsmooth_jobs_total{instance="a:9464",flow="taubin",status="INTERNAL"}', "values": "0+6x30"},
+            {"series": 'meshsmooth_jobs_total{instance="a:9464",flow="taubin",status="INVALID_ARGUMENT"}',
+             "values": "0+600x30"},
+        ],
+        "alert_rule_test": [
+            {"eval_time": "3m", "alertname": "MeshsmoothQueueSaturated", "exp_alerts": []},
+            {"eval_time": "10m", "alertname": "MeshsmoothQueueSaturated",
+             "exp_alerts": [{"exp_labels": {"severity": "warning", "instance": "a:9464"}}]},
+            {"eval_time": "5m", "alertname": "MeshsmoothJobsRefused", "exp_alerts": []},
+            {"eval_time": "20m", "alertname": "MeshsmoothJobsRefused",
+             "exp_alerts": [{"exp_labels": {"severity": "warning"}}]},
+            {"eval_time": "20m", "alertname": "MeshsmoothJobErrorRatio",
+             "exp_alerts": [{"exp_labels": {"severity": "critical"}}]},
+        ],
+    }, {
+        "interval": "1m",
+        "input_series": [
+            {"series": 'meshsmooth_queue_capacity{instance="a:9464"}', "values": "8x30"},
+            {"series": 'meshsmooth_queue_depth{instance="a:9464"}', "values": "2x30"},
+            {"series": 'meshsmooth_refusals_total{instance="a:9464",reason="queue_full"}', "values": "0x30"},
+            {"series": 'meshsmooth_jobs_total{instance="a:9464",flow="taubin",status="OK"}', "values": "0+60x30"},
+            {"series": 'meshsmooth_jobs_total{instance="a:9464",flow="taubin",status="CANCELLED"}',
+             "values": "0+30x30"},
+        ],
+        "alert_rule_test": [{"eval_time": "25m", "alertname": name, "exp_alerts": []} for name in
+                            ("MeshsmoothQueueSaturated", "MeshsmoothJobsRefused", "MeshsmoothJobErrorRatio")],
+    }],
+}
+
+
+def alert_checks(path, check):
+    """The PrometheusRule: its rules through promtool, and each alert fired on made-up series."""
+    with open(path) as f:
+        (rule,) = [d for d in yaml.safe_load_all(f) if d]
+    tmp = tempfile.mkdtemp(prefix="meshsmooth-alerts-")
+
+    def shape():
+        assert rule["apiVersion"] == "monitoring.coreos.com/v1" and rule["kind"] == "PrometheusRule", rule["kind"]
+        names = [r["alert"] for g in rule["spec"]["groups"] for r in g["rules"]]
+        assert names == ["MeshsmoothQueueSaturated", "MeshsmoothJobsRefused", "MeshsmoothJobErrorRatio"], names
+        for g in rule["spec"]["groups"]:
+            for r in g["rules"]:
+                assert r["annotations"].get("summary") and r["labels"].get("severity"), r["alert"]
+    check("a PrometheusRule with the queue, refusal and error-ratio alerts, each with a summary and severity",
+          shape)
+
+    promtool = shutil.which("promtool")
+    rules = os.path.join(tmp, "rules.yaml")
+    with open(rules, "w") as f:
+        yaml.safe_dump(rule["spec"], f)
+
+    def promtool_check():
+        assert promtool, "promtool not found (scripts/setup.sh installs Debian's prometheus)"
+        out = run([promtool, "check", "rules", rules])
+        assert out.returncode == 0 and "SUCCESS: 3 rules found" in out.stdout, out.stdout + out.stderr
+    check("promtool check rules: the rules parse (3 rules)", promtool_check)
+
+    def promtool_test():
+        assert promtool, "promtool not found"
+        # The alerts' annotations are templates; the test compares labels only.
+        bare = os.path.join(tmp, "bare.yaml")
+        with open(bare, "w") as f:
+            yaml.safe_dump({"groups": [{**g, "rules": [{k: v for k, v in r.items() if k != "annotations"}
+                                                       for r in g["rules"]]} for g in rule["spec"]["groups"]]}, f)
+        tests = os.path.join(tmp, "tests.yaml")
+        with open(tests, "w") as f:
+            yaml.safe_dump({"rule_files": [bare], **ALERT_TESTS}, f)
+        out = run([promtool, "test", "rules", tests])
+        assert out.returncode == 0 and "SUCCESS" in out.stdout, out.stdout + out.stderr
+    check("promtool test rules: each alert fires on its trouble, none on a healthy replica or a client's "
+          "bad requests", promtool_test)
+    shutil.rmtree(tmp, ignore_errors=True)
 
 
 def manifest_checks(a, check):
@@ -158,6 +256,19 @@ def manifest_checks(a, check):
         assert int(flags["--workers"]) * max(1, int(flags["--threads-per-job"])) <= \
             quantity(c["resources"]["limits"]["cpu"]), "more threads than CPUs"
     check("every server flag exists and the node-sized defaults are set", server_flags)
+
+    def metrics():
+        annotations = dep["spec"]["template"]["metadata"].get("annotations", {})
+        named = {p["name"]: p["containerPort"] for p in c["ports"]}
+        listen = flags.get("--metrics-listen", "")
+        assert re.fullmatch(r"0\.0\.0\.0:\d+", listen), f"--metrics-listen={listen!r}: all interfaces, a port"
+        port = int(listen.rsplit(":", 1)[1])
+        assert named.get("metrics") == port, f"the metrics port {named} vs --metrics-listen {port}"
+        assert annotations.get("prometheus.io/scrape") == "true", annotations
+        assert annotations.get("prometheus.io/port") == str(port), annotations
+        assert annotations.get("prometheus.io/path") == "/metrics", annotations
+        assert flags.get("--log-format") == "json", "the cluster's log pipeline gets JSON lines"
+    check("the pod is scraped: annotations, a named metrics port and --metrics-listen agree; JSON logs", metrics)
 
     def grace():
         pre = c.get("lifecycle", {}).get("preStop", {}).get("exec", {}).get("command", [])

@@ -152,6 +152,7 @@ def free_port():
 # meshsmoothd
 
 READY = re.compile(r"^meshsmoothd listening on (\S+):(\d+)$")
+METRICS_READY = re.compile(r"^meshsmoothd metrics on (\S+):(\d+)$")
 JOB_LOG = re.compile(r"^meshsmoothd job=(\S+) .* status=(\S+)")
 
 
@@ -162,7 +163,8 @@ def job_lines(lines):
 
 class Server:
     """One meshsmoothd listening on 127.0.0.1:0, started and waited for: the constructor returns
-    once it printed its ready line, with address ("127.0.0.1:PORT") and port set; the rest of its
+    once it printed its ready line, with address ("127.0.0.1:PORT") and port set (and, when it
+    was given --metrics-listen, metrics_address; else that is None); the rest of its
     stdout goes on to stderr. Its stderr (the per-job log lines) is inherited with stderr=None,
     kept in memory with stderr=Server.KEEP, or written to the file named by stderr."""
 
@@ -178,6 +180,7 @@ class Server:
             [binary, "--listen", "127.0.0.1:0", *flags], stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
             stderr=subprocess.PIPE if stderr == Server.KEEP else self._log, text=True, bufsize=1, env=env)
         self._readers = []
+        self.metrics_address = None
         if stderr == Server.KEEP:
             self._start(self._keep_stderr)
         # A thread drains stdout for the whole run, so a chatty server never blocks on the pipe.
@@ -221,6 +224,9 @@ class Server:
                 raise CheckFailed(f"server exited (code {self.proc.wait()}) before its ready line; "
                                   f"stdout: {seen!r}")
             seen.append(line)
+            metrics = METRICS_READY.match(line)
+            if metrics:
+                self.metrics_address = f"{metrics.group(1)}:{metrics.group(2)}"
             m = READY.match(line)
             if m:
                 port = int(m.group(2))
@@ -261,6 +267,24 @@ class Server:
 
     def __exit__(self, *exc):
         self.stop()
+
+
+def parse_metrics(text):
+    """Prometheus's text format as {(name, ((label, value), ...)): value}, labels sorted."""
+    samples = {}
+    for line in text.splitlines():
+        if not line or line.startswith("#"):
+            continue
+        m = re.match(r'^([a-zA-Z_:][a-zA-Z0-9_:]*)(?:\{(.*)\})? (\S+)$', line)
+        require(m is not None, f"not a sample line: {line!r}")
+        labels = tuple(sorted(re.findall(r'([a-zA-Z_][a-zA-Z0-9_]*)="((?:[^"\\]|\\.)*)"', m.group(2) or "")))
+        samples[(m.group(1), labels)] = float(m.group(3))
+    return samples
+
+
+def metric_sum(samples, name, **labels):
+    """The sum of the samples named `name` whose labels include `labels`."""
+    return sum(v for (n, ls), v in samples.items() if n == name and all((k, str(x)) in ls for k, x in labels.items()))
 
 
 # ----------------------------------------------------------------------------------------------

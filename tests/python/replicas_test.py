@@ -244,7 +244,7 @@ def replica_checks(a, check, tmp):
             assert short_job.returncode == 0, short_job.stderr.read()
             l_err = long_job.stderr.read()
             assert long_job.returncode == 3 and "UNAVAILABLE" in l_err and "grace" in l_err, l_err
-            assert rc == 0, rc
+            assert rc == 1, f"exit status {rc}: the grace cut the long job, which the status must say"
             assert grace - 0.1 <= exit_seconds <= grace + 1.0, exit_seconds
             time.sleep(0.2)
             assert rep.jobs("OK") == ["calibration", "short"], rep.jobs()
@@ -252,7 +252,7 @@ def replica_checks(a, check, tmp):
             channel.close()
             rep.stop()
     check("SIGTERM: health NOT_SERVING within 100 ms, new and queued jobs UNAVAILABLE at once, a running job "
-          "finishes within the grace, the rest UNAVAILABLE, exit within grace + 1 s", sigterm_drains)
+          "finishes within the grace, the rest UNAVAILABLE, exit 1 within grace + 1 s", sigterm_drains)
 
     def max_queue_wait():
         rep = Replica(server, "--workers", "1", "--threads-per-job", "1", "--max-queue-wait", "0.5")
