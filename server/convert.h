@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "absl/status/statusor.h"
 #include "core/features/ridges.h"
@@ -48,6 +49,7 @@ struct JobReport {
   std::optional<Displacement> displacement;
   std::optional<FeatureSummary> features;  // when the spec asked for them
   uint64_t result_bytes = 0;
+  std::vector<std::string> warnings;  // Summary.warnings
 };
 
 // The summary of a job that succeeded.

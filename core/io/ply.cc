@@ -215,6 +215,7 @@ absl::StatusOr<Mesh> ParsePly(std::string_view data, ReadInfo& info) {
       if (ix < 0 || iy < 0 || iz < 0) return error("the vertex element has no x, y, z");
       for (int i : {ix, iy, iz}) {
         if (e.props[i].is_list) return error("x, y, z must be scalar properties");
+        info.double_positions |= e.props[i].type == PlyType::kF64;
       }
       // A count that the remaining bytes cannot hold is a corrupt header, not a reason to
       // allocate gigabytes.
@@ -297,24 +298,32 @@ absl::StatusOr<Mesh> ParsePly(std::string_view data, ReadInfo& info) {
   return mesh;
 }
 
-absl::StatusOr<std::string> WritePly(const Mesh& mesh, bool binary) {
+absl::StatusOr<std::string> WritePly(const Mesh& mesh, bool binary, bool double_positions) {
   const bool with_colors = !mesh.colors.empty();
   if (with_colors && mesh.colors.size() != mesh.positions.size()) {
     return absl::InvalidArgumentError(absl::StrCat("PLY: the mesh has ", mesh.colors.size(), " colours for ",
                                                    mesh.positions.size(), " vertices (want one per vertex or none)"));
   }
-  std::string out = absl::StrCat(
-      "ply\nformat ", binary ? "binary_little_endian" : "ascii", " 1.0\ncomment written by meshsmooth\nelement vertex ",
-      mesh.positions.size(), "\nproperty float x\nproperty float y\nproperty float z\n",
-      with_colors ? "property uchar red\nproperty uchar green\nproperty uchar blue\n" : "", "element face ",
-      mesh.triangles.size(), "\nproperty list uchar int vertex_indices\nend_header\n");
+  std::string out =
+      absl::StrCat("ply\nformat ", binary ? "binary_little_endian" : "ascii",
+                   " 1.0\ncomment written by meshsmooth\nelement vertex ", mesh.positions.size(), "\n",
+                   double_positions ? "property double x\nproperty double y\nproperty double z\n"
+                                    : "property float x\nproperty float y\nproperty float z\n",
+                   with_colors ? "property uchar red\nproperty uchar green\nproperty uchar blue\n" : "",
+                   "element face ", mesh.triangles.size(), "\nproperty list uchar int vertex_indices\nend_header\n");
   if (binary) {
     static_assert(std::endian::native == std::endian::little, "binary PLY writer assumes little endian");
-    out.reserve(out.size() + mesh.positions.size() * (with_colors ? 15 : 12) + mesh.triangles.size() * 13);
+    out.reserve(out.size() + mesh.positions.size() * ((double_positions ? 24 : 12) + (with_colors ? 3 : 0)) +
+                mesh.triangles.size() * 13);
     for (size_t i = 0; i < mesh.positions.size(); ++i) {
       const Vec3& p = mesh.positions[i];
-      const float xyz[3] = {static_cast<float>(p.x), static_cast<float>(p.y), static_cast<float>(p.z)};
-      out.append(reinterpret_cast<const char*>(xyz), sizeof xyz);
+      if (double_positions) {
+        const double xyz[3] = {p.x, p.y, p.z};
+        out.append(reinterpret_cast<const char*>(xyz), sizeof xyz);
+      } else {
+        const float xyz[3] = {static_cast<float>(p.x), static_cast<float>(p.y), static_cast<float>(p.z)};
+        out.append(reinterpret_cast<const char*>(xyz), sizeof xyz);
+      }
       if (with_colors) {
         const Rgb& c = mesh.colors[i];
         const char rgb[3] = {static_cast<char>(c.r), static_cast<char>(c.g), static_cast<char>(c.b)};
@@ -331,9 +340,13 @@ absl::StatusOr<std::string> WritePly(const Mesh& mesh, bool binary) {
     const Vec3& p = mesh.positions[i];
     // Declared float: print the float's own shortest form so it reads back bit-exactly.
     for (double c : {p.x, p.y, p.z}) {
-      char buf[32];
-      auto [ptr, ec] = std::to_chars(buf, buf + sizeof buf, static_cast<float>(c));
-      out.append(buf, ec == std::errc() ? ptr : buf);
+      if (double_positions) {
+        AppendDouble(out, c);
+      } else {
+        char buf[32];
+        auto [ptr, ec] = std::to_chars(buf, buf + sizeof buf, static_cast<float>(c));
+        out.append(buf, ec == std::errc() ? ptr : buf);
+      }
       out += ' ';
     }
     if (with_colors) {
