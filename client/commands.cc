@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "absl/strings/str_cat.h"
+#include "absl/strings/str_join.h"
 #include "client/inputs.h"
 #include "client/json.h"
 #include "client/report.h"
@@ -78,8 +79,9 @@ v1::JobSpec SpecFrom(const SmoothOptions& o) {
 int RunSmooth(const SmoothOptions& o, const ConnectionOptions& c) {
   absl::StatusOr<MeshFormat> out_format = FormatFromPath(o.output);
   if (!out_format.ok()) return Fail("", out_format.status());
-  if (o.ridges && *out_format != MeshFormat::kPly && *out_format != MeshFormat::kDraco) {
-    std::cerr << "meshsmooth: warning: --ridges labels are kept only in .ply (vertex colours) and .drc "
+  if (o.ridges && *out_format != MeshFormat::kPly && *out_format != MeshFormat::kObj &&
+      *out_format != MeshFormat::kDraco) {
+    std::cerr << "meshsmooth: warning: --ridges labels are kept only in .ply and .obj (vertex colours) and .drc "
                  "(attributes) output; the summary still counts them\n";
   }
   absl::StatusOr<Upload> upload = PrepareUpload(o.input);
@@ -119,12 +121,18 @@ int RunSmooth(const SmoothOptions& o, const ConnectionOptions& c) {
   if (!outcome.ok()) {
     return Fail(std::string(absl::StatusCodeToString(outcome.status().code())) + ": ", outcome.status());
   }
-  if (absl::Status s = WriteResult(*upload, outcome->result, o.output, o.ridges); !s.ok()) return Fail("", s);
+  std::vector<std::string> dropped = upload->dropped;
+  if (absl::Status s = WriteResult(*upload, outcome->result, o.output, o.ridges, &dropped); !s.ok()) {
+    return Fail("", s);
+  }
   for (const std::string& w : outcome->summary.warnings()) std::cerr << "meshsmooth: warning: " << w << "\n";
+  // Everything not carried from the input to the output, in one line.
+  if (!dropped.empty()) std::cerr << "meshsmooth: warning: not kept: " << absl::StrJoin(dropped, "; ") << "\n";
   if (o.json) {
-    // The JSON lists every warning, the CLI's own (about the input) first.
+    // The JSON lists every warning, the CLI's own (about the input and the output) first.
     v1::Summary summary;
     for (const std::string& w : upload->warnings) summary.add_warnings(w);
+    for (const std::string& d : dropped) summary.add_warnings(absl::StrCat("not kept: ", d));
     summary.MergeFrom(outcome->summary);
     std::printf("%s", ToJson(summary).c_str());
   } else if (!o.quiet) {

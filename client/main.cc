@@ -81,7 +81,15 @@ std::string StepUnits(const std::vector<FlowInfo>& flows) {
 void AddSmoothOptions(CLI::App* smooth, SmoothOptions& so) {
   const std::vector<FlowInfo> flows = DescribeFlows();
   smooth->add_option("input", so.input, "mesh file (.obj .ply .off .stl .drc) or builtin:NAME")->required();
-  smooth->add_option("-o,--output", so.output, "output file; its extension picks the format")->required();
+  smooth
+      ->add_option("-o,--output", so.output,
+                   "output file; its extension picks the format. Texture coordinates (UV seams kept), colours and "
+                   "PLY vertex properties come back where the format holds them, normals recomputed from the "
+                   "smoothed positions; an .obj keeps its mtllib/usemtl/g/o/s lines, each mtllib rewritten as the "
+                   "path from the output's folder to the input's .mtl, so materials and textures (named in the .mtl, "
+                   "relative to it) resolve without copying. Whatever the output cannot hold is named in one "
+                   "'not kept' warning and in the --json warnings")
+      ->required();
   std::vector<std::string> flow_choices = FlowNames();
   flow_choices.insert(flow_choices.begin(), "auto");
   smooth

@@ -1,6 +1,7 @@
 // Between a mesh file and the service: what the CLI uploads for an input file and how it
-// writes the result back, keeping what the service does not see (the input's colours, its
-// coordinates' magnitude and precision).
+// writes the result back, keeping what the service does not change (the input's texture
+// coordinates, colours, properties and OBJ material lines, its coordinates' magnitude and
+// precision) and naming whatever the output cannot hold.
 #pragma once
 
 #include <string>
@@ -14,25 +15,37 @@
 namespace meshsmooth::client {
 
 struct Upload {
-  std::string draco;        // what is sent
-  std::vector<Rgb> colors;  // the input's vertex colours, for a PLY output
+  std::string input;  // the path (or builtin:NAME) it came from
+  std::string draco;  // what is sent
+  bool draco_input = false;
+  // The input as read, positions left out: its triangles, colours and attributes, written
+  // back around the result's positions (vertex i of the result is vertex i of the input).
+  Mesh kept;
+  int32_t num_vertices = 0;
   // Positions were sent relative to this origin (LocalOrigin): zero for a mesh near the
   // origin, the rounded centre of a georeferenced one. Added back to the result.
   Vec3 origin;
   bool double_positions = false;      // write PLY coordinates as double
-  std::vector<std::string> warnings;  // what the input lost on the way, one line each
+  std::vector<std::string> warnings;  // about the input, one sentence each
+  std::vector<std::string> dropped;   // what the input held that does not come back, one phrase each
 };
 
 // Draco input goes as it is (all its attributes travel along); anything else is read in
-// double, moved to its local origin and encoded losslessly and sequentially, so vertex i of
-// the result is vertex i of the input. The reader's errors when the input cannot be read.
+// double, moved to its local origin and encoded losslessly and sequentially with its
+// attributes (texture coordinates, normals, colours, vertex properties: EncodeDraco), so
+// vertex i of the result is vertex i of the input. The reader's errors when the input cannot
+// be read.
 absl::StatusOr<Upload> PrepareUpload(const std::string& input);
 
 // Writes `result` (the service's Draco bytes) to `output` in the format its extension names:
-// Draco bytes as they came, anything else decoded, moved back by the upload's origin, with the
-// ridge labels (`ridges`) or the input's colours (vertex i of the result is vertex i) as vertex
-// colours, PLY coordinates in double when the input had them or was shifted. Errors about the
-// result itself start with "the result: ".
-absl::Status WriteResult(const Upload& upload, const std::string& result, const std::string& output, bool ridges);
+// Draco bytes as they came, anything else decoded and moved back by the upload's origin, with
+// the input's attributes, normals recomputed from the smoothed positions, the ridge labels
+// (`ridges`) as vertex colours, PLY coordinates in double when the input had them or was
+// shifted. An OBJ output's `mtllib` lines are rewritten to reach the input's material files
+// from the output's folder. What the output cannot hold (or cannot find: a material file, a
+// texture image) is appended to `dropped`, one phrase each. Errors about the result itself
+// start with "the result: ".
+absl::Status WriteResult(const Upload& upload, const std::string& result, const std::string& output, bool ridges,
+                         std::vector<std::string>* dropped = nullptr);
 
 }  // namespace meshsmooth::client

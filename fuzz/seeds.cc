@@ -168,6 +168,26 @@ int main(int argc, char** argv) {
   for (int32_t i = 0; i < colored.num_vertices(); ++i) {
     colored.colors.push_back({static_cast<uint8_t>(i * 7), static_cast<uint8_t>(i * 13), static_cast<uint8_t>(i)});
   }
+  // A scan's attributes: per-corner UVs with a seam (the first face's corners name their own
+  // entries), per-vertex normals, a float property and OBJ material lines.
+  Mesh textured = colored;
+  textured.uvs.components = 2;
+  textured.normals.components = 3;
+  for (const Vec3& p : textured.positions) {
+    textured.uvs.values.insert(textured.uvs.values.end(), {0.5 + 0.5 * p.x, 0.5 + 0.5 * p.y});
+    textured.normals.values.insert(textured.normals.values.end(), {p.x, p.y, p.z});
+  }
+  for (const Triangle& t : textured.triangles) {
+    textured.uvs.corners.insert(textured.uvs.corners.end(), t.begin(), t.end());
+    textured.normals.corners.insert(textured.normals.corners.end(), t.begin(), t.end());
+  }
+  for (int k = 0; k < 3; ++k) {
+    textured.uvs.corners[k] = static_cast<int32_t>(textured.uvs.values.size() / 2);
+    textured.uvs.values.insert(textured.uvs.values.end(), {1.0 + k, 0.25});
+  }
+  textured.properties.push_back({"confidence", "float", std::vector<double>(textured.positions.size(), 0.5)});
+  textured.obj_directives = {{0, "mtllib a.mtl"}, {0, "usemtl skin"}, {4, "g rest"}};
+  seeds.AddMesh("textured_icosphere1", textured);
   seeds.AddMesh("icosphere1", Icosphere(1));
   seeds.AddMesh("noisy_icosphere2", noisy);
   seeds.AddMesh("colored_icosphere1", colored);

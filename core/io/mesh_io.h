@@ -13,14 +13,19 @@
 // Text formats are written with the shortest decimal form that reads back to the same
 // double; binary PLY and STL store float32, so float inputs round-trip exactly (PLY stores
 // double x, y, z when WriteOptions::ply_double asks, and the reader says when a file had them).
-// Vertex colours (Mesh::colors) are read from and written to PLY only (`red green blue`
-// uchar properties; float channels in 0..1 are scaled on reading, alpha is ignored); the other
-// formats neither read nor write them.
+// Vertex colours (Mesh::colors) are read from and written to PLY (`red green blue` uchar
+// properties; float channels in 0..1 are scaled on reading; alpha is a vertex property like any
+// other) and OBJ (`v x y z r g b`, 0..1). Texture coordinates and normals per corner: OBJ `vt`,
+// `vn` and `f v/vt/vn`; PLY per vertex (`s t` or `texture_u texture_v`, `nx ny nz`) or per face
+// (`texcoord` lists, MeshLab's per-wedge UVs). Named vertex properties: PLY. OBJ material and
+// group lines: OBJ. OFF and STL hold positions and faces only. What a reader cannot hold is
+// named in ReadInfo::dropped; never an error.
 #pragma once
 
 #include <cstdint>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
@@ -39,6 +44,9 @@ struct ReadInfo {
   int64_t polygons_fanned = 0;    // faces with more than 3 corners, split into a fan
   int64_t welded_corners = 0;     // STL: corners merged with an earlier identical position
   bool double_positions = false;  // PLY: x, y or z declared double (write them back as double)
+  // What the file held that the Mesh cannot, one phrase each ("3 OBJ line elements (l)"), in
+  // the order met; empty when everything was kept.
+  std::vector<std::string> dropped;
 };
 
 // Parses a whole file held in memory. InvalidArgument with the line or byte position for
