@@ -77,10 +77,15 @@ v1::JobSpec SpecFrom(const SmoothOptions& o) {
 }  // namespace
 
 int RunSmooth(const SmoothOptions& o, const ConnectionOptions& c) {
-  absl::StatusOr<MeshFormat> out_format = FormatFromPath(o.output);
+  const bool gltf_out = IsGltfPath(o.output);
+  if (gltf_out != IsGltfPath(o.input)) {
+    std::cerr << "meshsmooth: a glTF scene (.glb, .gltf) is smoothed into a glTF scene: give both or neither\n";
+    return kExitUsage;
+  }
+  absl::StatusOr<MeshFormat> out_format = gltf_out ? MeshFormat::kDraco : FormatFromPath(o.output);
   if (!out_format.ok()) return Fail("", out_format.status());
-  if (o.ridges && *out_format != MeshFormat::kPly && *out_format != MeshFormat::kObj &&
-      *out_format != MeshFormat::kDraco) {
+  if (o.ridges && (gltf_out || (*out_format != MeshFormat::kPly && *out_format != MeshFormat::kObj &&
+                                *out_format != MeshFormat::kDraco))) {
     std::cerr << "meshsmooth: warning: --ridges labels are kept only in .ply and .obj (vertex colours) and .drc "
                  "(attributes) output; the summary still counts them\n";
   }
@@ -122,7 +127,7 @@ int RunSmooth(const SmoothOptions& o, const ConnectionOptions& c) {
     return Fail(std::string(absl::StatusCodeToString(outcome.status().code())) + ": ", outcome.status());
   }
   std::vector<std::string> dropped = upload->dropped;
-  if (absl::Status s = WriteResult(*upload, outcome->result, o.output, o.ridges, &dropped); !s.ok()) {
+  if (absl::Status s = WriteResult(*upload, outcome->result, o.output, o.ridges, &dropped, o.gltf_draco); !s.ok()) {
     return Fail("", s);
   }
   for (const std::string& w : outcome->summary.warnings()) std::cerr << "meshsmooth: warning: " << w << "\n";

@@ -1,6 +1,7 @@
 #include "client/transfer.h"
 
 #include <algorithm>
+#include <cctype>
 #include <filesystem>
 #include <fstream>
 
@@ -124,9 +125,26 @@ std::vector<std::string> NotHeldBy(const Mesh& mesh, MeshFormat format) {
 
 }  // namespace
 
+bool IsGltfPath(const std::string& path) {
+  std::string ext = fs::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  return ext == ".gltf" || ext == ".glb";
+}
+
 absl::StatusOr<Upload> PrepareUpload(const std::string& input) {
   Upload upload;
   upload.input = input;
+  if (IsGltfPath(input)) {
+    absl::StatusOr<GltfScene> scene = GltfScene::Read(input);
+    if (!scene.ok()) return scene.status();
+    upload.gltf = std::make_shared<GltfScene>(std::move(*scene));
+    upload.dropped = upload.gltf->stale();
+    absl::StatusOr<std::string> bytes = EncodeDraco(upload.gltf->surface());
+    if (!bytes.ok()) return bytes.status();
+    upload.draco = std::move(*bytes);
+    upload.num_vertices = upload.gltf->surface().num_vertices();
+    return upload;
+  }
   const absl::StatusOr<MeshFormat> format = FormatFromPath(input);
   if (format.ok() && *format == MeshFormat::kDraco) {
     absl::StatusOr<std::string> bytes = ReadFileBytes(input);
@@ -164,9 +182,22 @@ absl::StatusOr<Upload> PrepareUpload(const std::string& input) {
 }
 
 absl::Status WriteResult(const Upload& upload, const std::string& result, const std::string& output, bool ridges,
-                         std::vector<std::string>* dropped) {
+                         std::vector<std::string>* dropped, bool gltf_draco) {
   std::vector<std::string> ignored;
   std::vector<std::string>& lost = dropped != nullptr ? *dropped : ignored;
+  if ((upload.gltf != nullptr) != IsGltfPath(output)) {
+    return absl::InvalidArgumentError(upload.gltf != nullptr
+                                          ? "a glTF scene is written as a scene: give -o FILE.glb or FILE.gltf"
+                                          : "glTF output needs a glTF input (.glb or .gltf)");
+  }
+  if (upload.gltf != nullptr) {
+    absl::StatusOr<Mesh> decoded = DecodeDraco(result);
+    if (!decoded.ok() || decoded->num_vertices() != upload.num_vertices) {
+      return absl::DataLossError("the result: not one point per point of the scene's primitives");
+    }
+    if (ridges) lost.push_back("the ridge labels (a glTF scene has no place for them)");
+    return upload.gltf->Write(decoded->positions, output, gltf_draco);
+  }
   absl::StatusOr<MeshFormat> format = FormatFromPath(output);
   if (!format.ok()) return format.status();
   if (*format == MeshFormat::kDraco) {

@@ -4,11 +4,13 @@
 // precision) and naming whatever the output cannot hold.
 #pragma once
 
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
+#include "core/io/gltf.h"
 #include "core/mesh.h"
 #include "core/vec3.h"
 
@@ -28,9 +30,15 @@ struct Upload {
   bool double_positions = false;      // write PLY coordinates as double
   std::vector<std::string> warnings;  // about the input, one sentence each
   std::vector<std::string> dropped;   // what the input held that does not come back, one phrase each
+  // A .gltf/.glb input: the scene, whose primitives' points were sent as one mesh.
+  std::shared_ptr<GltfScene> gltf;
 };
 
-// Draco input goes as it is (all its attributes travel along); anything else is read in
+// True for a path whose extension is .gltf or .glb (case-insensitive).
+bool IsGltfPath(const std::string& path);
+
+// Draco input goes as it is (all its attributes travel along); a glTF scene goes as the
+// points of all its triangle primitives (GltfScene::surface); anything else is read in
 // double, moved to its local origin and encoded losslessly and sequentially with its
 // attributes (texture coordinates, normals, colours, vertex properties: EncodeDraco), so
 // vertex i of the result is vertex i of the input. The reader's errors when the input cannot
@@ -44,8 +52,10 @@ absl::StatusOr<Upload> PrepareUpload(const std::string& input);
 // shifted. An OBJ output's `mtllib` lines are rewritten to reach the input's material files
 // from the output's folder. What the output cannot hold (or cannot find: a material file, a
 // texture image) is appended to `dropped`, one phrase each. Errors about the result itself
-// start with "the result: ".
+// start with "the result: ". A glTF input is written as the same scene with the smoothed
+// positions (GltfScene::Write; primitives Draco-compressed when `gltf_draco`) and only to
+// .gltf or .glb: InvalidArgument otherwise, as for glTF output of another input.
 absl::Status WriteResult(const Upload& upload, const std::string& result, const std::string& output, bool ridges,
-                         std::vector<std::string>* dropped = nullptr);
+                         std::vector<std::string>* dropped = nullptr, bool gltf_draco = false);
 
 }  // namespace meshsmooth::client

@@ -3,7 +3,7 @@
 # runs each fuzz target for SECONDS seconds, one after the other, in one process each.
 #
 # Usage: fuzz/run.sh [--no-build] [--seed N] SECONDS [TARGET...]
-#   TARGET: fuzz_job fuzz_ply fuzz_obj fuzz_off fuzz_stl fuzz_drc (default: all of them)
+#   TARGET: fuzz_job fuzz_ply fuzz_obj fuzz_off fuzz_stl fuzz_drc fuzz_gltf (default: all of them)
 #   --no-build: run the binaries already in build-fuzz/ (e.g. a long run beside other builds)
 #   --seed N: libFuzzer's random seed for every target (default: one from the clock). With a
 #     fixed seed and the same corpus, a target makes the same mutations in the same order, so a
@@ -32,7 +32,7 @@ done
 seconds="${1:?$usage}"
 shift
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(fuzz_job fuzz_ply fuzz_obj fuzz_off fuzz_stl fuzz_drc)
+[ ${#targets[@]} -gt 0 ] || targets=(fuzz_job fuzz_ply fuzz_obj fuzz_off fuzz_stl fuzz_drc fuzz_gltf)
 
 [ "$build" = 0 ] || scripts/setup.sh fuzz
 out=build-fuzz
