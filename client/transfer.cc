@@ -191,7 +191,7 @@ absl::Status WriteResult(const Upload& upload, const std::string& result, const 
                                           : "glTF output needs a glTF input (.glb or .gltf)");
   }
   if (upload.gltf != nullptr) {
-    absl::StatusOr<Mesh> decoded = DecodeDraco(result);
+    absl::StatusOr<Mesh> decoded = DecodeDraco(result, nullptr, false);
     if (!decoded.ok() || decoded->num_vertices() != upload.num_vertices) {
       return absl::DataLossError("the result: not one point per point of the scene's primitives");
     }
@@ -207,7 +207,8 @@ absl::Status WriteResult(const Upload& upload, const std::string& result, const 
   auto about_result = [](const absl::Status& s) {
     return absl::Status(s.code(), absl::StrCat("the result: ", s.message()));
   };
-  absl::StatusOr<Mesh> decoded = DecodeDraco(result, upload.draco_input ? &lost : nullptr);
+  // Only a Draco input's attributes come from the result; the others' are the input's own.
+  absl::StatusOr<Mesh> decoded = DecodeDraco(result, upload.draco_input ? &lost : nullptr, upload.draco_input);
   if (!decoded.ok()) return about_result(decoded.status());
   Mesh mesh;
   if (upload.draco_input) {
@@ -218,9 +219,13 @@ absl::Status WriteResult(const Upload& upload, const std::string& result, const 
       return about_result(absl::DataLossError(
           absl::StrCat("it has ", decoded->num_vertices(), " points for ", upload.num_vertices, " vertices")));
     }
-    mesh = upload.kept;
     mesh.positions.assign(decoded->positions.begin(), decoded->positions.begin() + upload.num_vertices);
-    if (!mesh.normals.empty()) mesh.normals = FreshNormals(mesh, mesh.normals);
+    mesh.triangles = upload.kept.triangles;
+    mesh.colors = upload.kept.colors;
+    mesh.uvs = upload.kept.uvs;
+    mesh.properties = upload.kept.properties;
+    mesh.obj_directives = upload.kept.obj_directives;
+    if (!upload.kept.normals.empty()) mesh.normals = FreshNormals(mesh, upload.kept.normals);
   }
   if (upload.origin != Vec3{}) Translate(mesh.positions, upload.origin);
   if (ridges) {

@@ -8,6 +8,13 @@ std::optional<std::vector<double>> PerVertexValues(const Mesh& mesh, const Corne
   if (a.empty() || a.corners.size() != 3 * mesh.triangles.size()) return std::nullopt;
   const int c = a.components;
   const int64_t entries = a.entries();
+  // The common case (a PLY's per-vertex values, normals from FreshNormals): corner k of
+  // triangle t names entry triangles[t][k], and there is one entry per vertex.
+  if (entries == mesh.num_vertices()) {
+    bool identity = true;
+    for (size_t i = 0; i < a.corners.size() && identity; ++i) identity = a.corners[i] == mesh.triangles[i / 3][i % 3];
+    if (identity) return a.values;
+  }
   std::vector<double> out(static_cast<size_t>(c) * mesh.positions.size(), 0.0);
   std::vector<int32_t> entry_of(mesh.positions.size(), -1);
   for (size_t t = 0; t < mesh.triangles.size(); ++t) {

@@ -405,12 +405,12 @@ void ReadAttributes(const draco::Mesh& dm, Mesh& mesh, std::vector<std::string>*
 
 }  // namespace
 
-absl::StatusOr<Mesh> DecodeDraco(std::string_view bytes, std::vector<std::string>* dropped) {
+absl::StatusOr<Mesh> DecodeDraco(std::string_view bytes, std::vector<std::string>* dropped, bool attributes) {
   absl::StatusOr<std::unique_ptr<draco::Mesh>> dm = DecodeToDraco(bytes, kMaxDracoVertices);
   if (!dm.ok()) return dm.status();
   absl::StatusOr<Mesh> mesh = PointMesh(**dm);
   if (!mesh.ok()) return mesh.status();
-  ReadAttributes(**dm, *mesh, dropped);
+  if (attributes) ReadAttributes(**dm, *mesh, dropped);
   return mesh;
 }
 

@@ -83,7 +83,9 @@ absl::StatusOr<std::string> EncodeDraco(const Mesh& mesh, const DracoOptions& op
 // kMaxCoordinate in magnitude. Vertices are Draco's points (attribute seams stay split).
 // The attributes a Mesh holds come along per point (texture coordinates, normals, colours,
 // named one-component attributes as vertex properties); the others are named in `dropped`.
-absl::StatusOr<Mesh> DecodeDraco(std::string_view bytes, std::vector<std::string>* dropped = nullptr);
+// `attributes` false: positions and faces only (a caller that keeps its own attributes).
+absl::StatusOr<Mesh> DecodeDraco(std::string_view bytes, std::vector<std::string>* dropped = nullptr,
+                                 bool attributes = true);
 
 // Vertices a Draco mesh may have: an int32 holds every index.
 inline constexpr int64_t kMaxDracoVertices = std::numeric_limits<int32_t>::max();

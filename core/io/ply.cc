@@ -73,7 +73,7 @@ class ValueReader {
  public:
   ValueReader(std::string_view body, Encoding enc) : body_(body), enc_(enc) {}
 
-  bool Read(PlyType t, double& out) {
+  [[gnu::always_inline]] bool Read(PlyType t, double& out) {
     if (enc_ == Encoding::kAscii) {
       if (t != PlyType::kF32) return ParseDouble(NextToken(body_), out);
       // A declared float is rounded from the text to float, as a binary file would hold it.
