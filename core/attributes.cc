@@ -21,7 +21,11 @@ std::optional<std::vector<double>> PerVertexValues(const Mesh& mesh, const Corne
     for (int k = 0; k < 3; ++k) {
       const int32_t v = mesh.triangles[t][k];
       const int32_t e = a.corners[3 * t + k];
-      if (v < 0 || v >= mesh.num_vertices()) continue;
+      // A corner of a vertex that does not exist keeps its value only per corner.
+      if (v < 0 || v >= mesh.num_vertices()) {
+        if (e >= 0) return std::nullopt;
+        continue;
+      }
       if (e < 0 || e >= entries) return std::nullopt;  // a corner without a value cannot go per vertex
       int32_t& seen = entry_of[v];
       if (seen == e) continue;

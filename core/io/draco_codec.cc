@@ -370,7 +370,9 @@ void ReadAttributes(const draco::Mesh& dm, Mesh& mesh, std::vector<std::string>*
         break;
       case draco::GeometryAttribute::COLOR:
         if (mesh.colors.empty() && components >= 3) {
-          const bool unit = pa.data_type() == draco::DT_FLOAT32 || pa.data_type() == draco::DT_FLOAT64;
+          // ConvertValue gives a normalized integer attribute as 0..1, like a float one.
+          const bool unit =
+              pa.normalized() || pa.data_type() == draco::DT_FLOAT32 || pa.data_type() == draco::DT_FLOAT64;
           mesh.colors.resize(n);
           double v[4] = {0, 0, 0, 0};
           for (uint32_t p = 0; p < n; ++p) {

@@ -63,7 +63,12 @@ absl::StatusOr<GltfScene> GltfScene::Read(const std::string& path) {
     points[m].resize(dm.num_points());
     for (uint32_t p = 0; p < dm.num_points(); ++p) {
       double xyz[3] = {0, 0, 0};
-      pos->ConvertValue<double>(pos->mapped_index(draco::PointIndex(p)), 3, xyz);
+      const draco::AttributeValueIndex avi = pos->mapped_index(draco::PointIndex(p));
+      if (avi.value() >= pos->size()) {
+        return absl::InvalidArgumentError(
+            absl::StrCat(path, ": glTF primitive ", m, " has a point without a position"));
+      }
+      pos->ConvertValue<double>(avi, 3, xyz);
       points[m][p] = {xyz[0], xyz[1], xyz[2]};
       boxes[group_of[m]].Add(points[m][p]);
     }
@@ -88,6 +93,10 @@ absl::StatusOr<GltfScene> GltfScene::Read(const std::string& path) {
     if (points[m].empty()) continue;
     for (uint32_t f = 0; f < dm.num_faces(); ++f) {
       const draco::Mesh::Face& face = dm.face(draco::FaceIndex(f));
+      if (face[0].value() >= dm.num_points() || face[1].value() >= dm.num_points() ||
+          face[2].value() >= dm.num_points()) {
+        return absl::InvalidArgumentError(absl::StrCat(path, ": glTF primitive ", m, " has a face past its points"));
+      }
       s.triangles.push_back({first + static_cast<int32_t>(face[0].value()),
                              first + static_cast<int32_t>(face[1].value()),
                              first + static_cast<int32_t>(face[2].value())});
@@ -123,8 +132,9 @@ absl::Status GltfScene::Write(const std::vector<Vec3>& positions, const std::str
   draco::Scene& scene = *impl_->scene;
   for (int m = 0; m < scene.NumMeshes(); ++m) {
     draco::Mesh& dm = scene.GetMesh(draco::MeshIndex(m));
-    draco::PointAttribute* pos = dm.attribute(dm.GetNamedAttributeId(draco::GeometryAttribute::POSITION));
-    if (pos == nullptr) continue;
+    const int pos_id = dm.GetNamedAttributeId(draco::GeometryAttribute::POSITION);
+    if (pos_id < 0) continue;
+    draco::PointAttribute* pos = dm.attribute(pos_id);
     const int32_t first = impl_->first[m];
     const Vec3 offset = impl_->offset[m];
     // Positions per value; the normals' sums per position value, area-weighted.
@@ -132,6 +142,7 @@ absl::Status GltfScene::Write(const std::vector<Vec3>& positions, const std::str
     for (uint32_t p = 0; p < dm.num_points(); ++p) {
       const Vec3 q = positions[first + p] - offset;
       const draco::AttributeValueIndex avi = pos->mapped_index(draco::PointIndex(p));
+      if (avi.value() >= value_position.size()) continue;
       value_position[avi.value()] = q;
       if (pos->data_type() == draco::DT_FLOAT32) {
         const float v[3] = {static_cast<float>(q.x), static_cast<float>(q.y), static_cast<float>(q.z)};
@@ -143,18 +154,26 @@ absl::Status GltfScene::Write(const std::vector<Vec3>& positions, const std::str
         return absl::InvalidArgumentError(absl::StrCat("glTF primitive ", m, ": positions that are not floats"));
       }
     }
-    draco::PointAttribute* nrm = dm.attribute(dm.GetNamedAttributeId(draco::GeometryAttribute::NORMAL));
+    const int nrm_id = dm.GetNamedAttributeId(draco::GeometryAttribute::NORMAL);
+    draco::PointAttribute* nrm = nrm_id >= 0 ? dm.attribute(nrm_id) : nullptr;
     if (nrm != nullptr && nrm->data_type() == draco::DT_FLOAT32 && nrm->num_components() == 3) {
       std::vector<Vec3> sum(pos->size());
       for (uint32_t f = 0; f < dm.num_faces(); ++f) {
         const draco::Mesh::Face& face = dm.face(draco::FaceIndex(f));
         uint32_t v[3];
-        for (int k = 0; k < 3; ++k) v[k] = pos->mapped_index(face[k]).value();
+        bool inside = true;
+        for (int k = 0; k < 3; ++k) {
+          v[k] = pos->mapped_index(face[k]).value();
+          inside = inside && v[k] < sum.size();
+        }
+        if (!inside) continue;
         const Vec3 fn = Cross(value_position[v[1]] - value_position[v[0]], value_position[v[2]] - value_position[v[0]]);
         for (int k = 0; k < 3; ++k) sum[v[k]] += fn;
       }
       for (uint32_t p = 0; p < dm.num_points(); ++p) {
-        const Vec3& s = sum[pos->mapped_index(draco::PointIndex(p)).value()];
+        const uint32_t value = pos->mapped_index(draco::PointIndex(p)).value();
+        if (value >= sum.size()) continue;
+        const Vec3& s = sum[value];
         const double len = Norm(s);
         if (!(len > 0.0) || !std::isfinite(len)) continue;  // keep the old normal
         const float v[3] = {static_cast<float>(s.x / len), static_cast<float>(s.y / len),

@@ -102,12 +102,12 @@ absl::StatusOr<Mesh> ParseObj(std::string_view data, ReadInfo& info) {
           if (!t.empty()) {
             c.t = ParseInt(t, k) ? ObjIndex(k, uv_entries) : -1;
             bad_attribute_indices += c.t < 0;
-            any_uv_corner = true;
+            any_uv_corner |= c.t >= 0;
           }
           if (!n.empty()) {
             c.n = ParseInt(n, k) ? ObjIndex(k, normal_entries) : -1;
             bad_attribute_indices += c.n < 0;
-            any_normal_corner = true;
+            any_normal_corner |= c.n >= 0;
           }
         }
         corners.push_back(c);

@@ -154,6 +154,32 @@ TEST(AttributesIoTest, DracoSplitsSeamsIntoPointsAfterTheVertices) {
   EXPECT_EQ(decoded->uvs.values[2 * 8], 0.25);  // point 8: vertex 2's second UV
 }
 
+TEST(AttributesIoTest, DracoCarriesColoursAndPropertiesBitForBit) {
+  absl::StatusOr<Mesh> m = ParseMesh(kPly, MeshFormat::kPly);
+  ASSERT_TRUE(m.ok());
+  absl::StatusOr<std::string> bytes = EncodeDraco(*m);
+  ASSERT_TRUE(bytes.ok()) << bytes.status();
+  absl::StatusOr<Mesh> back = DecodeDraco(*bytes);
+  ASSERT_TRUE(back.ok()) << back.status();
+  // COLOR is a normalized uint8 attribute: read back as 0..1 and scaled, not taken as 0..255.
+  EXPECT_EQ(back->colors, m->colors);
+  ASSERT_EQ(back->properties.size(), 2u);
+  EXPECT_EQ(back->properties[0].values, m->properties[0].values);
+  EXPECT_EQ(back->uvs.values, m->uvs.values);
+}
+
+TEST(AttributesIoTest, ACornerOfAMissingVertexKeepsItsValueOnlyPerCorner) {
+  Mesh m;
+  m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  m.triangles = {{0, 1, 2}, {0, 1, 7}};
+  m.uvs.components = 2;
+  m.uvs.values = {0, 0, 1, 0, 0, 1, 0.5, 0.5};
+  m.uvs.corners = {0, 1, 2, 0, 1, 3};
+  EXPECT_FALSE(PerVertexValues(m, m.uvs).has_value());
+  m.uvs.corners[5] = -1;
+  EXPECT_TRUE(PerVertexValues(m, m.uvs).has_value());
+}
+
 TEST(AttributesIoTest, FreshNormalsKeepHardEdgesApart) {
   absl::StatusOr<Mesh> m = ParseMesh(kObj, MeshFormat::kObj);
   ASSERT_TRUE(m.ok());
