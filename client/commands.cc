@@ -12,14 +12,14 @@
 #include <vector>
 
 #include "absl/strings/str_cat.h"
+#include "absl/strings/str_join.h"
 #include "client/inputs.h"
 #include "client/json.h"
 #include "client/report.h"
 #include "client/retry.h"
 #include "client/smooth_client.h"
+#include "client/transfer.h"
 #include "core/features/ridges.h"
-#include "core/io/draco_codec.h"
-#include "core/io/file_bytes.h"
 #include "core/io/mesh_io.h"
 #include "core/measure/metrics.h"
 #include "core/render/png.h"
@@ -74,69 +74,24 @@ v1::JobSpec SpecFrom(const SmoothOptions& o) {
   return spec;
 }
 
-// What goes to the service: the input's Draco bytes, and its vertex colours for a PLY output.
-struct Upload {
-  std::string draco;
-  std::vector<Rgb> colors;
-};
-
-// Draco input goes as it is (all its attributes travel along); anything else is encoded
-// losslessly and sequentially, so vertex i of the result is vertex i of the input.
-absl::StatusOr<Upload> PrepareUpload(const std::string& input) {
-  Upload upload;
-  const absl::StatusOr<MeshFormat> format = FormatFromPath(input);
-  if (format.ok() && *format == MeshFormat::kDraco) {
-    absl::StatusOr<std::string> bytes = ReadFileBytes(input);
-    if (!bytes.ok()) return bytes.status();
-    upload.draco = std::move(*bytes);
-    return upload;
-  }
-  absl::StatusOr<Mesh> mesh = LoadInput(input);
-  if (!mesh.ok()) return mesh.status();
-  const ValidationReport r = Validate(*mesh);
-  if (r.faces_out_of_range > 0) {
-    std::cerr << "meshsmooth: warning: " << r.faces_out_of_range
-              << " faces reference vertices that do not exist; they cannot be sent and are left out\n";
-  }
-  absl::StatusOr<std::string> bytes = EncodeDraco(*mesh);
-  if (!bytes.ok()) return bytes.status();
-  upload.draco = std::move(*bytes);
-  upload.colors = std::move(mesh->colors);
-  return upload;
-}
-
-// Writes the result in `format`: Draco bytes as they came, anything else decoded, with the
-// ridge labels (--ridges) or the input's colours (vertex i of the result is vertex i) as vertex
-// colours. Errors about the result itself start with "the result: ".
-absl::Status WriteResult(const SmoothOptions& o, MeshFormat format, const std::string& draco,
-                         std::vector<Rgb> input_colors) {
-  if (format == MeshFormat::kDraco) return WriteFileBytes(o.output, draco);
-  auto about_result = [](const absl::Status& s) {
-    return absl::Status(s.code(), absl::StrCat("the result: ", s.message()));
-  };
-  absl::StatusOr<Mesh> result = DecodeDraco(draco);
-  if (!result.ok()) return about_result(result.status());
-  if (o.ridges) {
-    absl::StatusOr<std::vector<float>> labels = DecodeDracoAttribute(draco, kFeatureLabelAttribute);
-    if (!labels.ok()) return about_result(labels.status());
-    result->colors = FeatureColors(std::vector<uint8_t>(labels->begin(), labels->end()));
-  } else if (input_colors.size() == result->positions.size()) {
-    result->colors = std::move(input_colors);
-  }
-  return WriteMesh(o.output, *result);
-}
-
 }  // namespace
 
 int RunSmooth(const SmoothOptions& o, const ConnectionOptions& c) {
-  absl::StatusOr<MeshFormat> out_format = FormatFromPath(o.output);
+  const bool gltf_out = IsGltfPath(o.output);
+  if (gltf_out != IsGltfPath(o.input)) {
+    std::cerr << "meshsmooth: a glTF scene (.glb, .gltf) is smoothed into a glTF scene: give both or neither\n";
+    return kExitUsage;
+  }
+  absl::StatusOr<MeshFormat> out_format = gltf_out ? MeshFormat::kDraco : FormatFromPath(o.output);
   if (!out_format.ok()) return Fail("", out_format.status());
-  if (o.ridges && *out_format != MeshFormat::kPly && *out_format != MeshFormat::kDraco) {
-    std::cerr << "meshsmooth: warning: --ridges labels are kept only in .ply (vertex colours) and .drc "
+  if (o.ridges && (gltf_out || (*out_format != MeshFormat::kPly && *out_format != MeshFormat::kObj &&
+                                *out_format != MeshFormat::kDraco))) {
+    std::cerr << "meshsmooth: warning: --ridges labels are kept only in .ply and .obj (vertex colours) and .drc "
                  "(attributes) output; the summary still counts them\n";
   }
   absl::StatusOr<Upload> upload = PrepareUpload(o.input);
   if (!upload.ok()) return Fail("", upload.status());
+  for (const std::string& w : upload->warnings) std::cerr << "meshsmooth: warning: " << w << "\n";
   const v1::JobSpec spec = SpecFrom(o);
 
   std::unique_ptr<server::Server> embedded;
@@ -171,11 +126,20 @@ int RunSmooth(const SmoothOptions& o, const ConnectionOptions& c) {
   if (!outcome.ok()) {
     return Fail(std::string(absl::StatusCodeToString(outcome.status().code())) + ": ", outcome.status());
   }
-  if (absl::Status s = WriteResult(o, *out_format, outcome->result, std::move(upload->colors)); !s.ok()) {
+  std::vector<std::string> dropped = upload->dropped;
+  if (absl::Status s = WriteResult(*upload, outcome->result, o.output, o.ridges, &dropped, o.gltf_draco); !s.ok()) {
     return Fail("", s);
   }
+  for (const std::string& w : outcome->summary.warnings()) std::cerr << "meshsmooth: warning: " << w << "\n";
+  // Everything not carried from the input to the output, in one line.
+  if (!dropped.empty()) std::cerr << "meshsmooth: warning: not kept: " << absl::StrJoin(dropped, "; ") << "\n";
   if (o.json) {
-    std::printf("%s", ToJson(outcome->summary).c_str());
+    // The JSON lists every warning, the CLI's own (about the input and the output) first.
+    v1::Summary summary;
+    for (const std::string& w : upload->warnings) summary.add_warnings(w);
+    for (const std::string& d : dropped) summary.add_warnings(absl::StrCat("not kept: ", d));
+    summary.MergeFrom(outcome->summary);
+    std::printf("%s", ToJson(summary).c_str());
   } else if (!o.quiet) {
     PrintSummary(outcome->summary);
     std::printf("wrote %s\n", o.output.c_str());

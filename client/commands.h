@@ -32,6 +32,7 @@ struct SmoothOptions {
   double tolerance = 0.0;
   unsigned quantization_bits = 0;
   bool edgebreaker = false;
+  bool gltf_draco = false;  // glTF output: Draco-compressed primitives
   bool quiet = false, json = false;
   bool ridges = false;
   double ridge_threshold = 0.0;

@@ -18,9 +18,10 @@ std::vector<std::pair<std::string, std::string>> BuiltinInputs() {
   };
 }
 
-absl::StatusOr<Mesh> LoadInput(const std::string& spec) {
+absl::StatusOr<Mesh> LoadInput(const std::string& spec, ReadInfo* info) {
   const std::string kPrefix = "builtin:";
-  if (!absl::StartsWith(spec, kPrefix)) return ReadMesh(spec);
+  if (!absl::StartsWith(spec, kPrefix)) return ReadMesh(spec, info);
+  if (info != nullptr) *info = ReadInfo{};
   const std::string name = spec.substr(kPrefix.size());
   Mesh mesh;
   if (name == "noisy-sphere" || name == "sphere") {

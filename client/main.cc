@@ -80,8 +80,20 @@ std::string StepUnits(const std::vector<FlowInfo>& flows) {
 
 void AddSmoothOptions(CLI::App* smooth, SmoothOptions& so) {
   const std::vector<FlowInfo> flows = DescribeFlows();
-  smooth->add_option("input", so.input, "mesh file (.obj .ply .off .stl .drc) or builtin:NAME")->required();
-  smooth->add_option("-o,--output", so.output, "output file; its extension picks the format")->required();
+  smooth
+      ->add_option("input", so.input,
+                   "mesh file (.obj .ply .off .stl .drc), glTF scene (.glb .gltf: every triangle primitive smoothed, "
+                   "the rest of the scene kept; the output must be a scene too) or builtin:NAME")
+      ->required();
+  smooth
+      ->add_option("-o,--output", so.output,
+                   "output file; its extension picks the format. Texture coordinates (UV seams kept), colours and "
+                   "PLY vertex properties come back where the format holds them, normals recomputed from the "
+                   "smoothed positions; an .obj keeps its mtllib/usemtl/g/o/s lines, each mtllib rewritten as the "
+                   "path from the output's folder to the input's .mtl, so materials and textures (named in the .mtl, "
+                   "relative to it) resolve without copying. Whatever the output cannot hold is named in one "
+                   "'not kept' warning and in the --json warnings")
+      ->required();
   std::vector<std::string> flow_choices = FlowNames();
   flow_choices.insert(flow_choices.begin(), "auto");
   smooth
@@ -171,6 +183,10 @@ void AddSmoothOptions(CLI::App* smooth, SmoothOptions& so) {
       ->capture_default_str()
       ->check(CLI::Range(0, meshsmooth::kMaxQuantizationBits));
   smooth->add_flag("--edgebreaker", so.edgebreaker, "encode the result with Edgebreaker (reorders vertices)");
+  smooth->add_flag("--gltf-draco", so.gltf_draco,
+                   "glTF output: Draco-compress every primitive (KHR_draco_mesh_compression; positions and texture "
+                   "coordinates quantized to 16 bits, normals to 12). Default: plain float32 accessors, every value "
+                   "kept");
   smooth->add_flag("-q,--quiet", so.quiet, "print nothing but errors");
   smooth->add_flag("--json", so.json, "print the job summary as JSON on stdout (no progress)");
   smooth->add_flag("--ridges", so.ridges,

@@ -5,11 +5,17 @@
 // smoothed and written back is the user's own mesh with only positions changed.
 //
 // Optional per-vertex colours ride along: read from and written to PLY (`red green blue`
-// uchar properties); OBJ, OFF, STL and Draco ignore them on both read and write.
+// uchar properties), OBJ (`v x y z r g b`) and Draco (COLOR); OFF and STL ignore them.
+//
+// So do a scan's other attributes (core/io/mesh_io.h says which format reads and writes which):
+// texture coordinates and normals per face corner, named per-vertex properties and the OBJ
+// material and group lines. Nothing in core changes them; the CLI recomputes the normals from
+// the smoothed positions.
 #pragma once
 
 #include <array>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "core/vec3.h"
@@ -24,12 +30,47 @@ struct Rgb {
   friend constexpr bool operator==(const Rgb&, const Rgb&) = default;
 };
 
+// Values given per face corner, as OBJ's `vt` and `vn` with `f v/vt/vn`: a table of values and,
+// for each corner of each triangle, the index of its value. Several corners of one vertex may
+// name different values (a UV seam, a hard edge).
+struct CornerAttribute {
+  int components = 0;            // values per entry: 2 (UV), 3 (normal); 0 = the mesh has none
+  std::vector<double> values;    // components x entries
+  std::vector<int32_t> corners;  // 3 per triangle, in triangle order; -1 = this corner has none
+  bool empty() const { return components == 0; }
+  int64_t entries() const { return components == 0 ? 0 : static_cast<int64_t>(values.size()) / components; }
+};
+
+// A named per-vertex property of a PLY file (`confidence`, `quality`, `intensity`, ...), one
+// value per vertex, and the PLY type it was declared with (`float`, `uchar`, ...).
+struct VertexProperty {
+  std::string name;
+  std::string type;
+  std::vector<double> values;
+};
+
+// An OBJ line that is not geometry but names how the faces after it are shown: `mtllib`,
+// `usemtl`, `g`, `o`, `s`; written back before the same triangle.
+struct ObjDirective {
+  int32_t before_triangle = 0;  // the index of the first triangle after it
+  std::string line;             // the whole line, keyword included
+};
+
 struct Mesh {
   std::vector<Vec3> positions;
   std::vector<Triangle> triangles;
   // Per-vertex colours: empty when the mesh has none, otherwise one per vertex (colors[i] is
   // the colour of positions[i]). Nothing in core changes them: a flow moves positions only.
   std::vector<Rgb> colors;
+  CornerAttribute uvs;      // texture coordinates
+  CornerAttribute normals;  // unit normals
+  std::vector<VertexProperty> properties;
+  std::vector<ObjDirective> obj_directives;
+
+  // True when the mesh carries anything besides positions, triangles and colours.
+  bool has_attributes() const {
+    return !uvs.empty() || !normals.empty() || !properties.empty() || !obj_directives.empty();
+  }
 
   int32_t num_vertices() const { return static_cast<int32_t>(positions.size()); }
   int32_t num_triangles() const { return static_cast<int32_t>(triangles.size()); }

@@ -19,6 +19,8 @@
 #include <string_view>
 #include <vector>
 
+#include "core/attributes.h"
+#include "core/io/draco_codec.h"
 #include "core/io/mesh_io.h"
 #include "core/topology.h"
 
@@ -66,6 +68,35 @@ void CheckTopology(const Mesh& mesh) {
   }
 }
 
+void CheckAttributes(const Mesh& mesh) {
+  for (const CornerAttribute* a : {&mesh.uvs, &mesh.normals}) {
+    if (a->empty()) {
+      Check(a->corners.empty() && a->values.empty(), "an empty attribute with values or corners");
+      continue;
+    }
+    Check(a->values.size() % a->components == 0, "an attribute's table is not whole entries");
+    Check(a->corners.size() == 3 * mesh.triangles.size(), "an attribute without 3 corners a triangle");
+    for (int32_t e : a->corners) Check(e >= -1 && e < a->entries(), "a corner names an entry that does not exist");
+  }
+  for (const VertexProperty& p : mesh.properties) {
+    Check(p.values.size() == mesh.positions.size(), "a vertex property without one value a vertex");
+  }
+  for (const ObjDirective& d : mesh.obj_directives) {
+    Check(d.before_triangle >= 0 && d.before_triangle <= mesh.num_triangles(), "a directive past the triangles");
+  }
+  const CornerAttribute fresh = FreshNormals(mesh, mesh.normals);
+  Check(fresh.corners.size() == 3 * mesh.triangles.size(), "fresh normals without 3 corners a triangle");
+  if (mesh.num_vertices() == 0 || mesh.triangles.empty()) return;
+  absl::StatusOr<std::string> draco = EncodeDraco(mesh);
+  if (!draco.ok()) return;  // e.g. no face in range, or coordinates Draco cannot hold
+  absl::StatusOr<Mesh> points = DecodeDraco(*draco);
+  Check(points.ok(), "EncodeDraco wrote what DecodeDraco refuses");
+  Check(points->num_vertices() >= mesh.num_vertices(), "EncodeDraco lost vertices");
+  for (int32_t v = 0; v < mesh.num_vertices(); ++v) {
+    Check(points->positions[v] == RoundToFloat(mesh.positions[v]), "EncodeDraco moved vertex i off point i");
+  }
+}
+
 // Same value once stored as the format stores it (float32 for PLY, STL and Draco).
 bool SameValue(double written, double read) {
   const bool as_float = kFormat != MeshFormat::kObj && kFormat != MeshFormat::kOff;
@@ -103,6 +134,23 @@ void CheckRoundTrip(const Mesh& mesh) {
   }
   Check(back->triangles == stored, "written back, the faces changed");
   Check(back->colors == mesh.colors, "written back, the colours changed");
+  if (kFormat != MeshFormat::kObj && kFormat != MeshFormat::kPly) return;
+  if (!mesh.uvs.empty()) {
+    Check(back->uvs.components == 2 && back->uvs.corners.size() == mesh.uvs.corners.size(),
+          "written back, the texture coordinates are gone");
+    for (size_t c = 0; c < mesh.uvs.corners.size(); ++c) {
+      const int32_t e = mesh.uvs.corners[c], f = back->uvs.corners[c];
+      if (e < 0) continue;
+      Check(f >= 0, "written back, a corner lost its texture coordinate");
+      for (int j = 0; j < 2; ++j) {
+        const double a = mesh.uvs.values[2 * e + j], b = back->uvs.values[2 * f + j];
+        Check(a == b || (std::isnan(a) && std::isnan(b)), "written back, a texture coordinate changed");
+      }
+    }
+  }
+  if (kFormat == MeshFormat::kPly) {
+    Check(back->properties.size() == mesh.properties.size(), "written back, vertex properties are gone");
+  }
 }
 
 }  // namespace
@@ -118,6 +166,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     return 0;
   }
   fuzz::CheckTopology(*mesh);
+  fuzz::CheckAttributes(*mesh);
   fuzz::CheckRoundTrip(*mesh);
   return 0;
 }

@@ -3,7 +3,9 @@
 # runs each fuzz target for SECONDS seconds, one after the other, in one process each.
 #
 # Usage: fuzz/run.sh [--no-build] [--seed N] SECONDS [TARGET...]
-#   TARGET: fuzz_job fuzz_ply fuzz_obj fuzz_off fuzz_stl fuzz_drc (default: all of them)
+#   TARGET: fuzz_job fuzz_ply fuzz_obj fuzz_off fuzz_stl fuzz_drc (default: these), or fuzz_gltf,
+#     run by name only: it finds heap overflows inside Draco 1.5.5's own glTF decoder within
+#     seconds (docs/decisions.md, "glTF through Draco's entry points"), which would fail every run
 #   --no-build: run the binaries already in build-fuzz/ (e.g. a long run beside other builds)
 #   --seed N: libFuzzer's random seed for every target (default: one from the clock). With a
 #     fixed seed and the same corpus, a target makes the same mutations in the same order, so a

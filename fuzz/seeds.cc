@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <string_view>
 #include <tuple>
@@ -20,6 +21,8 @@
 #include "core/io/mesh_io.h"
 #include "core/shapes/added_noise.h"
 #include "core/shapes/parametric.h"
+#include "draco/io/gltf_encoder.h"
+#include "draco/mesh/mesh.h"
 #include "fuzz/job_input.h"
 
 namespace meshsmooth::fuzz {
@@ -69,7 +72,7 @@ void WriteFile(const fs::path& path, std::string_view bytes) {
 class SeedWriter {
  public:
   explicit SeedWriter(fs::path out) : out_(std::move(out)) {
-    for (const char* d : {"job", "drc", "ply", "obj", "off", "stl"}) fs::create_directories(out_ / d);
+    for (const char* d : {"job", "drc", "ply", "obj", "off", "stl", "gltf"}) fs::create_directories(out_ / d);
   }
 
   void Add(const std::string& dir, const std::string& name, const std::string& bytes) {
@@ -152,6 +155,34 @@ Mesh Odd() {
   return m;
 }
 
+// A one-primitive glTF scene of `mesh` (positions, lat-long texture coordinates), as GLB bytes:
+// Draco-compressed or plain. Empty when Draco's encoder fails.
+std::string GlbSeed(const Mesh& mesh, bool compressed) {
+  auto dm = std::make_unique<draco::Mesh>();
+  const uint32_t n = static_cast<uint32_t>(mesh.num_vertices());
+  dm->set_num_points(n);
+  draco::GeometryAttribute ga;
+  ga.Init(draco::GeometryAttribute::POSITION, nullptr, 3, draco::DT_FLOAT32, false, 12, 0);
+  draco::PointAttribute* pos = dm->attribute(dm->AddAttribute(ga, true, n));
+  ga.Init(draco::GeometryAttribute::TEX_COORD, nullptr, 2, draco::DT_FLOAT32, false, 8, 0);
+  draco::PointAttribute* uv = dm->attribute(dm->AddAttribute(ga, true, n));
+  for (uint32_t p = 0; p < n; ++p) {
+    const Vec3& q = mesh.positions[p];
+    const float xyz[3] = {static_cast<float>(q.x), static_cast<float>(q.y), static_cast<float>(q.z)};
+    const float st[2] = {static_cast<float>(0.5 + 0.5 * q.x), static_cast<float>(0.5 + 0.5 * q.y)};
+    pos->SetAttributeValue(draco::AttributeValueIndex(p), xyz);
+    uv->SetAttributeValue(draco::AttributeValueIndex(p), st);
+  }
+  for (const Triangle& t : mesh.triangles) {
+    dm->AddFace({draco::PointIndex(t[0]), draco::PointIndex(t[1]), draco::PointIndex(t[2])});
+  }
+  dm->SetCompressionEnabled(compressed);
+  draco::EncoderBuffer buffer;
+  draco::GltfEncoder encoder;
+  if (!encoder.EncodeToBuffer(*dm, &buffer).ok()) return {};
+  return std::string(buffer.data(), buffer.size());
+}
+
 }  // namespace
 }  // namespace meshsmooth::fuzz
 
@@ -168,6 +199,26 @@ int main(int argc, char** argv) {
   for (int32_t i = 0; i < colored.num_vertices(); ++i) {
     colored.colors.push_back({static_cast<uint8_t>(i * 7), static_cast<uint8_t>(i * 13), static_cast<uint8_t>(i)});
   }
+  // A scan's attributes: per-corner UVs with a seam (the first face's corners name their own
+  // entries), per-vertex normals, a float property and OBJ material lines.
+  Mesh textured = colored;
+  textured.uvs.components = 2;
+  textured.normals.components = 3;
+  for (const Vec3& p : textured.positions) {
+    textured.uvs.values.insert(textured.uvs.values.end(), {0.5 + 0.5 * p.x, 0.5 + 0.5 * p.y});
+    textured.normals.values.insert(textured.normals.values.end(), {p.x, p.y, p.z});
+  }
+  for (const Triangle& t : textured.triangles) {
+    textured.uvs.corners.insert(textured.uvs.corners.end(), t.begin(), t.end());
+    textured.normals.corners.insert(textured.normals.corners.end(), t.begin(), t.end());
+  }
+  for (int k = 0; k < 3; ++k) {
+    textured.uvs.corners[k] = static_cast<int32_t>(textured.uvs.values.size() / 2);
+    textured.uvs.values.insert(textured.uvs.values.end(), {1.0 + k, 0.25});
+  }
+  textured.properties.push_back({"confidence", "float", std::vector<double>(textured.positions.size(), 0.5)});
+  textured.obj_directives = {{0, "mtllib a.mtl"}, {0, "usemtl skin"}, {4, "g rest"}};
+  seeds.AddMesh("textured_icosphere1", textured);
   seeds.AddMesh("icosphere1", Icosphere(1));
   seeds.AddMesh("noisy_icosphere2", noisy);
   seeds.AddMesh("colored_icosphere1", colored);
@@ -175,6 +226,10 @@ int main(int argc, char** argv) {
   seeds.AddMesh("plane", TwoRatePlane(4, 4));
   seeds.AddMesh("cylinder", Cylinder(0.5, 1.0, 8, 3));
   seeds.AddMesh("odd", fuzz::Odd());
+  for (bool compressed : {false, true}) {
+    const std::string glb = fuzz::GlbSeed(Icosphere(1), compressed);
+    if (!glb.empty()) seeds.Add("gltf", compressed ? "icosphere1_draco.glb" : "icosphere1.glb", glb);
+  }
   if (argc == 3) {
     seeds.AddShared(fuzz::fs::path(argv[2]) / "data" / "draco");
     seeds.AddShared(fuzz::fs::path(argv[2]) / "data" / "meshes");

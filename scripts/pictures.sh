@@ -11,6 +11,11 @@
 #   docs/images/fandisk-guided.png the same input after guided_normal, automatic stopping
 #   docs/images/fandisk-ridges.png ridges (black) and ravines (white) of that result, features with
 #                                  |curvature| > 20 only
+#   docs/images/bunny-textured-before.png  the bunny as scanned, as a textured scan: per-vertex
+#                                  texture coordinates (a front projection) and a checkerboard of
+#                                  them as vertex colours
+#   docs/images/bunny-textured-after.png   that PLY after 20 iterations of median: the texture
+#                                  coordinates and colours come back on the smoothed surface
 set -euo pipefail
 cd "$(dirname "$0")/.."
 meshes=${MESHES:-../shared/data/meshes}
@@ -31,3 +36,26 @@ $cli smooth "$tmp/fandisk-noisy.ply" -o "$tmp/fandisk-guided.ply" --flow guided_
 $cli render "$tmp/fandisk-guided.ply" -o "$out/fandisk-guided.png" --view iso --size 480x480 --shading flat
 $cli ridges "$tmp/fandisk-guided.ply" -o "$tmp/fandisk-ridges.ply" --threshold 20
 $cli render "$tmp/fandisk-ridges.ply" -o "$out/fandisk-ridges.png" --view iso --size 480x480
+# A textured scan: s t from a front projection and an 8 x 8 checkerboard of them as colours.
+/usr/bin/python3 - "$meshes/stanford-bunny.ply" "$tmp/bunny-textured.ply" <<'PY'
+import sys
+lines = open(sys.argv[1]).read().splitlines()
+end = lines.index("end_header")
+nv = int(next(l.split()[2] for l in lines if l.startswith("element vertex")))
+verts = [tuple(map(float, l.split()[:3])) for l in lines[end + 1:end + 1 + nv]]
+faces = lines[end + 1 + nv:]
+lo = [min(v[i] for v in verts) for i in range(2)]
+hi = [max(v[i] for v in verts) for i in range(2)]
+with open(sys.argv[2], "w") as out:
+    out.write("ply\nformat ascii 1.0\nelement vertex %d\nproperty float x\nproperty float y\nproperty float z\n"
+              "property float s\nproperty float t\nproperty uchar red\nproperty uchar green\nproperty uchar blue\n"
+              "element face %d\nproperty list uchar int vertex_indices\nend_header\n" % (nv, len(faces)))
+    for x, y, z in verts:
+        s, t = (x - lo[0]) / (hi[0] - lo[0]), (y - lo[1]) / (hi[1] - lo[1])
+        rgb = (230, 120, 40) if (int(s * 8) + int(t * 8)) % 2 else (250, 240, 220)
+        out.write("%r %r %r %.6f %.6f %d %d %d\n" % (x, y, z, s, t, *rgb))
+    out.write("\n".join(faces) + "\n")
+PY
+$cli render "$tmp/bunny-textured.ply" -o "$out/bunny-textured-before.png" --view front --size 480x480
+$cli smooth "$tmp/bunny-textured.ply" -o "$tmp/bunny-textured-smooth.ply" --flow median --iterations 20 --quiet
+$cli render "$tmp/bunny-textured-smooth.ply" -o "$out/bunny-textured-after.png" --view front --size 480x480

@@ -240,6 +240,7 @@ v1::Summary MakeSummary(const JobReport& report, const JobParams& params) {
   t->set_total_seconds(report.total_seconds);
   ToProto(params, report.flow, summary.mutable_parameters());
   summary.set_result_bytes(report.result_bytes);
+  for (const std::string& w : report.warnings) summary.add_warnings(w);
   if (report.features.has_value()) {
     v1::FeatureCounts* f = summary.mutable_features();
     f->set_ridge_vertices(report.features->ridges);

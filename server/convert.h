@@ -5,6 +5,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "absl/status/statusor.h"
 #include "core/features/ridges.h"
@@ -49,6 +50,7 @@ struct JobReport {
   std::optional<Displacement> displacement;
   std::optional<FeatureSummary> features;  // when the spec asked for them
   uint64_t result_bytes = 0;
+  std::vector<std::string> warnings;  // Summary.warnings
 };
 
 // The summary of a job that succeeded.

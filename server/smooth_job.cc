@@ -7,6 +7,7 @@
 #include "absl/strings/str_format.h"
 #include "core/features/ridges.h"
 #include "core/flows/flow.h"
+#include "core/io/coordinates.h"
 #include "core/measure/metrics.h"
 #include "core/topology.h"
 #include "server/log.h"
@@ -223,6 +224,9 @@ void SmoothJob::Run() {
     return Fail(report, s);
   }
   report.before = ComputeMetrics(mesh, topo, stop);
+  if (std::optional<std::string> w = CoarseCoordinatesWarning(mesh.positions, report.before.edge_length_mean)) {
+    report.warnings.push_back(std::move(*w));
+  }
   const Clock::time_point decoded = Clock::now();
   report.decode_seconds = Seconds(start, decoded);
   if (absl::Status s = stop.Check(); !s.ok()) return Fail(report, StepStatus(s, "validating the mesh"));

@@ -1,13 +1,16 @@
 #include "core/io/draco_codec.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <exception>
 #include <memory>
 #include <new>
+#include <tuple>
 #include <utility>
 #include <variant>
 
+#include "absl/container/flat_hash_map.h"
 #include "absl/strings/str_cat.h"
 #include "core/io/allocation_limit.h"
 #include "core/io/draco_checks.h"
@@ -24,6 +27,84 @@ absl::StatusOr<std::string> EncodeWithOptions(const draco::Mesh& dm, const Draco
 
 }  // namespace
 
+namespace {
+
+// True when every value is a float32 exactly (so a float32 attribute carries it bit for bit).
+bool AllFloat(const std::vector<double>& values) {
+  return std::all_of(values.begin(), values.end(),
+                     [](double v) { return !std::isfinite(v) || static_cast<double>(static_cast<float>(v)) == v; });
+}
+
+// Adds an attribute of `components` values per point, float32 when that holds every value
+// exactly and float64 otherwise; `value(p, out)` writes point p's values as doubles.
+template <typename ValueOf>
+int AddFloatAttribute(draco::Mesh& dm, draco::GeometryAttribute::Type type, int components, bool exact_float,
+                      const ValueOf& value) {
+  const uint32_t n = dm.num_points();
+  draco::GeometryAttribute ga;
+  const draco::DataType dt = exact_float ? draco::DT_FLOAT32 : draco::DT_FLOAT64;
+  ga.Init(type, nullptr, components, dt, false, draco::DataTypeLength(dt) * components, 0);
+  const int id = dm.AddAttribute(ga, /*identity_mapping=*/true, n);
+  draco::PointAttribute* a = dm.attribute(id);
+  double v[4];
+  float f[4];
+  for (uint32_t p = 0; p < n; ++p) {
+    value(p, v);
+    if (exact_float) {
+      for (int c = 0; c < components; ++c) f[c] = static_cast<float>(v[c]);
+      a->SetAttributeValue(draco::AttributeValueIndex(p), f);
+    } else {
+      a->SetAttributeValue(draco::AttributeValueIndex(p), v);
+    }
+  }
+  return id;
+}
+
+}  // namespace
+
+DracoPoints SplitAtSeams(const Mesh& mesh) {
+  DracoPoints out;
+  const int32_t n = mesh.num_vertices();
+  const bool uv = mesh.uvs.corners.size() == 3 * mesh.triangles.size() && !mesh.uvs.empty();
+  const bool nrm = mesh.normals.corners.size() == 3 * mesh.triangles.size() && !mesh.normals.empty();
+  out.vertex.resize(n);
+  for (int32_t v = 0; v < n; ++v) out.vertex[v] = v;
+  out.uv.assign(uv ? n : 0, -1);
+  out.normal.assign(nrm ? n : 0, -1);
+  out.corners.resize(3 * mesh.triangles.size());
+  std::vector<uint8_t> claimed(n, 0);
+  // Corners whose values differ from their vertex's first ones become points of their own.
+  absl::flat_hash_map<std::tuple<int32_t, int32_t, int32_t>, int32_t> extra;
+  for (size_t c = 0; c < out.corners.size(); ++c) {
+    const int32_t v = mesh.triangles[c / 3][c % 3];
+    if (v < 0 || v >= n) {
+      out.corners[c] = -1;
+      continue;
+    }
+    const int32_t t = uv ? mesh.uvs.corners[c] : -1;
+    const int32_t m = nrm ? mesh.normals.corners[c] : -1;
+    if (!claimed[v]) {
+      claimed[v] = 1;
+      if (uv) out.uv[v] = t;
+      if (nrm) out.normal[v] = m;
+      out.corners[c] = v;
+      continue;
+    }
+    if ((!uv || out.uv[v] == t) && (!nrm || out.normal[v] == m)) {
+      out.corners[c] = v;
+      continue;
+    }
+    auto [it, fresh] = extra.try_emplace({v, t, m}, static_cast<int32_t>(out.vertex.size()));
+    if (fresh) {
+      out.vertex.push_back(v);
+      if (uv) out.uv.push_back(t);
+      if (nrm) out.normal.push_back(m);
+    }
+    out.corners[c] = it->second;
+  }
+  return out;
+}
+
 absl::StatusOr<std::string> EncodeDraco(const Mesh& mesh, const DracoOptions& options) {
   const int32_t n = mesh.num_vertices();
   if (n == 0 || mesh.triangles.empty()) {
@@ -33,21 +114,64 @@ absl::StatusOr<std::string> EncodeDraco(const Mesh& mesh, const DracoOptions& op
   for (int32_t i = 0; i < n; ++i) {
     if (absl::Status s = CheckCoordinates(mesh.positions[i], "vertex", i); !s.ok()) return s;
   }
+  const bool attributes = mesh.has_attributes() || !mesh.colors.empty();
+  const DracoPoints points = attributes ? SplitAtSeams(mesh) : DracoPoints{};
+  const uint32_t num_points = attributes ? static_cast<uint32_t>(points.vertex.size()) : static_cast<uint32_t>(n);
   draco::Mesh dm;
-  dm.set_num_points(n);
+  dm.set_num_points(num_points);
   draco::GeometryAttribute ga;
   ga.Init(draco::GeometryAttribute::POSITION, nullptr, 3, draco::DT_FLOAT32, false, 3 * sizeof(float), 0);
-  const int att_id = dm.AddAttribute(ga, /*identity_mapping=*/true, n);
+  const int att_id = dm.AddAttribute(ga, /*identity_mapping=*/true, num_points);
   draco::PointAttribute* positions = dm.attribute(att_id);
-  for (int32_t i = 0; i < n; ++i) {
-    const Vec3& p = mesh.positions[i];
+  for (uint32_t i = 0; i < num_points; ++i) {
+    const Vec3& p = mesh.positions[attributes ? points.vertex[i] : static_cast<int32_t>(i)];
     const float v[3] = {static_cast<float>(p.x), static_cast<float>(p.y), static_cast<float>(p.z)};
     positions->SetAttributeValue(draco::AttributeValueIndex(i), v);
   }
-  for (const Triangle& t : mesh.triangles) {
+  for (size_t f = 0; f < mesh.triangles.size(); ++f) {
+    const Triangle& t = mesh.triangles[f];
     // Out-of-range faces cannot be stored (the validation report counts them).
     if (t[0] < 0 || t[0] >= n || t[1] < 0 || t[1] >= n || t[2] < 0 || t[2] >= n) continue;
-    dm.AddFace({draco::PointIndex(t[0]), draco::PointIndex(t[1]), draco::PointIndex(t[2])});
+    if (attributes) {
+      dm.AddFace({draco::PointIndex(points.corners[3 * f]), draco::PointIndex(points.corners[3 * f + 1]),
+                  draco::PointIndex(points.corners[3 * f + 2])});
+    } else {
+      dm.AddFace({draco::PointIndex(t[0]), draco::PointIndex(t[1]), draco::PointIndex(t[2])});
+    }
+  }
+  if (attributes) {
+    auto entry = [](const CornerAttribute& a, int32_t e, int components, double* v) {
+      for (int c = 0; c < components; ++c) {
+        v[c] = e >= 0 && e < a.entries() ? a.values[static_cast<size_t>(components) * e + c] : 0.0;
+      }
+    };
+    if (!points.uv.empty()) {
+      AddFloatAttribute(dm, draco::GeometryAttribute::TEX_COORD, 2, AllFloat(mesh.uvs.values),
+                        [&](uint32_t p, double* v) { entry(mesh.uvs, points.uv[p], 2, v); });
+    }
+    if (!points.normal.empty()) {
+      // Normals are recomputed from the smoothed positions: float32 is enough.
+      AddFloatAttribute(dm, draco::GeometryAttribute::NORMAL, 3, true,
+                        [&](uint32_t p, double* v) { entry(mesh.normals, points.normal[p], 3, v); });
+    }
+    if (mesh.colors.size() == static_cast<size_t>(n)) {
+      draco::GeometryAttribute cg;
+      cg.Init(draco::GeometryAttribute::COLOR, nullptr, 3, draco::DT_UINT8, true, 3, 0);
+      draco::PointAttribute* a = dm.attribute(dm.AddAttribute(cg, /*identity_mapping=*/true, num_points));
+      for (uint32_t p = 0; p < num_points; ++p) {
+        const Rgb& c = mesh.colors[points.vertex[p]];
+        const uint8_t rgb[3] = {c.r, c.g, c.b};
+        a->SetAttributeValue(draco::AttributeValueIndex(p), rgb);
+      }
+    }
+    for (const VertexProperty& prop : mesh.properties) {
+      if (prop.values.size() != static_cast<size_t>(n)) continue;
+      const int id = AddFloatAttribute(dm, draco::GeometryAttribute::GENERIC, 1, AllFloat(prop.values),
+                                       [&](uint32_t p, double* v) { v[0] = prop.values[points.vertex[p]]; });
+      auto metadata = std::make_unique<draco::AttributeMetadata>();
+      metadata->AddEntryString("name", prop.name);
+      dm.AddAttributeMetadata(id, std::move(metadata));
+    }
   }
   if (options.method == DracoMethod::kEdgebreaker) {
     const std::vector<uint8_t> used = PointsEdgebreakerKeeps(dm);
@@ -197,10 +321,99 @@ absl::StatusOr<std::string> EncodeWithOptions(const draco::Mesh& dm, const Draco
 
 }  // namespace
 
-absl::StatusOr<Mesh> DecodeDraco(std::string_view bytes) {
+namespace {
+
+// The attributes of a decoded Draco mesh that a Mesh holds, per point (a point is a vertex of
+// DecodeDraco's mesh): the first TEX_COORD (u, v), NORMAL (x, y, z), COLOR (r, g, b, as 0..255
+// for integer types and 0..1 for float ones), and each one-component attribute named by the
+// metadata entry "name" as a vertex property. The others are named in `dropped`.
+void ReadAttributes(const draco::Mesh& dm, Mesh& mesh, std::vector<std::string>* dropped) {
+  const uint32_t n = dm.num_points();
+  auto per_point = [&](CornerAttribute& a, const draco::PointAttribute& pa, int components) {
+    a.components = components;
+    a.values.assign(static_cast<size_t>(components) * n, 0.0);
+    double v[4] = {0, 0, 0, 0};
+    for (uint32_t p = 0; p < n; ++p) {
+      // Every mapped index is in range (CheckDracoLayout).
+      pa.ConvertValue<double>(pa.mapped_index(draco::PointIndex(p)), components, v);
+      for (int c = 0; c < components; ++c) a.values[static_cast<size_t>(components) * p + c] = v[c];
+    }
+    a.corners.resize(3 * mesh.triangles.size());
+    for (size_t t = 0; t < mesh.triangles.size(); ++t) {
+      for (int k = 0; k < 3; ++k) a.corners[3 * t + k] = mesh.triangles[t][k];
+    }
+  };
+  for (int32_t i = 0; i < dm.num_attributes(); ++i) {
+    const draco::PointAttribute& pa = *dm.attribute(i);
+    const int components = pa.num_components();
+    std::string name;
+    const draco::AttributeMetadata* md = dm.GetAttributeMetadataByAttributeId(i);
+    const bool named = md != nullptr && md->GetEntryString("name", &name);
+    // Booleans (ConvertValue is undefined for corrupt ones) and unknown types are not read.
+    const bool numeric = CheckNumericValues(pa, "").ok();
+    switch (numeric ? pa.attribute_type() : draco::GeometryAttribute::INVALID) {
+      case draco::GeometryAttribute::POSITION:
+        continue;
+      case draco::GeometryAttribute::INVALID:
+        break;
+      case draco::GeometryAttribute::TEX_COORD:
+        if (mesh.uvs.empty() && components >= 2) {
+          per_point(mesh.uvs, pa, 2);
+          continue;
+        }
+        break;
+      case draco::GeometryAttribute::NORMAL:
+        if (mesh.normals.empty() && components == 3) {
+          per_point(mesh.normals, pa, 3);
+          continue;
+        }
+        break;
+      case draco::GeometryAttribute::COLOR:
+        if (mesh.colors.empty() && components >= 3) {
+          // ConvertValue gives a normalized integer attribute as 0..1, like a float one.
+          const bool unit =
+              pa.normalized() || pa.data_type() == draco::DT_FLOAT32 || pa.data_type() == draco::DT_FLOAT64;
+          mesh.colors.resize(n);
+          double v[4] = {0, 0, 0, 0};
+          for (uint32_t p = 0; p < n; ++p) {
+            pa.ConvertValue<double>(pa.mapped_index(draco::PointIndex(p)), 3, v);
+            uint8_t rgb[3];
+            for (int c = 0; c < 3; ++c) {
+              const double x = unit ? v[c] * 255.0 : v[c];
+              rgb[c] = !(x > 0.0) ? 0 : x >= 255.0 ? 255 : static_cast<uint8_t>(std::lround(x));
+            }
+            mesh.colors[p] = {rgb[0], rgb[1], rgb[2]};
+          }
+          continue;
+        }
+        break;
+      default:
+        if (named && components == 1) {
+          VertexProperty prop{name, pa.data_type() == draco::DT_FLOAT64 ? "double" : "float", std::vector<double>(n)};
+          for (uint32_t p = 0; p < n; ++p) {
+            pa.ConvertValue<double>(pa.mapped_index(draco::PointIndex(p)), 1, &prop.values[p]);
+          }
+          mesh.properties.push_back(std::move(prop));
+          continue;
+        }
+        break;
+    }
+    if (dropped != nullptr) {
+      dropped->push_back(absl::StrCat("Draco attribute ", i, " (", pa.TypeToString(pa.attribute_type()),
+                                      named ? absl::StrCat(" '", name, "'") : "", ", ", components, " components)"));
+    }
+  }
+}
+
+}  // namespace
+
+absl::StatusOr<Mesh> DecodeDraco(std::string_view bytes, std::vector<std::string>* dropped, bool attributes) {
   absl::StatusOr<std::unique_ptr<draco::Mesh>> dm = DecodeToDraco(bytes, kMaxDracoVertices);
   if (!dm.ok()) return dm.status();
-  return PointMesh(**dm);
+  absl::StatusOr<Mesh> mesh = PointMesh(**dm);
+  if (!mesh.ok()) return mesh.status();
+  if (attributes) ReadAttributes(**dm, *mesh, dropped);
+  return mesh;
 }
 
 struct DracoMesh::Impl {

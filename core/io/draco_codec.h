@@ -53,7 +53,24 @@ struct DracoOptions {
   int speed = 5;  // Draco's encoding/decoding speed, 0 (best compression) .. 10 (fastest)
 };
 
-// Positions are stored as float32; faces with an index out of range are left out.
+// How a mesh with corner attributes becomes Draco points: point v is vertex v (with the values
+// of its first corner), and each further (vertex, texture coordinate, normal) combination met
+// at a corner, i.e. each seam, adds a point after them. So a decoder that welds points by
+// position, as the service does, gets back the vertices in their order.
+struct DracoPoints {
+  std::vector<int32_t> vertex;   // per point: its vertex
+  std::vector<int32_t> uv;       // per point: its texture coordinate entry (empty: no UVs)
+  std::vector<int32_t> normal;   // per point: its normal entry (empty: no normals)
+  std::vector<int32_t> corners;  // per triangle corner: its point (-1 for an out-of-range vertex)
+};
+DracoPoints SplitAtSeams(const Mesh& mesh);
+
+// Positions are stored as float32; faces with an index out of range are left out. A mesh with
+// attributes (Mesh::has_attributes, or colours) is split at its seams (SplitAtSeams) and
+// carries them: texture coordinates as TEX_COORD and normals as NORMAL (float32, or float64
+// when float32 cannot hold a coordinate exactly), colours as COLOR (uint8) and each vertex
+// property as a one-component GENERIC attribute named by the metadata entry "name". Without
+// attributes, point i is vertex i and nothing else is stored.
 // InvalidArgument for bad options, an empty mesh, a coordinate that is not finite or above
 // kMaxCoordinate in magnitude, quantized output of a mesh spanning less than
 // kMinQuantizedExtent, and Edgebreaker when it would drop a vertex (one that no face with three
@@ -64,7 +81,11 @@ absl::StatusOr<std::string> EncodeDraco(const Mesh& mesh, const DracoOptions& op
 // with no or several POSITION attributes, an attribute without a value for some point, a face
 // naming a point past the point count, and a coordinate that is not finite or above
 // kMaxCoordinate in magnitude. Vertices are Draco's points (attribute seams stay split).
-absl::StatusOr<Mesh> DecodeDraco(std::string_view bytes);
+// The attributes a Mesh holds come along per point (texture coordinates, normals, colours,
+// named one-component attributes as vertex properties); the others are named in `dropped`.
+// `attributes` false: positions and faces only (a caller that keeps its own attributes).
+absl::StatusOr<Mesh> DecodeDraco(std::string_view bytes, std::vector<std::string>* dropped = nullptr,
+                                 bool attributes = true);
 
 // Vertices a Draco mesh may have: an int32 holds every index.
 inline constexpr int64_t kMaxDracoVertices = std::numeric_limits<int32_t>::max();

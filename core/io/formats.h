@@ -19,7 +19,7 @@ absl::StatusOr<Mesh> ParseStl(std::string_view data, ReadInfo& info);
 
 std::string WriteObj(const Mesh& mesh);
 // InvalidArgument when the mesh has colours but not one per vertex.
-absl::StatusOr<std::string> WritePly(const Mesh& mesh, bool binary);
+absl::StatusOr<std::string> WritePly(const Mesh& mesh, bool binary, bool double_positions = false);
 std::string WriteOff(const Mesh& mesh);
 std::string WriteStl(const Mesh& mesh);
 

@@ -58,7 +58,7 @@ absl::StatusOr<std::string> SerializeMesh(const Mesh& mesh, MeshFormat format, c
     case MeshFormat::kObj:
       return io::WriteObj(mesh);
     case MeshFormat::kPly:
-      return io::WritePly(mesh, options.ply_binary);
+      return io::WritePly(mesh, options.ply_binary, options.ply_double);
     case MeshFormat::kOff:
       return io::WriteOff(mesh);
     case MeshFormat::kStl:

@@ -258,6 +258,28 @@ def cli_checks(a, check, tmp):
         assert n == len(before) and after == before, "vertex colours changed"
     check("smooth carries a PLY input's vertex colours to PLY output", smooth_keeps_ply_colours)
 
+    def smooth_names_what_it_drops():
+        src = os.path.join(tmp, "parts.obj")
+        with open(src, "w") as f:
+            f.write("mtllib gone.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0.5 0.5 1\nvt 0 0\nvt 1 0\nvt 1 1\n"
+                    "usemtl skin\nf 1/1 2/2 3/3 4/1\nf 1 2 5\nf 2 3 5\nf 3 4 5\nf 4 1 5\nl 1 3\n")
+        out = os.path.join(tmp, "parts-out.obj")
+        r = run([cli, "smooth", src, "-o", out, "--flow", "laplacian", "--iterations", "1", "--json"])
+        assert r.returncode == 0, (r.returncode, r.stderr)
+        lines = [l for l in r.stderr.splitlines() if l.startswith("meshsmooth: warning:")]
+        want = ("meshsmooth: warning: not kept: 1 OBJ line elements (l); 1 polygons triangulated; "
+                "material library 'gone.mtl' (not found beside the input)")
+        assert lines == [want], lines
+        warnings = json.loads(r.stdout).get("warnings")
+        assert warnings == ["not kept: 1 OBJ line elements (l)", "not kept: 1 polygons triangulated",
+                            "not kept: material library 'gone.mtl' (not found beside the input)"], warnings
+        with open(out) as f:
+            text = f.read()
+        assert "mtllib gone.mtl\n" in text and "usemtl skin\n" in text and "\nvt 1 1\n" in text, text[:300]
+        assert "f 1/1 2/2 3/3\nf 1/1 3/3 4/1\n" in text, text
+    check("smooth names what it cannot carry in one warning line and in the JSON; OBJ keeps vt and materials",
+          smooth_names_what_it_drops)
+
     def render_png():
         png = os.path.join(tmp, "sphere.png")
         r = run([cli, "render", "builtin:noisy-sphere", "-o", png, "--size", "320x200"])

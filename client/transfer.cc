@@ -1,0 +1,253 @@
+#include "client/transfer.h"
+
+#include <algorithm>
+#include <cctype>
+#include <filesystem>
+#include <fstream>
+
+#include "absl/strings/match.h"
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_join.h"
+#include "absl/strings/strip.h"
+#include "client/inputs.h"
+#include "core/attributes.h"
+#include "core/features/ridges.h"
+#include "core/io/coordinates.h"
+#include "core/io/draco_codec.h"
+#include "core/io/file_bytes.h"
+#include "core/io/mesh_io.h"
+#include "core/topology.h"
+
+namespace meshsmooth::client {
+namespace {
+
+namespace fs = std::filesystem;
+
+// Leaves out the triangles for which `drop(t)` holds, with their corner attributes, and keeps
+// each OBJ directive before the same following triangle.
+template <typename Drop>
+void DropTriangles(Mesh& mesh, const Drop& drop) {
+  std::vector<int32_t> kept_before(mesh.triangles.size() + 1, 0);
+  size_t out = 0;
+  for (size_t t = 0; t < mesh.triangles.size(); ++t) {
+    kept_before[t] = static_cast<int32_t>(out);
+    if (drop(mesh.triangles[t])) continue;
+    for (CornerAttribute* a : {&mesh.uvs, &mesh.normals}) {
+      if (a->corners.size() != 3 * mesh.triangles.size()) continue;
+      for (int k = 0; k < 3; ++k) a->corners[3 * out + k] = a->corners[3 * t + k];
+    }
+    mesh.triangles[out++] = mesh.triangles[t];
+  }
+  kept_before[mesh.triangles.size()] = static_cast<int32_t>(out);
+  for (CornerAttribute* a : {&mesh.uvs, &mesh.normals}) {
+    if (a->corners.size() == 3 * mesh.triangles.size()) a->corners.resize(3 * out);
+  }
+  for (ObjDirective& d : mesh.obj_directives) {
+    d.before_triangle = kept_before[std::clamp<size_t>(d.before_triangle, 0, mesh.triangles.size())];
+  }
+  mesh.triangles.resize(out);
+}
+
+// The file names an `.mtl` file's texture statements (map_Kd, bump, ...) name: the last token
+// of each, after the options.
+std::vector<std::string> TextureFiles(const std::string& mtl) {
+  std::vector<std::string> files;
+  std::ifstream in(mtl);
+  std::string line;
+  while (std::getline(in, line)) {
+    absl::string_view rest = absl::StripAsciiWhitespace(line);
+    const size_t space = rest.find_first_of(" \t");
+    if (space == absl::string_view::npos) continue;
+    const absl::string_view key = rest.substr(0, space);
+    if (!absl::StartsWith(key, "map_") && key != "bump" && key != "disp" && key != "decal" && key != "refl" &&
+        key != "norm") {
+      continue;
+    }
+    const size_t last = rest.find_last_of(" \t");
+    files.emplace_back(rest.substr(last + 1));
+  }
+  return files;
+}
+
+// Rewrites `mtllib` lines so that they reach, from `output`'s folder, the files they named from
+// `input`'s; names missing material files and texture images in `dropped`.
+void RelinkMaterials(Mesh& mesh, const std::string& input, const std::string& output,
+                     std::vector<std::string>& dropped) {
+  const fs::path in_dir = fs::absolute(fs::path(input)).parent_path();
+  const fs::path out_dir = fs::absolute(fs::path(output)).parent_path();
+  for (ObjDirective& d : mesh.obj_directives) {
+    if (!absl::StartsWith(d.line, "mtllib")) continue;
+    const std::string name(absl::StripAsciiWhitespace(absl::StripPrefix(d.line, "mtllib")));
+    const fs::path mtl = fs::path(name).is_absolute() ? fs::path(name) : in_dir / name;
+    std::error_code error;
+    if (!fs::is_regular_file(mtl, error)) {
+      dropped.push_back(absl::StrCat("material library '", name, "' (not found beside the input)"));
+      continue;
+    }
+    for (const std::string& texture : TextureFiles(mtl.string())) {
+      const fs::path image = fs::path(texture).is_absolute() ? fs::path(texture) : mtl.parent_path() / texture;
+      if (!fs::is_regular_file(image, error)) {
+        dropped.push_back(absl::StrCat("texture image '", texture, "' of ", name, " (not found)"));
+      }
+    }
+    const fs::path relative = fs::weakly_canonical(mtl, error).lexically_relative(fs::weakly_canonical(out_dir, error));
+    const std::string target = relative.empty() ? fs::weakly_canonical(mtl, error).string() : relative.generic_string();
+    d.line = absl::StrCat("mtllib ", target);
+  }
+}
+
+// What `format` cannot hold of `mesh`, one phrase each.
+std::vector<std::string> NotHeldBy(const Mesh& mesh, MeshFormat format) {
+  std::vector<std::string> lost;
+  const char* name = format == MeshFormat::kObj   ? ".obj"
+                     : format == MeshFormat::kPly ? ".ply"
+                     : format == MeshFormat::kOff ? ".off"
+                     : format == MeshFormat::kStl ? ".stl"
+                                                  : ".drc";
+  const bool obj = format == MeshFormat::kObj, ply = format == MeshFormat::kPly, drc = format == MeshFormat::kDraco;
+  if (!mesh.obj_directives.empty() && !obj) {
+    lost.push_back(
+        absl::StrCat(mesh.obj_directives.size(), " OBJ material and group lines (", name, " has no place for them)"));
+  }
+  if (!mesh.properties.empty() && !ply && !drc) {
+    std::vector<std::string> names;
+    for (const VertexProperty& p : mesh.properties) names.push_back(p.name);
+    lost.push_back(
+        absl::StrCat("vertex properties ", absl::StrJoin(names, ", "), " (", name, " has no place for them)"));
+  }
+  if (!obj && !ply && !drc) {
+    if (!mesh.uvs.empty()) lost.push_back(absl::StrCat("texture coordinates (", name, " has no place for them)"));
+    if (!mesh.normals.empty()) lost.push_back(absl::StrCat("normals (", name, " has no place for them)"));
+    if (!mesh.colors.empty()) lost.push_back(absl::StrCat("vertex colours (", name, " has no place for them)"));
+  }
+  return lost;
+}
+
+}  // namespace
+
+bool IsGltfPath(const std::string& path) {
+  std::string ext = fs::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  return ext == ".gltf" || ext == ".glb";
+}
+
+absl::StatusOr<Upload> PrepareUpload(const std::string& input) {
+  Upload upload;
+  upload.input = input;
+  if (IsGltfPath(input)) {
+    absl::StatusOr<GltfScene> scene = GltfScene::Read(input);
+    if (!scene.ok()) return scene.status();
+    upload.gltf = std::make_shared<GltfScene>(std::move(*scene));
+    upload.dropped = upload.gltf->stale();
+    absl::StatusOr<std::string> bytes = EncodeDraco(upload.gltf->surface());
+    if (!bytes.ok()) return bytes.status();
+    upload.draco = std::move(*bytes);
+    upload.num_vertices = upload.gltf->surface().num_vertices();
+    return upload;
+  }
+  const absl::StatusOr<MeshFormat> format = FormatFromPath(input);
+  if (format.ok() && *format == MeshFormat::kDraco) {
+    absl::StatusOr<std::string> bytes = ReadFileBytes(input);
+    if (!bytes.ok()) return bytes.status();
+    upload.draco = std::move(*bytes);
+    upload.draco_input = true;
+    return upload;
+  }
+  ReadInfo info;
+  absl::StatusOr<Mesh> mesh = LoadInput(input, &info);
+  if (!mesh.ok()) return mesh.status();
+  upload.dropped = std::move(info.dropped);
+  if (info.polygons_fanned > 0) upload.dropped.push_back(absl::StrCat(info.polygons_fanned, " polygons triangulated"));
+  const ValidationReport r = Validate(*mesh);
+  if (r.faces_out_of_range > 0) {
+    upload.warnings.push_back(absl::StrCat(r.faces_out_of_range,
+                                           " faces reference vertices that do not exist; they cannot be sent "
+                                           "and are left out"));
+    // Out of step with the result's faces otherwise (Draco cannot store them).
+    const int32_t n = mesh->num_vertices();
+    DropTriangles(*mesh, [n](const Triangle& t) {
+      return t[0] < 0 || t[0] >= n || t[1] < 0 || t[1] >= n || t[2] < 0 || t[2] >= n;
+    });
+  }
+  upload.origin = LocalOrigin(mesh->positions);
+  upload.double_positions = info.double_positions || upload.origin != Vec3{};
+  if (upload.origin != Vec3{}) Translate(mesh->positions, -upload.origin);
+  absl::StatusOr<std::string> bytes = EncodeDraco(*mesh);
+  if (!bytes.ok()) return bytes.status();
+  upload.draco = std::move(*bytes);
+  upload.num_vertices = mesh->num_vertices();
+  upload.kept = std::move(*mesh);
+  upload.kept.positions = {};
+  return upload;
+}
+
+absl::Status WriteResult(const Upload& upload, const std::string& result, const std::string& output, bool ridges,
+                         std::vector<std::string>* dropped, bool gltf_draco) {
+  std::vector<std::string> ignored;
+  std::vector<std::string>& lost = dropped != nullptr ? *dropped : ignored;
+  if ((upload.gltf != nullptr) != IsGltfPath(output)) {
+    return absl::InvalidArgumentError(upload.gltf != nullptr
+                                          ? "a glTF scene is written as a scene: give -o FILE.glb or FILE.gltf"
+                                          : "glTF output needs a glTF input (.glb or .gltf)");
+  }
+  if (upload.gltf != nullptr) {
+    absl::StatusOr<Mesh> decoded = DecodeDraco(result, nullptr, false);
+    if (!decoded.ok() || decoded->num_vertices() != upload.num_vertices) {
+      return absl::DataLossError("the result: not one point per point of the scene's primitives");
+    }
+    if (ridges) lost.push_back("the ridge labels (a glTF scene has no place for them)");
+    return upload.gltf->Write(decoded->positions, output, gltf_draco);
+  }
+  absl::StatusOr<MeshFormat> format = FormatFromPath(output);
+  if (!format.ok()) return format.status();
+  if (*format == MeshFormat::kDraco) {
+    for (std::string& s : NotHeldBy(upload.kept, *format)) lost.push_back(std::move(s));
+    return WriteFileBytes(output, result);
+  }
+  auto about_result = [](const absl::Status& s) {
+    return absl::Status(s.code(), absl::StrCat("the result: ", s.message()));
+  };
+  // Only a Draco input's attributes come from the result; the others' are the input's own.
+  absl::StatusOr<Mesh> decoded = DecodeDraco(result, upload.draco_input ? &lost : nullptr, upload.draco_input);
+  if (!decoded.ok()) return about_result(decoded.status());
+  Mesh mesh;
+  if (upload.draco_input) {
+    mesh = std::move(*decoded);
+  } else {
+    // Vertex i is point i of the result (SplitAtSeams puts the seams' points after them).
+    if (decoded->num_vertices() < upload.num_vertices) {
+      return about_result(absl::DataLossError(
+          absl::StrCat("it has ", decoded->num_vertices(), " points for ", upload.num_vertices, " vertices")));
+    }
+    mesh.positions.assign(decoded->positions.begin(), decoded->positions.begin() + upload.num_vertices);
+    mesh.triangles = upload.kept.triangles;
+    mesh.colors = upload.kept.colors;
+    mesh.uvs = upload.kept.uvs;
+    mesh.properties = upload.kept.properties;
+    mesh.obj_directives = upload.kept.obj_directives;
+    if (!upload.kept.normals.empty()) mesh.normals = FreshNormals(mesh, upload.kept.normals);
+  }
+  if (upload.origin != Vec3{}) Translate(mesh.positions, upload.origin);
+  if (ridges) {
+    absl::StatusOr<std::vector<float>> labels = DecodeDracoAttribute(result, kFeatureLabelAttribute);
+    if (!labels.ok()) return about_result(labels.status());
+    std::vector<uint8_t> bytes(labels->begin(), labels->end());
+    bytes.resize(mesh.positions.size());
+    mesh.colors = FeatureColors(bytes);
+    // Shown as the colours; the curvatures are the service's, not the input's.
+    std::erase_if(mesh.properties, [](const VertexProperty& p) {
+      return p.name == kFeatureLabelAttribute || p.name == kKmaxAttribute || p.name == kKminAttribute;
+    });
+  }
+  for (std::string& s : NotHeldBy(mesh, *format)) lost.push_back(std::move(s));
+  if (*format == MeshFormat::kPly && !mesh.normals.empty() && !PerVertexValues(mesh, mesh.normals).has_value()) {
+    lost.push_back("hard edges (.ply holds one normal per vertex: the smooth one is written)");
+    mesh.normals = FreshNormals(mesh, {});
+  }
+  if (*format == MeshFormat::kObj && !upload.draco_input) RelinkMaterials(mesh, upload.input, output, lost);
+  WriteOptions options;
+  options.ply_double = upload.double_positions;
+  return WriteMesh(output, mesh, options);
+}
+
+}  // namespace meshsmooth::client

@@ -1,0 +1,61 @@
+// Between a mesh file and the service: what the CLI uploads for an input file and how it
+// writes the result back, keeping what the service does not change (the input's texture
+// coordinates, colours, properties and OBJ material lines, its coordinates' magnitude and
+// precision) and naming whatever the output cannot hold.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "absl/status/status.h"
+#include "absl/status/statusor.h"
+#include "core/io/gltf.h"
+#include "core/mesh.h"
+#include "core/vec3.h"
+
+namespace meshsmooth::client {
+
+struct Upload {
+  std::string input;  // the path (or builtin:NAME) it came from
+  std::string draco;  // what is sent
+  bool draco_input = false;
+  // The input as read, positions left out: its triangles, colours and attributes, written
+  // back around the result's positions (vertex i of the result is vertex i of the input).
+  Mesh kept;
+  int32_t num_vertices = 0;
+  // Positions were sent relative to this origin (LocalOrigin): zero for a mesh near the
+  // origin, the rounded centre of a georeferenced one. Added back to the result.
+  Vec3 origin;
+  bool double_positions = false;      // write PLY coordinates as double
+  std::vector<std::string> warnings;  // about the input, one sentence each
+  std::vector<std::string> dropped;   // what the input held that does not come back, one phrase each
+  // A .gltf/.glb input: the scene, whose primitives' points were sent as one mesh.
+  std::shared_ptr<GltfScene> gltf;
+};
+
+// True for a path whose extension is .gltf or .glb (case-insensitive).
+bool IsGltfPath(const std::string& path);
+
+// Draco input goes as it is (all its attributes travel along); a glTF scene goes as the
+// points of all its triangle primitives (GltfScene::surface); anything else is read in
+// double, moved to its local origin and encoded losslessly and sequentially with its
+// attributes (texture coordinates, normals, colours, vertex properties: EncodeDraco), so
+// vertex i of the result is vertex i of the input. The reader's errors when the input cannot
+// be read.
+absl::StatusOr<Upload> PrepareUpload(const std::string& input);
+
+// Writes `result` (the service's Draco bytes) to `output` in the format its extension names:
+// Draco bytes as they came, anything else decoded and moved back by the upload's origin, with
+// the input's attributes, normals recomputed from the smoothed positions, the ridge labels
+// (`ridges`) as vertex colours, PLY coordinates in double when the input had them or was
+// shifted. An OBJ output's `mtllib` lines are rewritten to reach the input's material files
+// from the output's folder. What the output cannot hold (or cannot find: a material file, a
+// texture image) is appended to `dropped`, one phrase each. Errors about the result itself
+// start with "the result: ". A glTF input is written as the same scene with the smoothed
+// positions (GltfScene::Write; primitives Draco-compressed when `gltf_draco`) and only to
+// .gltf or .glb: InvalidArgument otherwise, as for glTF output of another input.
+absl::Status WriteResult(const Upload& upload, const std::string& result, const std::string& output, bool ridges,
+                         std::vector<std::string>* dropped = nullptr, bool gltf_draco = false);
+
+}  // namespace meshsmooth::client

@@ -1,0 +1,198 @@
+#include "core/io/gltf.h"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+
+#include "absl/strings/str_cat.h"
+#include "draco/io/scene_io.h"
+#include "draco/scene/scene.h"
+
+namespace meshsmooth {
+
+struct GltfScene::Impl {
+  std::unique_ptr<draco::Scene> scene;
+  Mesh surface;
+  // Per scene mesh (primitive): its first vertex in surface and the offset it was moved by.
+  std::vector<int32_t> first;
+  std::vector<Vec3> offset;
+};
+
+GltfScene::GltfScene(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+GltfScene::GltfScene(GltfScene&&) noexcept = default;
+GltfScene& GltfScene::operator=(GltfScene&&) noexcept = default;
+GltfScene::~GltfScene() = default;
+
+absl::StatusOr<GltfScene> GltfScene::Read(const std::string& path) {
+  std::error_code error;
+  if (!std::filesystem::is_regular_file(path, error)) {
+    return absl::NotFoundError(absl::StrCat(path, ": no such file"));
+  }
+  // Through Draco's own entry point, never a GltfDecoder of ours: the class holds a
+  // tinygltf::Model, whose layout in Debian's libtinygltf-dev differs from the one libdraco
+  // was built with (docs/decisions.md).
+  draco::StatusOr<std::unique_ptr<draco::Scene>> decoded = draco::ReadSceneFromFile(path);
+  if (!decoded.ok()) {
+    return absl::InvalidArgumentError(
+        absl::StrCat(path, ": not a glTF scene Draco reads: ", decoded.status().error_msg()));
+  }
+  auto impl = std::make_unique<Impl>();
+  impl->scene = std::move(decoded).value();
+  draco::Scene& scene = *impl->scene;
+  const int n = scene.NumMeshes();
+  // Each primitive's glTF mesh (mesh group): the first that names it.
+  std::vector<int> group_of(n, -1);
+  for (int g = 0; g < scene.NumMeshGroups(); ++g) {
+    const draco::MeshGroup& group = *scene.GetMeshGroup(draco::MeshGroupIndex(g));
+    for (int i = 0; i < group.NumMeshInstances(); ++i) {
+      const int m = group.GetMeshInstance(i).mesh_index.value();
+      if (m >= 0 && m < n && group_of[m] < 0) group_of[m] = g;
+    }
+  }
+  for (int m = 0, next = scene.NumMeshGroups(); m < n; ++m) {
+    if (group_of[m] < 0) group_of[m] = next++;
+  }
+  // The positions of every primitive, and each glTF mesh's bounding box.
+  std::vector<std::vector<Vec3>> points(n);
+  std::vector<BoundingBox> boxes(*std::max_element(group_of.begin(), group_of.end()) + 1);
+  double widest = 0.0;
+  for (int m = 0; m < n; ++m) {
+    const draco::Mesh& dm = scene.GetMesh(draco::MeshIndex(m));
+    const draco::PointAttribute* pos = dm.GetNamedAttribute(draco::GeometryAttribute::POSITION);
+    if (pos == nullptr) continue;
+    points[m].resize(dm.num_points());
+    for (uint32_t p = 0; p < dm.num_points(); ++p) {
+      double xyz[3] = {0, 0, 0};
+      const draco::AttributeValueIndex avi = pos->mapped_index(draco::PointIndex(p));
+      if (avi.value() >= pos->size()) {
+        return absl::InvalidArgumentError(
+            absl::StrCat(path, ": glTF primitive ", m, " has a point without a position"));
+      }
+      pos->ConvertValue<double>(avi, 3, xyz);
+      points[m][p] = {xyz[0], xyz[1], xyz[2]};
+      boxes[group_of[m]].Add(points[m][p]);
+    }
+  }
+  for (const BoundingBox& b : boxes) widest = std::max(widest, b.max_extent());
+  std::vector<double> shift(boxes.size(), 0.0);
+  double start = boxes.empty() || boxes[0].empty() ? 0.0 : boxes[0].hi.x;
+  for (size_t g = 1; g < boxes.size(); ++g) {
+    if (boxes[g].empty()) continue;
+    // Whole units past the previous mesh, so the shift itself is exact.
+    shift[g] = std::ceil(start + widest + 1.0 - boxes[g].lo.x);
+    start = boxes[g].hi.x + shift[g];
+  }
+  Mesh& s = impl->surface;
+  for (int m = 0; m < n; ++m) {
+    const draco::Mesh& dm = scene.GetMesh(draco::MeshIndex(m));
+    const int32_t first = s.num_vertices();
+    const Vec3 offset{shift[group_of[m]], 0.0, 0.0};
+    impl->first.push_back(first);
+    impl->offset.push_back(offset);
+    for (const Vec3& p : points[m]) s.positions.push_back(p + offset);
+    if (points[m].empty()) continue;
+    for (uint32_t f = 0; f < dm.num_faces(); ++f) {
+      const draco::Mesh::Face& face = dm.face(draco::FaceIndex(f));
+      if (face[0].value() >= dm.num_points() || face[1].value() >= dm.num_points() ||
+          face[2].value() >= dm.num_points()) {
+        return absl::InvalidArgumentError(absl::StrCat(path, ": glTF primitive ", m, " has a face past its points"));
+      }
+      s.triangles.push_back({first + static_cast<int32_t>(face[0].value()),
+                             first + static_cast<int32_t>(face[1].value()),
+                             first + static_cast<int32_t>(face[2].value())});
+    }
+  }
+  if (s.triangles.empty()) return absl::InvalidArgumentError(absl::StrCat(path, ": the glTF scene has no triangles"));
+  return GltfScene(std::move(impl));
+}
+
+const Mesh& GltfScene::surface() const { return impl_->surface; }
+
+GltfCounts GltfScene::counts() const {
+  const draco::Scene& s = *impl_->scene;
+  return {s.NumNodes(), s.NumMeshGroups(), s.NumMeshes(), static_cast<int>(s.GetMaterialLibrary().NumMaterials()),
+          static_cast<int>(s.GetMaterialLibrary().GetTextureLibrary().NumTextures())};
+}
+
+std::vector<std::string> GltfScene::stale() const {
+  int tangents = 0;
+  for (int m = 0; m < impl_->scene->NumMeshes(); ++m) {
+    tangents +=
+        impl_->scene->GetMesh(draco::MeshIndex(m)).GetNamedAttribute(draco::GeometryAttribute::TANGENT) != nullptr;
+  }
+  if (tangents == 0) return {};
+  return {absl::StrCat("the tangents of ", tangents, " glTF primitives (written as they were, not recomputed)")};
+}
+
+absl::Status GltfScene::Write(const std::vector<Vec3>& positions, const std::string& path, bool draco_compressed) {
+  if (positions.size() != impl_->surface.positions.size()) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("expected ", impl_->surface.positions.size(), " positions, got ", positions.size()));
+  }
+  draco::Scene& scene = *impl_->scene;
+  for (int m = 0; m < scene.NumMeshes(); ++m) {
+    draco::Mesh& dm = scene.GetMesh(draco::MeshIndex(m));
+    const int pos_id = dm.GetNamedAttributeId(draco::GeometryAttribute::POSITION);
+    if (pos_id < 0) continue;
+    draco::PointAttribute* pos = dm.attribute(pos_id);
+    const int32_t first = impl_->first[m];
+    const Vec3 offset = impl_->offset[m];
+    // Positions per value; the normals' sums per position value, area-weighted.
+    std::vector<Vec3> value_position(pos->size());
+    for (uint32_t p = 0; p < dm.num_points(); ++p) {
+      const Vec3 q = positions[first + p] - offset;
+      const draco::AttributeValueIndex avi = pos->mapped_index(draco::PointIndex(p));
+      if (avi.value() >= value_position.size()) continue;
+      value_position[avi.value()] = q;
+      if (pos->data_type() == draco::DT_FLOAT32) {
+        const float v[3] = {static_cast<float>(q.x), static_cast<float>(q.y), static_cast<float>(q.z)};
+        pos->SetAttributeValue(avi, v);
+      } else if (pos->data_type() == draco::DT_FLOAT64) {
+        const double v[3] = {q.x, q.y, q.z};
+        pos->SetAttributeValue(avi, v);
+      } else {
+        return absl::InvalidArgumentError(absl::StrCat("glTF primitive ", m, ": positions that are not floats"));
+      }
+    }
+    const int nrm_id = dm.GetNamedAttributeId(draco::GeometryAttribute::NORMAL);
+    draco::PointAttribute* nrm = nrm_id >= 0 ? dm.attribute(nrm_id) : nullptr;
+    if (nrm != nullptr && nrm->data_type() == draco::DT_FLOAT32 && nrm->num_components() == 3) {
+      std::vector<Vec3> sum(pos->size());
+      for (uint32_t f = 0; f < dm.num_faces(); ++f) {
+        const draco::Mesh::Face& face = dm.face(draco::FaceIndex(f));
+        uint32_t v[3];
+        bool inside = true;
+        for (int k = 0; k < 3; ++k) {
+          v[k] = pos->mapped_index(face[k]).value();
+          inside = inside && v[k] < sum.size();
+        }
+        if (!inside) continue;
+        const Vec3 fn = Cross(value_position[v[1]] - value_position[v[0]], value_position[v[2]] - value_position[v[0]]);
+        for (int k = 0; k < 3; ++k) sum[v[k]] += fn;
+      }
+      for (uint32_t p = 0; p < dm.num_points(); ++p) {
+        const uint32_t value = pos->mapped_index(draco::PointIndex(p)).value();
+        if (value >= sum.size()) continue;
+        const Vec3& s = sum[value];
+        const double len = Norm(s);
+        if (!(len > 0.0) || !std::isfinite(len)) continue;  // keep the old normal
+        const float v[3] = {static_cast<float>(s.x / len), static_cast<float>(s.y / len),
+                            static_cast<float>(s.z / len)};
+        nrm->SetAttributeValue(nrm->mapped_index(draco::PointIndex(p)), v);
+      }
+    }
+    dm.SetCompressionEnabled(draco_compressed);
+    if (draco_compressed) {
+      draco::DracoCompressionOptions options;
+      options.quantization_position.SetQuantizationBits(16);
+      options.quantization_bits_tex_coord = 16;
+      options.quantization_bits_normal = 12;
+      dm.SetCompressionOptions(options);
+    }
+  }
+  const draco::Status s = draco::WriteSceneToFile(path, scene);
+  if (!s.ok()) return absl::InternalError(absl::StrCat("writing ", path, ": ", s.error_msg()));
+  return absl::OkStatus();
+}
+
+}  // namespace meshsmooth

@@ -1,0 +1,61 @@
+// glTF 2.0 scenes (.gltf with its buffers and images, .glb), plain or with Draco-compressed
+// primitives (KHR_draco_mesh_compression), read and written by Draco's own transcoder
+// (draco::GltfDecoder, draco::GltfEncoder): the scene's nodes and their transforms, meshes,
+// materials, textures and images come back as they were, only the primitives' positions (and
+// normals, recomputed from them) change.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "absl/status/status.h"
+#include "absl/status/statusor.h"
+#include "core/mesh.h"
+
+namespace meshsmooth {
+
+// What a scene holds, for the record and the tests.
+struct GltfCounts {
+  int nodes = 0, meshes = 0, primitives = 0, materials = 0, textures = 0;
+  friend bool operator==(const GltfCounts&, const GltfCounts&) = default;
+};
+
+class GltfScene {
+ public:
+  // InvalidArgument (with Draco's message) for a file Draco's glTF decoder refuses, or one
+  // without a triangle primitive; NotFound for a missing file.
+  static absl::StatusOr<GltfScene> Read(const std::string& path);
+
+  GltfScene(GltfScene&&) noexcept;
+  GltfScene& operator=(GltfScene&&) noexcept;
+  ~GltfScene();
+
+  // Every triangle primitive's points as one mesh, primitive after primitive, positions in
+  // their glTF mesh's own frame (node transforms stay in the scene). The primitives of one glTF
+  // mesh share that frame, so where they share positions a welding service makes them one
+  // surface; the glTF meshes after the first are moved apart along x by more than any mesh's
+  // extent, so that no two of them weld.
+  const Mesh& surface() const;
+
+  GltfCounts counts() const;
+
+  // What the scene holds that smoothing leaves stale (tangents), one phrase each.
+  std::vector<std::string> stale() const;
+
+  // Sets the primitives' positions from `positions` (one per vertex of surface(), in its
+  // frame: the offsets between glTF meshes are taken back off), recomputes the normals of those
+  // that have them (area-weighted over the faces at each position) and writes the scene to
+  // `path` (.glb: one file; .gltf: the JSON with a .bin and the images beside it), each
+  // primitive Draco-compressed when `draco_compressed` (16-bit positions and texture
+  // coordinates, 12-bit normals) or plain. InvalidArgument for a wrong count; Internal when
+  // Draco's encoder fails.
+  absl::Status Write(const std::vector<Vec3>& positions, const std::string& path, bool draco_compressed);
+
+ private:
+  struct Impl;
+  explicit GltfScene(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace meshsmooth
