@@ -27,6 +27,7 @@
 
 #include "bench/bench_common.h"
 #include "core/attributes.h"
+#include "core/io/gltf.h"
 #include "core/io/mesh_io.h"
 #include "core/shapes/added_noise.h"
 #include "draco/io/mesh_io.h"
@@ -158,6 +159,7 @@ int Main(int argc, char** argv) {
   if (!WriteMesh(textured_obj, textured).ok()) return 1;
   std::printf("\n| reader | file | ms (median of %d) | vertices (points for Draco) | faces |\n|---|---|---|---|---|\n",
               runs);
+  UseDracoFileIo();
   for (const std::string& file : {textured_in, textured_obj}) {
     std::vector<double> ours, theirs;
     int64_t our_vertices = 0, our_faces = 0, their_points = 0, their_faces = 0;

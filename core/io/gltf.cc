@@ -5,7 +5,11 @@
 #include <filesystem>
 
 #include "absl/strings/str_cat.h"
+#include "draco/io/file_reader_factory.h"
+#include "draco/io/file_writer_factory.h"
 #include "draco/io/scene_io.h"
+#include "draco/io/stdio_file_reader.h"
+#include "draco/io/stdio_file_writer.h"
 #include "draco/scene/scene.h"
 
 namespace meshsmooth {
@@ -23,7 +27,17 @@ GltfScene::GltfScene(GltfScene&&) noexcept = default;
 GltfScene& GltfScene::operator=(GltfScene&&) noexcept = default;
 GltfScene::~GltfScene() = default;
 
+void UseDracoFileIo() {
+  static const bool registered = [] {
+    draco::FileReaderFactory::RegisterReader(draco::StdioFileReader::Open);
+    draco::FileWriterFactory::RegisterWriter(draco::StdioFileWriter::Open);
+    return true;
+  }();
+  (void)registered;
+}
+
 absl::StatusOr<GltfScene> GltfScene::Read(const std::string& path) {
+  UseDracoFileIo();
   std::error_code error;
   if (!std::filesystem::is_regular_file(path, error)) {
     return absl::NotFoundError(absl::StrCat(path, ": no such file"));
@@ -190,6 +204,7 @@ absl::Status GltfScene::Write(const std::vector<Vec3>& positions, const std::str
       dm.SetCompressionOptions(options);
     }
   }
+  UseDracoFileIo();
   const draco::Status s = draco::WriteSceneToFile(path, scene);
   if (!s.ok()) return absl::InternalError(absl::StrCat("writing ", path, ": ", s.error_msg()));
   return absl::OkStatus();

@@ -15,6 +15,13 @@
 
 namespace meshsmooth {
 
+// Registers Draco's stdio file reader and writer with its file factories, once. They join from
+// static initialisers in their own object files, which a program linking libdraco.a
+// (cmake/StaticDependencies.cmake) does not pull in: without this, Draco's own file functions
+// (draco::ReadSceneFromFile, WriteSceneToFile, ReadMeshFromFile) open no file. GltfScene calls
+// it; a caller of those functions calls it first.
+void UseDracoFileIo();
+
 // What a scene holds, for the record and the tests.
 struct GltfCounts {
   int nodes = 0, meshes = 0, primitives = 0, materials = 0, textures = 0;

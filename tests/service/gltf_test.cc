@@ -139,6 +139,7 @@ std::vector<float> Values(const draco::Scene& s, draco::GeometryAttribute::Type 
 }
 
 std::unique_ptr<draco::Scene> ReadScene(const std::string& path) {
+  UseDracoFileIo();
   auto s = draco::ReadSceneFromFile(path);
   EXPECT_TRUE(s.ok()) << path << ": " << s.status().error_msg();
   return s.ok() ? std::move(s).value() : nullptr;
@@ -160,6 +161,7 @@ TEST(GltfTest, ScenesComeBackWithTheirNodesMaterialsTexturesAndUvs) {
   AddUniformNoise(noisy, 0.3, 3);
   const std::unique_ptr<draco::Scene> scene = SphereScene(noisy, *png);
   const std::string plain = (dir / "plain.glb").string(), packed = (dir / "draco.glb").string();
+  UseDracoFileIo();
   ASSERT_TRUE(draco::WriteSceneToFile(plain, *scene).ok());
   for (int m = 0; m < scene->NumMeshes(); ++m) scene->GetMesh(draco::MeshIndex(m)).SetCompressionEnabled(true);
   ASSERT_TRUE(draco::WriteSceneToFile(packed, *scene).ok());
