@@ -269,19 +269,12 @@ class Spawner {
   int to_ = -1, from_ = -1;
 };
 
-// The seconds of "smooth Xs" in a job summary or a meshsmooth_peer line.
-std::optional<double> SmoothSeconds(const std::string& out) {
-  static const std::regex kSmooth(R"(smooth ([0-9.]+)s)");
+// The seconds of "LABEL Xs" in a job summary ("smooth": the smoothing call, also in a
+// meshsmooth_peer line; "total": the job's own time inside the process).
+std::optional<double> SecondsOf(const std::string& out, const std::string& label) {
+  const std::regex pattern(label + R"( ([0-9.]+)s)");
   std::smatch m;
-  if (!std::regex_search(out, m, kSmooth)) return std::nullopt;
-  return std::atof(m[1].str().c_str());
-}
-
-// The seconds of "total Xs" in a job summary: the job's own time inside the process.
-std::optional<double> JobSeconds(const std::string& out) {
-  static const std::regex kTotal(R"(total ([0-9.]+)s)");
-  std::smatch m;
-  if (!std::regex_search(out, m, kTotal)) return std::nullopt;
+  if (!std::regex_search(out, m, pattern)) return std::nullopt;
   return std::atof(m[1].str().c_str());
 }
 
@@ -328,9 +321,9 @@ Row RunRow(Spawner& spawner, const std::string& label, const std::vector<std::st
       }
       row.quality = *q;
     }
-    const std::optional<double> s = SmoothSeconds(p.out);
+    const std::optional<double> s = SecondsOf(p.out, "smooth");
     smooth.push_back(s ? *s : NAN);
-    const std::optional<double> job = JobSeconds(p.out);
+    const std::optional<double> job = SecondsOf(p.out, "total");
     beyond.push_back(job ? p.seconds - *job : NAN);
     process.push_back(p.seconds);
     rss.push_back(p.max_rss_bytes);
@@ -548,7 +541,7 @@ bool ScaleSection(Spawner& spawner, const Options& opt, const std::vector<CaseRe
       return false;
     }
     if (r == 0) row.out = p.out;
-    const std::optional<double> s = SmoothSeconds(p.out);
+    const std::optional<double> s = SecondsOf(p.out, "smooth");
     smooth.push_back(s ? *s : NAN);
     process.push_back(p.seconds);
     rss.push_back(p.max_rss_bytes);
