@@ -306,13 +306,30 @@ absl::StatusOr<FlowResult> RunIterations(Mesh& mesh, const Topology& topo, const
     probe_next.resize(n);
     if (probe->passes() > 1) probe_mid.resize(n);
   }
+  // A run on one thread (a small mesh) and its probe are independent: with a second thread to
+  // spare they iterate side by side, each on one thread, so each computes the same bits.
+  const int spare_threads = p.threads > 0 ? p.threads : omp_get_max_threads();
+  const bool side_by_side = estimate_risk && run.threads() == 1 && spare_threads >= 2;
   for (int it = 1; it <= last_iteration; ++it) {
     if (control.stop.Cancelled()) {
       mesh.positions = std::move(cur);
       return absl::CancelledError(absl::StrCat("cancelled after ", it - 1, " iterations"));
     }
     std::vector<Vec3>* out = &next;
-    const BlockStats total = run.Iterate(it, cur, next, mid, out);
+    std::vector<Vec3>* probe_out = &probe_next;
+    BlockStats total;
+    if (side_by_side) {
+#pragma omp parallel sections num_threads(2)
+      {
+#pragma omp section
+        total = run.Iterate(it, cur, next, mid, out);
+#pragma omp section
+        probe->Iterate(it, probe_mesh.positions, probe_next, probe_mid, probe_out);
+      }
+    } else {
+      total = run.Iterate(it, cur, next, mid, out);
+      if (estimate_risk) probe->Iterate(it, probe_mesh.positions, probe_next, probe_mid, probe_out);
+    }
     const Progress progress = run.ToProgress(it, total, estimate_risk ? 0 : last_iteration);
     if (absl::Status s = run.CheckDivergence(it, total, progress); !s.ok()) {
       mesh.positions = std::move(cur);  // the last iteration before the failure
@@ -324,8 +341,6 @@ absl::StatusOr<FlowResult> RunIterations(Mesh& mesh, const Topology& topo, const
     if (control.on_progress) control.on_progress(progress);
     if (estimate_risk) {
       std::vector<Vec3>& probe_cur = probe_mesh.positions;
-      std::vector<Vec3>* probe_out = &probe_next;
-      probe->Iterate(it, probe_cur, probe_next, probe_mid, probe_out);
       probe_cur.swap(*probe_out);
       const std::optional<StopReason> stop = auto_stop->After(it, cur.data(), probe_cur.data());
       if (auto_stop->improved()) best.assign(cur.begin(), cur.end());

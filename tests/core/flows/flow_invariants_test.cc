@@ -87,6 +87,38 @@ TEST(FlowInvariantsTest, EveryFlowOnEveryMesh) {
 
 // Large meshes run on a Morton-reordered copy: the positions must be exactly those of the
 // caller's order, for every flow and eq. (14).
+// Automatic runs of a small mesh iterate beside their probe copy when a second thread is there
+// (core/flows/driver.cc): the default job and each candidate flow must then give the bytes and
+// counts of the same runs done one after the other on one thread.
+TEST(FlowInvariantsTest, ProbeBesideTheRunChangesNoPosition) {
+  std::vector<Case> cases;
+  cases.push_back({"noisy icosphere(4)", NoisySphere(4)});
+  cases.push_back({"noisy two-rate torus", NoisyTorus()});
+  Mesh needles = SphereWithNeedles();
+  AddNormalNoise(needles, 0.3, 3);
+  cases.push_back({"sphere with needles", needles});
+  for (const Case& c : cases) {
+    const Topology topo = BuildTopology(c.mesh);
+    for (const std::string& flow : {std::string(), std::string("bilaplacian"), std::string("bilateral_normal")}) {
+      SCOPED_TRACE(c.name + " / " + (flow.empty() ? "default job" : flow));
+      FlowParams p;
+      if (!flow.empty()) p.flow = *ParseFlowName(flow);
+      p.threads = 1;
+      Mesh one = c.mesh;
+      absl::StatusOr<FlowResult> r1 = Smooth(one, topo, p);
+      ASSERT_TRUE(r1.ok()) << r1.status();
+      p.threads = 2;
+      Mesh two = c.mesh;
+      absl::StatusOr<FlowResult> r2 = Smooth(two, topo, p);
+      ASSERT_TRUE(r2.ok()) << r2.status();
+      EXPECT_GT(r1->iterations_run, 0);
+      EXPECT_EQ(r1->flow, r2->flow);
+      EXPECT_EQ(r1->iterations_run, r2->iterations_run);
+      EXPECT_TRUE(SameBytes(one, two)) << "the probe beside the run changed the result";
+    }
+  }
+}
+
 TEST(FlowInvariantsTest, InternalReorderingChangesNoPosition) {
   const Mesh noisy = NoisySphere(7);  // 163,842 vertices: above the reordering threshold
   const Topology topo = BuildTopology(noisy);
