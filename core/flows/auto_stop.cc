@@ -207,7 +207,6 @@ std::optional<StopReason> AutoStop::After(int it, const Vec3* pos, const Vec3* p
   if (improved_) {
     best_risk_ = risk;
     best_it_ = it;
-    report_.displacement_h = RmsNormalDisplacement(pos) / h_;
     report_.risk_h2 = (risk - sigma_ * sigma_) / (h_ * h_);
   }
   if (rival_ && it > 2 * kRivalWindow) {  // two full windows of decreases

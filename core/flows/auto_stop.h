@@ -113,7 +113,9 @@ class AutoStop {
   // stop now, if any. improved() tells whether `pos` is the best iteration so far.
   std::optional<StopReason> After(int it, const Vec3* pos, const Vec3* probe);
   bool improved() const { return improved_; }
-  // The report for positions `pos` reached without After() (a count chosen beforehand).
+  // The report for the positions `pos` the run returns: those of the best iteration After()
+  // found, or reached without After() (a count chosen beforehand). After() leaves the
+  // displacement to this (a pass over the rings, once per run rather than once per iteration).
   AutoStopReport Measure(const Vec3* pos) const {
     AutoStopReport r = report_;
     r.displacement_h = RmsNormalDisplacement(pos) / h_;

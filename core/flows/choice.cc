@@ -134,7 +134,8 @@ absl::StatusOr<FlowResult> SmoothAutomatic(Mesh& mesh, const Topology& topo, con
   if (!ChoosesFlow(p)) q.flow = p.flow.value_or(kDefaultFlow);
   Report(control, Phase::kNoiseEstimate, q.flow.value_or(kDefaultFlow));
   const int32_t n = mesh.num_vertices();
-  const NoiseEstimate noise = EstimateNoise(mesh, topo, h, ThreadsFor(n, p));
+  // Every thread the job may use, whatever the mesh's size: the fits are independent and costly.
+  const NoiseEstimate noise = EstimateNoise(mesh, topo, h, p.threads);
   const int32_t size = SampleSize(n);
   if (size >= n) return Choose(mesh, topo, q, control, h, noise);
 

@@ -293,7 +293,7 @@ absl::StatusOr<FlowResult> RunIterations(Mesh& mesh, const Topology& topo, const
   std::vector<Vec3> cur = std::move(mesh.positions), next(n), mid;
   if (run.passes() > 1) mid.resize(n);
   // Automatic stopping runs the flow a second time, beside the first, on a probe copy of the
-  // input (auto_stop.h), and keeps the best iteration so far in `best`.
+  // input (auto_stop.h), and keeps the best iteration in `best` once the run has passed it.
   Mesh probe_mesh;
   std::optional<FlowRun> probe;
   std::vector<Vec3> probe_next, probe_mid, best;
@@ -343,7 +343,10 @@ absl::StatusOr<FlowResult> RunIterations(Mesh& mesh, const Topology& topo, const
       std::vector<Vec3>& probe_cur = probe_mesh.positions;
       probe_cur.swap(*probe_out);
       const std::optional<StopReason> stop = auto_stop->After(it, cur.data(), probe_cur.data());
-      if (auto_stop->improved()) best.assign(cur.begin(), cur.end());
+      // The best iteration is kept only once the run moves past it: while every iteration
+      // improves, it is `cur` itself; the iteration after it finds it in *out, which the swap
+      // above gave the positions `cur` held, and copies it before anything overwrites it.
+      if (!auto_stop->improved() && auto_stop->best_iteration() == it - 1) best.assign(out->begin(), out->end());
       result.auto_stop = auto_stop->report();
       if (stop) {
         result.stop_reason = *stop;
@@ -364,7 +367,7 @@ absl::StatusOr<FlowResult> RunIterations(Mesh& mesh, const Topology& topo, const
     result.iterations_run = auto_stop->best_iteration();
   }
   if (auto_stop) {
-    if (!estimate_risk) result.auto_stop = auto_stop->Measure(cur.data());
+    result.auto_stop = auto_stop->Measure(cur.data());
     auto_stop->RepairFolds(cur.data());
     auto_stop->KeepVolume(cur.data());
   }

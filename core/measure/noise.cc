@@ -35,6 +35,9 @@ constexpr double kUnusable = -1.0;
 // At most about this many vertices are fitted (every k-th vertex of a larger mesh): the median
 // of 50,000 residuals is within ~0.5% of the whole mesh's, at a fraction of the time.
 constexpr int32_t kMaxFits = 50000;
+// Fewer fits than this run on one thread: a fit costs ~2 us, so below it waking a second
+// thread is not worth it.
+constexpr int32_t kMinParallelFits = 2000;
 // The least number of well-posed fits, absolute and as a share of the vertices tried, for the
 // median to be an estimate.
 constexpr int64_t kMinWellPosed = 25;
@@ -132,11 +135,11 @@ NoiseEstimate EstimateNoise(const Mesh& mesh, const Topology& topo, double h, in
   // One entry per vertex tried (every stride-th one): bounded by ~kMaxFits, whatever the mesh.
   std::vector<double> residual((n + stride - 1) / stride, std::numeric_limits<double>::quiet_NaN());
   bool stopped = false;
-#pragma omp parallel num_threads(threads) if (threads > 1 && n > 20000)
+  const auto tried = static_cast<int32_t>(residual.size());
+#pragma omp parallel num_threads(threads) if (threads > 1 && tried >= kMinParallelFits)
   {
     std::vector<int32_t> ring2;
-    const auto tried = static_cast<int32_t>(residual.size());
-#pragma omp for schedule(static, 512)
+#pragma omp for schedule(static, 128)
     for (int32_t i = 0; i < tried; ++i) {
       if (i % 256 == 0 && stop.Fired()) {
 #pragma omp atomic write
