@@ -33,8 +33,11 @@ constexpr double kTrimmedSecondMoment = 0.97071;
 // Marks a vertex whose fit was tried but not well posed.
 constexpr double kUnusable = -1.0;
 // At most about this many vertices are fitted (every k-th vertex of a larger mesh): the median
-// of 50,000 residuals is within ~0.5% of the whole mesh's, at a fraction of the time.
-constexpr int32_t kMaxFits = 50000;
+// of n residuals has a relative standard error of ~1.17 / sqrt(n), 0.8% at 20,000. Against
+// 50,000 fits, the deviation of the benchmark's noisy bunny, nefertiti and dragon moves by
+// 0.1-1.0% and every default row of docs/quality.md on the meshes above 20,000 vertices stays
+// within 1.005x; the estimate takes 20-27 ms instead of 39-62 ms on them (docs/decisions.md).
+constexpr int32_t kMaxFits = 20000;
 // Fewer fits than this run on one thread: a fit costs ~2 us, so below it waking a second
 // thread is not worth it.
 constexpr int32_t kMinParallelFits = 2000;

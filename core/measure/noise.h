@@ -11,7 +11,7 @@
 // ignores the minority of vertices on creases and corners, where a quadric cannot follow the
 // surface. On a smooth, clean mesh the residuals are the fit's third-order terms, a small
 // fraction of h; docs/quality.md gives the estimates of the benchmark's clean and noisy meshes.
-// A mesh of more than 50,000 vertices is sampled: every k-th vertex is fitted.
+// A mesh of more than 20,000 vertices is sampled: every k-th vertex is fitted.
 #pragma once
 
 #include <cstdint>

@@ -56,7 +56,8 @@ TEST(NoiseEstimateTest, ReadsGaussianNoiseAlongTheNormals) {
 }
 
 TEST(NoiseEstimateTest, SameForAnyThreadCount) {
-  // 2,562 vertices: just above the fits that stay on one thread (kMinParallelFits); 40,962: many.
+  // 2,562 vertices: just above the fits that stay on one thread (kMinParallelFits); 40,962: every
+  // second vertex fitted.
   for (int level : {4, 6}) {
     SCOPED_TRACE(level);
     const Mesh clean = Icosphere(level);
