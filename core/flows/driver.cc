@@ -266,7 +266,17 @@ absl::StatusOr<FlowResult> RunIterations(Mesh& mesh, const Topology& topo, const
   if (!diagonal.ok()) return diagonal.status();
   FlowResult result;
   result.flow = *p.flow;
-  FlowRun run(topo, p, h, *diagonal);
+  // A run with a risk estimate and its probe copy (below) share only the read-only topology:
+  // they iterate side by side, each on one thread, when the run would take one thread anyway
+  // (below kParallelThreshold) or the job has exactly two (the default job's samples of 20,000
+  // vertices on two cores): no per-pass wait between threads, and the bits do not depend on
+  // the thread count. With more threads a large run keeps them all, the probe after it.
+  const int threads = p.threads > 0 ? p.threads : omp_get_max_threads();
+  const bool side_by_side = p.iterations == kAutoIterations && plan.fixed_iterations == 0 && threads >= 2 &&
+                            (mesh.num_vertices() < kParallelThreshold || threads == 2);
+  FlowParams run_params = p;
+  if (side_by_side) run_params.threads = 1;
+  FlowRun run(topo, run_params, h, *diagonal);
   run.SetUp(mesh, result);
 
   // The positions move into `cur` for the run (no copy; the mesh gets them back on every return
@@ -300,16 +310,12 @@ absl::StatusOr<FlowResult> RunIterations(Mesh& mesh, const Topology& topo, const
   if (estimate_risk) {
     probe_mesh.positions = auto_stop->ProbeStart();
     probe_mesh.triangles = mesh.triangles;
-    probe.emplace(topo, p, h, *diagonal);
+    probe.emplace(topo, run_params, h, *diagonal);
     FlowResult unused;
     probe->SetUp(probe_mesh, unused);
     probe_next.resize(n);
     if (probe->passes() > 1) probe_mid.resize(n);
   }
-  // A run on one thread (a small mesh) and its probe are independent: with a second thread to
-  // spare they iterate side by side, each on one thread, so each computes the same bits.
-  const int spare_threads = p.threads > 0 ? p.threads : omp_get_max_threads();
-  const bool side_by_side = estimate_risk && run.threads() == 1 && spare_threads >= 2;
   for (int it = 1; it <= last_iteration; ++it) {
     if (control.stop.Cancelled()) {
       mesh.positions = std::move(cur);
@@ -318,7 +324,7 @@ absl::StatusOr<FlowResult> RunIterations(Mesh& mesh, const Topology& topo, const
     std::vector<Vec3>* out = &next;
     std::vector<Vec3>* probe_out = &probe_next;
     BlockStats total;
-    if (side_by_side) {
+    if (side_by_side && estimate_risk) {
 #pragma omp parallel sections num_threads(2)
       {
 #pragma omp section

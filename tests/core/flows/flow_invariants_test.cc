@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "core/flows/catalogue.h"
+#include "core/flows/driver.h"
 #include "core/flows/flow_table.h"
 #include "core/flows/lane_batches.h"
 #include "core/flows/reorder.h"
@@ -117,6 +118,28 @@ TEST(FlowInvariantsTest, ProbeBesideTheRunChangesNoPosition) {
       EXPECT_TRUE(SameBytes(one, two)) << "the probe beside the run changed the result";
     }
   }
+  // Above kParallelThreshold a run with a probe (a default job's sample of 20,000 vertices)
+  // goes side by side on exactly two threads, and keeps every thread otherwise.
+  const Mesh large = NoisySphere(6);  // 40,962 vertices
+  const Topology topo = BuildTopology(large);
+  const double h = MeanEdgeLength(large, topo);
+  std::vector<Mesh> results;
+  std::vector<int> counts;
+  for (int threads : {1, 2, 3}) {
+    SCOPED_TRACE(threads);
+    FlowParams p = Params("bilaplacian", kAutoIterations);
+    p.threads = threads;
+    Mesh m = large;
+    absl::StatusOr<FlowResult> r = flows::RunIterations(m, topo, p, {}, h, flows::AutoPlan{});
+    ASSERT_TRUE(r.ok()) << r.status();
+    EXPECT_GT(r->iterations_run, 0);
+    results.push_back(std::move(m));
+    counts.push_back(r->iterations_run);
+  }
+  EXPECT_EQ(counts[0], counts[1]);
+  EXPECT_EQ(counts[0], counts[2]);
+  EXPECT_TRUE(SameBytes(results[0], results[1])) << "1 and 2 threads differ";
+  EXPECT_TRUE(SameBytes(results[0], results[2])) << "1 and 3 threads differ";
 }
 
 TEST(FlowInvariantsTest, InternalReorderingChangesNoPosition) {
