@@ -16,7 +16,7 @@
 #include "core/io/draco_codec.h"
 #include "core/io/file_bytes.h"
 #include "core/io/mesh_io.h"
-#include "core/topology.h"
+#include "core/mesh.h"
 
 namespace meshsmooth::client {
 namespace {
@@ -158,16 +158,18 @@ absl::StatusOr<Upload> PrepareUpload(const std::string& input) {
   if (!mesh.ok()) return mesh.status();
   upload.dropped = std::move(info.dropped);
   if (info.polygons_fanned > 0) upload.dropped.push_back(absl::StrCat(info.polygons_fanned, " polygons triangulated"));
-  const ValidationReport r = Validate(*mesh);
-  if (r.faces_out_of_range > 0) {
-    upload.warnings.push_back(absl::StrCat(r.faces_out_of_range,
-                                           " faces reference vertices that do not exist; they cannot be sent "
-                                           "and are left out"));
-    // Out of step with the result's faces otherwise (Draco cannot store them).
-    const int32_t n = mesh->num_vertices();
-    DropTriangles(*mesh, [n](const Triangle& t) {
-      return t[0] < 0 || t[0] >= n || t[1] < 0 || t[1] >= n || t[2] < 0 || t[2] >= n;
-    });
+  // Faces naming a vertex that does not exist cannot be sent (Draco cannot store them); the
+  // server checks the rest of the mesh. Only this count is needed here: the full validation
+  // builds the topology, 11% of the CLI's whole process on the dragon.
+  const int32_t n = mesh->num_vertices();
+  auto out_of_range = [n](const Triangle& t) {
+    return t[0] < 0 || t[0] >= n || t[1] < 0 || t[1] >= n || t[2] < 0 || t[2] >= n;
+  };
+  const auto bad_faces = std::count_if(mesh->triangles.begin(), mesh->triangles.end(), out_of_range);
+  if (bad_faces > 0) {
+    upload.warnings.push_back(
+        absl::StrCat(bad_faces, " faces reference vertices that do not exist; they cannot be sent and are left out"));
+    DropTriangles(*mesh, out_of_range);  // out of step with the result's faces otherwise
   }
   upload.origin = LocalOrigin(mesh->positions);
   upload.double_positions = info.double_positions || upload.origin != Vec3{};

@@ -253,6 +253,19 @@ TEST_F(AttributesTest, WhatCannotBeCarriedIsNamed) {
   EXPECT_EQ(dropped, (std::vector<std::string>{"vertex properties confidence (.obj has no place for them)"}));
 }
 
+// A face naming a vertex the file does not have cannot travel: the upload leaves it out, says
+// so, and keeps the others (the server validates the rest).
+TEST_F(AttributesTest, FacesNamingMissingVerticesAreLeftOutWithAWarning) {
+  std::ofstream(Path("holes.obj")) << "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 2 4\nf 1 3 10\nf 9 3 4\n";
+  absl::StatusOr<client::Upload> upload = client::PrepareUpload(Path("holes.obj"));
+  ASSERT_TRUE(upload.ok()) << upload.status();
+  EXPECT_EQ(
+      upload->warnings,
+      (std::vector<std::string>{"2 faces reference vertices that do not exist; they cannot be sent and are left out"}));
+  EXPECT_EQ(upload->kept.triangles, (std::vector<Triangle>{{0, 1, 2}, {0, 1, 3}}));
+  EXPECT_EQ(upload->num_vertices, 4);
+}
+
 // Draco's own test files with attributes, smoothed into their own format (and the .drc ones
 // into OBJ): every texture coordinate comes back, normals fresh, nothing dropped.
 TEST_F(AttributesTest, DracoTestFilesKeepTheirAttributes) {
