@@ -23,21 +23,32 @@ AutoStop::AutoStop(const Mesh& mesh, const Topology& topo, const uint8_t* role, 
   sigma_ = kRiskSigmaMargin * noise.deviation_h * h;
   const int32_t n = topo.num_vertices();
   stride_ = std::max<int32_t>(1, (n + kMaxMeasured - 1) / kMaxMeasured);
-  normal_.assign(n, Vec3{});
+  has_normal_.assign(n, 0);
   for (int32_t v = 0; v < n; ++v) {
     closed_ &= topo.kind[v] == VertexKind::kInterior || topo.kind[v] == VertexKind::kIsolated;
     if (role[v] != kFree || topo.kind[v] != VertexKind::kInterior) continue;
     if (measured != nullptr && (*measured)[v] == 0) continue;
-    const Vec3 normal = RingNormal(topo, start_.data(), v);
-    const double len = Norm(normal);
-    if (!(len > 0.0) || !std::isfinite(len)) continue;
-    normal_[v] = normal * (1.0 / len);
+    if (!UnitNormal(v)) continue;
+    has_normal_[v] = 1;
     counted_ += v % stride_ == 0;
   }
   if (closed_) start_volume_ = Volume(start_.data());
 }
 
-std::vector<Vec3> AutoStop::ProbeStart() const {
+std::optional<Vec3> AutoStop::UnitNormal(int32_t v) const {
+  const Vec3 normal = RingNormal(topo_, start_.data(), v);
+  const double len = Norm(normal);
+  if (!(len > 0.0) || !std::isfinite(len)) return std::nullopt;
+  return normal * (1.0 / len);
+}
+
+std::vector<Vec3> AutoStop::ProbeStart() {
+  // The normals only a run with a probe reads (Risk): a run of a count chosen beforehand (a
+  // large mesh's) holds a byte per vertex, not 24.
+  normal_.assign(start_.size(), Vec3{});
+  for (size_t v = 0; v < normal_.size(); ++v) {
+    if (has_normal_[v]) normal_[v] = *UnitNormal(static_cast<int32_t>(v));
+  }
   std::vector<Vec3> probe = start_;
   const double eps = kProbeStep * sigma_;
   for (size_t v = 0; v < probe.size(); ++v) probe[v] += normal_[v] * (eps * Sign(static_cast<int32_t>(v)));
@@ -186,7 +197,7 @@ double AutoStop::RmsNormalDisplacement(const Vec3* pos) const {
   ForBlocks(n, threads_, [&](int32_t b, int32_t begin, int32_t end) {
     double sum = 0.0;
     for (int32_t v = begin; v < end; ++v) {
-      if (v % stride_ != 0 || normal_[v] == Vec3{}) continue;  // the measured vertices
+      if (v % stride_ != 0 || !has_normal_[v]) continue;  // the measured vertices
       const Vec3 normal = RingNormal(topo_, pos, v);
       const double len = Norm(normal);
       if (!(len > 0.0)) continue;

@@ -106,8 +106,9 @@ class AutoStop {
   // Why the run does nothing when nothing_to_do().
   StopReason idle_reason() const { return estimated_ ? StopReason::kNoNoise : StopReason::kNoEstimate; }
 
-  // The probe's input: the run's input moved by +-kProbeStep sigma along its normals.
-  std::vector<Vec3> ProbeStart() const;
+  // The probe's input: the run's input moved by +-kProbeStep sigma along its normals. Called
+  // once, before the first After().
+  std::vector<Vec3> ProbeStart();
 
   // After accepted iteration `it` with positions `pos` (the probe's: `probe`): the reason to
   // stop now, if any. improved() tells whether `pos` is the best iteration so far.
@@ -160,8 +161,12 @@ class AutoStop {
   double cos_fold_ = std::cos(kFoldAngleDeg * std::numbers::pi / 180.0);
   bool closed_ = true;  // every vertex in use is interior
   double start_volume_ = 0.0;
-  double sigma_ = 0.0;        // the noise's deviation, in mesh units
-  std::vector<Vec3> normal_;  // unit normals of the input at the measured vertices, else zero
+  double sigma_ = 0.0;  // the noise's deviation, in mesh units
+  // The unit normal of the input's ring at v, or none where the ring has no area.
+  std::optional<Vec3> UnitNormal(int32_t v) const;
+
+  std::vector<uint8_t> has_normal_;  // per vertex: one of the measured vertices, with a normal
+  std::vector<Vec3> normal_;         // ProbeStart's: their unit normals, else zero
   double best_risk_ = 0.0;
   int best_it_ = 0;
   bool improved_ = false;
