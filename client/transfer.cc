@@ -179,7 +179,9 @@ absl::StatusOr<Upload> PrepareUpload(const std::string& input) {
   upload.draco = std::move(*bytes);
   upload.num_vertices = mesh->num_vertices();
   upload.kept = std::move(*mesh);
-  upload.kept.positions = {};
+  // Released, not only emptied (`= {}` keeps a vector's capacity): 24 bytes a vertex the CLI
+  // held through the whole job.
+  std::vector<Vec3>().swap(upload.kept.positions);
   return upload;
 }
 
