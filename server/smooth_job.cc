@@ -232,7 +232,6 @@ void SmoothJob::Run() {
   if (absl::Status s = stop.Check(); !s.ok()) return Fail(report, StepStatus(s, "validating the mesh"));
   SendAccepted(validation, draco->seam_points());
 
-  const std::vector<Vec3> input = mesh.positions;  // for the displacement; the triangles stay put
   absl::StatusOr<FlowResult> result = SmoothMesh(mesh, topo, decoded, stop, report);
   const Clock::time_point smoothed = Clock::now();
   report.smooth_seconds = Seconds(decoded, smoothed);
@@ -255,6 +254,8 @@ void SmoothJob::Run() {
     writing.set_elapsed_seconds(Seconds(decoded, Clock::now()));
     Emit([&](JobSink& sink) { sink.OnProgress(writing); });
   }
+  // The input's positions for the displacement, made anew rather than kept through the run.
+  const std::vector<Vec3> input = draco->InputPositions();
   absl::StatusOr<std::string> encoded = EncodeAndMeasure(*draco, mesh, topo, input, *attributes, stop, report);
   const Clock::time_point done = Clock::now();
   report.encode_seconds = Seconds(smoothed, done);

@@ -243,12 +243,12 @@ absl::StatusOr<std::unique_ptr<draco::Mesh>> DecodeToDraco(std::string_view byte
   return dm;
 }
 
-// Positions of every point, and faces over points.
-absl::StatusOr<Mesh> PointMesh(const draco::Mesh& dm) {
+// The position of every point of `dm`, as doubles (InvalidArgument for a point without one or
+// with a coordinate out of range).
+absl::StatusOr<std::vector<Vec3>> PointPositions(const draco::Mesh& dm) {
   const draco::PointAttribute* pos = dm.GetNamedAttribute(draco::GeometryAttribute::POSITION);
-  Mesh mesh;
   const uint32_t n = dm.num_points();
-  mesh.positions.resize(n);
+  std::vector<Vec3> positions(n);
   // Plain float32 xyz (what a lossless encoder writes) is read directly, one copy per point;
   // ConvertValue's per-value type switch gives the same doubles, slower (docs/decisions.md).
   const bool float_xyz = pos->data_type() == draco::DT_FLOAT32 && pos->num_components() == 3;
@@ -260,16 +260,25 @@ absl::StatusOr<Mesh> PointMesh(const draco::Mesh& dm) {
     if (float_xyz) {
       float xyz[3];
       std::memcpy(xyz, pos->GetAddress(avi), sizeof xyz);
-      mesh.positions[i] = {xyz[0], xyz[1], xyz[2]};
+      positions[i] = {xyz[0], xyz[1], xyz[2]};
     } else {
       double xyz[3];
       if (!pos->ConvertValue<double>(avi, 3, xyz)) {
         return absl::InvalidArgumentError(absl::StrCat("corrupt Draco mesh: no position for point ", i));
       }
-      mesh.positions[i] = {xyz[0], xyz[1], xyz[2]};
+      positions[i] = {xyz[0], xyz[1], xyz[2]};
     }
-    if (absl::Status s = CheckCoordinates(mesh.positions[i], "point", i); !s.ok()) return s;
+    if (absl::Status s = CheckCoordinates(positions[i], "point", i); !s.ok()) return s;
   }
+  return positions;
+}
+
+// Positions of every point, and faces over points.
+absl::StatusOr<Mesh> PointMesh(const draco::Mesh& dm) {
+  absl::StatusOr<std::vector<Vec3>> positions = PointPositions(dm);
+  if (!positions.ok()) return positions.status();
+  Mesh mesh;
+  mesh.positions = *std::move(positions);
   mesh.triangles.resize(dm.num_faces());
   for (uint32_t f = 0; f < dm.num_faces(); ++f) {  // every index < n (CheckDracoLayout)
     const draco::Mesh::Face& face = dm.face(draco::FaceIndex(f));
@@ -468,6 +477,18 @@ absl::Status DracoMesh::CheckEncodable(const DracoOptions& options) const {
 const Mesh& DracoMesh::welded() const { return impl_->welded; }
 Mesh DracoMesh::TakeWelded() { return std::exchange(impl_->welded, Mesh{}); }
 int64_t DracoMesh::num_points() const { return impl_->draco->num_points(); }
+
+std::vector<Vec3> DracoMesh::InputPositions() const {
+  // Decode() checked every point's position; each vertex takes its first point's, as WeldPoints.
+  const std::vector<Vec3> points = PointPositions(*impl_->draco).value();
+  std::vector<Vec3> positions(impl_->num_vertices);
+  std::vector<uint8_t> seen(impl_->num_vertices, 0);
+  for (size_t p = 0; p < points.size(); ++p) {
+    const int32_t v = impl_->point_to_vertex[p];
+    if (!seen[v]) seen[v] = 1, positions[v] = points[p];
+  }
+  return positions;
+}
 int64_t DracoMesh::seam_points() const { return impl_->seam_points; }
 
 absl::StatusOr<std::vector<float>> DecodeDracoAttribute(std::string_view bytes, std::string_view name) {

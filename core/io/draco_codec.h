@@ -128,6 +128,10 @@ class DracoMesh {
   // empty afterwards. Encode() still expects a mesh with welded()'s vertex count.
   Mesh TakeWelded();
   int64_t num_points() const;
+  // The positions welded() had, made anew from the decoded points (the same bits): a job that
+  // smooths the taken mesh in place needs them only afterwards, and keeping a copy through the
+  // run would cost 24 bytes a vertex at its peak.
+  std::vector<Vec3> InputPositions() const;
   // Points that share their position with an earlier point (welded into it).
   int64_t seam_points() const;
 

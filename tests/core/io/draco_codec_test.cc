@@ -1,6 +1,7 @@
 #include "core/io/draco_codec.h"
 
 #include <cmath>
+#include <cstring>
 
 #include "core/io/file_bytes.h"
 #include "core/shapes/added_noise.h"
@@ -189,6 +190,9 @@ TEST(DracoCodecTest, TakenWeldedMeshEncodesBackToEveryPoint) {
   Mesh welded = dm->TakeWelded();
   ASSERT_EQ(welded.num_vertices(), n);
   EXPECT_EQ(dm->welded().num_vertices(), 0);
+  const std::vector<Vec3> input = dm->InputPositions();  // the taken positions, made anew
+  ASSERT_EQ(input.size(), welded.positions.size());
+  EXPECT_EQ(std::memcmp(input.data(), welded.positions.data(), input.size() * sizeof(Vec3)), 0);
   for (Vec3& p : welded.positions) p *= 2.0;
   absl::StatusOr<std::string> out = dm->Encode(welded);
   ASSERT_TRUE(out.ok()) << out.status();
