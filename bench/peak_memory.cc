@@ -41,11 +41,11 @@ int PeakChild(const std::string& draco_path) {
   std::string().swap(upload);
   Mesh mesh = dm->TakeWelded();
   const Topology topo = BuildTopology(mesh);
-  const std::vector<Vec3> input = mesh.positions;  // the job keeps the input positions for the displacement
   FlowParams p;
   p.flow = FlowId::kMedian;
   p.iterations = 5;
   if (!Smooth(mesh, topo, p).ok()) return 1;
+  const std::vector<Vec3> input = dm->InputPositions();  // the job's, for the displacement, after the run
   absl::StatusOr<std::string> out = dm->Encode(mesh);
   if (!out.ok()) return 1;
   std::printf("%f\n", (StatusKb("VmHWM:") - base) * 1024.0 / mesh.num_vertices());
