@@ -77,8 +77,9 @@ class FlowRun {
   FlowRun(const Topology& topo, const FlowParams& p, double h, double diagonal)
       : topo_(topo), p_(p), row_(FlowOf(*p.flow)), n_(topo.num_vertices()), h_(h), diagonal_(diagonal) {}
 
-  // Kernel, roles, step context, lane batches and the constant threshold.
-  void SetUp(const Mesh& mesh, FlowResult& result) {
+  // The step, the kernel (not yet bound), the roles and the threads: what an automatic run
+  // needs to find it has nothing to do. Bind() does the rest.
+  void SetUp(FlowResult& result) {
     curvature_ = row_.kind == FlowKind::kCurvature;
     step_ = p_.step.value_or(row_.default_step);
     lambda_ = curvature_ ? step_ * h_ * h_ : step_;
@@ -88,6 +89,11 @@ class FlowRun {
     result.effective_mu = kernel_->mu();
     AssignRoles();
     threads_ = ThreadsFor(n_, p_);
+  }
+
+  // The step context, lane batches, the kernel's own set-up on `mesh` (a normal filter's face
+  // graph) and the constant threshold.
+  void Bind(const Mesh& mesh) {
     MakeContext();
     kernel_->Bind(mesh, topo_, threads_);
     // Curvature flows move a boundary curve like the curve-shortening flow with the same time
@@ -277,7 +283,7 @@ absl::StatusOr<FlowResult> RunIterations(Mesh& mesh, const Topology& topo, const
   FlowParams run_params = p;
   if (side_by_side) run_params.threads = 1;
   FlowRun run(topo, run_params, h, *diagonal);
-  run.SetUp(mesh, result);
+  run.SetUp(result);
 
   // The positions move into `cur` for the run (no copy; the mesh gets them back on every return
   // below). `cur` keeps the iteration's start until the iteration is accepted; passes write
@@ -297,6 +303,8 @@ absl::StatusOr<FlowResult> RunIterations(Mesh& mesh, const Topology& topo, const
     if (plan.fixed_iterations > 0) last_iteration = std::min(last_iteration, plan.fixed_iterations);
     result.stop_reason = StopReason::kIterations;
   }
+  // Bound only now: a clean mesh (nothing to do) skips a normal filter's face graph.
+  run.Bind(mesh);
   // A count chosen on a sample of the mesh (choice.h) runs as it is: no probe, no estimate.
   const bool estimate_risk = auto_stop && plan.fixed_iterations == 0;
   const int32_t n = mesh.num_vertices();
@@ -312,7 +320,8 @@ absl::StatusOr<FlowResult> RunIterations(Mesh& mesh, const Topology& topo, const
     probe_mesh.triangles = mesh.triangles;
     probe.emplace(topo, run_params, h, *diagonal);
     FlowResult unused;
-    probe->SetUp(probe_mesh, unused);
+    probe->SetUp(unused);
+    probe->Bind(probe_mesh);
     probe_next.resize(n);
     if (probe->passes() > 1) probe_mid.resize(n);
   }
