@@ -162,9 +162,7 @@ absl::StatusOr<Upload> PrepareUpload(const std::string& input) {
   // server checks the rest of the mesh. Only this count is needed here: the full validation
   // builds the topology, 11% of the CLI's whole process on the dragon.
   const int32_t n = mesh->num_vertices();
-  auto out_of_range = [n](const Triangle& t) {
-    return t[0] < 0 || t[0] >= n || t[1] < 0 || t[1] >= n || t[2] < 0 || t[2] >= n;
-  };
+  auto out_of_range = [n](const Triangle& t) { return IndexOutOfRange(t, n); };
   const auto bad_faces = std::count_if(mesh->triangles.begin(), mesh->triangles.end(), out_of_range);
   if (bad_faces > 0) {
     upload.warnings.push_back(

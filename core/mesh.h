@@ -76,13 +76,19 @@ struct Mesh {
   int32_t num_triangles() const { return static_cast<int32_t>(triangles.size()); }
 };
 
+// True when one of the face's indices is outside [0, num_vertices): a face no format can store
+// and no step may read.
+inline bool IndexOutOfRange(const Triangle& t, int32_t num_vertices) {
+  for (int32_t i : t) {
+    if (i < 0 || i >= num_vertices) return true;
+  }
+  return false;
+}
+
 // True when the face's indices are in [0, num_vertices) and pairwise distinct: the only faces
 // the topology and OpenMesh may see (Debian's OpenMesh asserts on anything else).
 inline bool IsUsableTriangle(const Triangle& t, int32_t num_vertices) {
-  for (int32_t i : t) {
-    if (i < 0 || i >= num_vertices) return false;
-  }
-  return t[0] != t[1] && t[1] != t[2] && t[0] != t[2];
+  return !IndexOutOfRange(t, num_vertices) && t[0] != t[1] && t[1] != t[2] && t[0] != t[2];
 }
 
 }  // namespace meshsmooth

@@ -265,7 +265,7 @@ Topology BuildTopology(const Mesh& mesh, ValidationReport* report, const StopTok
     const Triangle& t = mesh.triangles[f];
     if (IsUsableTriangle(t, n)) {
       topo.faces.push_back(f);
-    } else if (t[0] < 0 || t[0] >= n || t[1] < 0 || t[1] >= n || t[2] < 0 || t[2] >= n) {
+    } else if (IndexOutOfRange(t, n)) {
       ++r.faces_out_of_range;
     } else {
       ++r.faces_repeated_index;

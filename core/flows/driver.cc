@@ -333,7 +333,7 @@ absl::StatusOr<FlowResult> RunIterations(Mesh& mesh, const Topology& topo, const
     std::vector<Vec3>* out = &next;
     std::vector<Vec3>* probe_out = &probe_next;
     BlockStats total;
-    if (side_by_side && estimate_risk) {
+    if (side_by_side) {  // implies estimate_risk: automatic, no count chosen beforehand
 #pragma omp parallel sections num_threads(2)
       {
 #pragma omp section

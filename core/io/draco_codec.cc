@@ -131,7 +131,7 @@ absl::StatusOr<std::string> EncodeDraco(const Mesh& mesh, const DracoOptions& op
   for (size_t f = 0; f < mesh.triangles.size(); ++f) {
     const Triangle& t = mesh.triangles[f];
     // Out-of-range faces cannot be stored (the validation report counts them).
-    if (t[0] < 0 || t[0] >= n || t[1] < 0 || t[1] >= n || t[2] < 0 || t[2] >= n) continue;
+    if (IndexOutOfRange(t, n)) continue;
     if (attributes) {
       dm.AddFace({draco::PointIndex(points.corners[3 * f]), draco::PointIndex(points.corners[3 * f + 1]),
                   draco::PointIndex(points.corners[3 * f + 2])});
@@ -479,13 +479,14 @@ Mesh DracoMesh::TakeWelded() { return std::exchange(impl_->welded, Mesh{}); }
 int64_t DracoMesh::num_points() const { return impl_->draco->num_points(); }
 
 std::vector<Vec3> DracoMesh::InputPositions() const {
-  // Decode() checked every point's position; each vertex takes its first point's, as WeldPoints.
+  // Decode() checked every point's position. WeldPoints numbers the vertices in the order their
+  // first points appear and gives each that point's position: a point whose vertex is the next
+  // number is that first point.
   const std::vector<Vec3> points = PointPositions(*impl_->draco).value();
-  std::vector<Vec3> positions(impl_->num_vertices);
-  std::vector<uint8_t> seen(impl_->num_vertices, 0);
+  std::vector<Vec3> positions;
+  positions.reserve(impl_->num_vertices);
   for (size_t p = 0; p < points.size(); ++p) {
-    const int32_t v = impl_->point_to_vertex[p];
-    if (!seen[v]) seen[v] = 1, positions[v] = points[p];
+    if (impl_->point_to_vertex[p] == static_cast<int32_t>(positions.size())) positions.push_back(points[p]);
   }
   return positions;
 }

@@ -52,6 +52,15 @@ bool SameBytes(const Mesh& a, const Mesh& b) {
          std::memcmp(a.positions.data(), b.positions.data(), a.positions.size() * sizeof(Vec3)) == 0;
 }
 
+// `mesh` smoothed with `p` on `threads` threads, and Smooth()'s result.
+std::pair<Mesh, absl::StatusOr<FlowResult>> SmoothedOn(const Mesh& mesh, const Topology& topo, FlowParams p,
+                                                       int threads) {
+  p.threads = threads;
+  Mesh out = mesh;
+  absl::StatusOr<FlowResult> r = Smooth(out, topo, p);
+  return {std::move(out), std::move(r)};
+}
+
 TEST(FlowInvariantsTest, EveryFlowOnEveryMesh) {
   for (const Case& c : Meshes()) {
     const Topology topo = BuildTopology(c.mesh);
@@ -61,13 +70,10 @@ TEST(FlowInvariantsTest, EveryFlowOnEveryMesh) {
     for (const std::string& flow : FlowNames()) {
       SCOPED_TRACE(c.name + " / " + flow);
       FlowParams p = Params(flow, 3);
-      p.threads = 1;
-      Mesh one = c.mesh;
-      absl::StatusOr<FlowResult> r = Smooth(one, topo, p);
+      const auto [one, r] = SmoothedOn(c.mesh, topo, p, 1);
       ASSERT_TRUE(r.ok()) << r.status();
-      p.threads = 2;
-      Mesh two = c.mesh;
-      ASSERT_TRUE(Smooth(two, topo, p).ok());
+      const auto [two, r2] = SmoothedOn(c.mesh, topo, p, 2);
+      ASSERT_TRUE(r2.ok()) << r2.status();
       EXPECT_TRUE(SameBytes(one, two)) << "1 and 2 threads differ";
       int64_t moved = 0;
       for (int32_t v = 0; v < n; ++v) {
@@ -86,8 +92,6 @@ TEST(FlowInvariantsTest, EveryFlowOnEveryMesh) {
   }
 }
 
-// Large meshes run on a Morton-reordered copy: the positions must be exactly those of the
-// caller's order, for every flow and eq. (14).
 // Automatic runs of a small mesh iterate beside their probe copy when a second thread is there
 // (core/flows/driver.cc): the default job and each candidate flow must then give the bytes and
 // counts of the same runs done one after the other on one thread.
@@ -104,13 +108,9 @@ TEST(FlowInvariantsTest, ProbeBesideTheRunChangesNoPosition) {
       SCOPED_TRACE(c.name + " / " + (flow.empty() ? "default job" : flow));
       FlowParams p;
       if (!flow.empty()) p.flow = *ParseFlowName(flow);
-      p.threads = 1;
-      Mesh one = c.mesh;
-      absl::StatusOr<FlowResult> r1 = Smooth(one, topo, p);
+      const auto [one, r1] = SmoothedOn(c.mesh, topo, p, 1);
       ASSERT_TRUE(r1.ok()) << r1.status();
-      p.threads = 2;
-      Mesh two = c.mesh;
-      absl::StatusOr<FlowResult> r2 = Smooth(two, topo, p);
+      const auto [two, r2] = SmoothedOn(c.mesh, topo, p, 2);
       ASSERT_TRUE(r2.ok()) << r2.status();
       EXPECT_GT(r1->iterations_run, 0);
       EXPECT_EQ(r1->flow, r2->flow);
@@ -142,6 +142,8 @@ TEST(FlowInvariantsTest, ProbeBesideTheRunChangesNoPosition) {
   EXPECT_TRUE(SameBytes(results[0], results[2])) << "1 and 3 threads differ";
 }
 
+// Large meshes run on a Morton-reordered copy: the positions must be exactly those of the
+// caller's order, for every flow and eq. (14).
 TEST(FlowInvariantsTest, InternalReorderingChangesNoPosition) {
   const Mesh noisy = NoisySphere(7);  // 163,842 vertices: above the reordering threshold
   const Topology topo = BuildTopology(noisy);
