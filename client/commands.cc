@@ -99,7 +99,9 @@ int RunSmooth(const SmoothOptions& o, const ConnectionOptions& c) {
   if (!channel.ok()) return Fail("", channel.status());
   auto stub = v1::MeshSmoother::NewStub(*channel);
   RetryPolicy policy;
-  policy.max_attempts = 1 + std::max(0, c.retries);
+  // The in-process server has no network to fail between: one attempt, and the upload's bytes
+  // go as soon as they are sent (the server holds its own copy while the job runs).
+  policy.max_attempts = embedded != nullptr ? 1 : 1 + std::max(0, c.retries);
   const bool quiet = o.quiet || o.json;
   const auto deadline = CallDeadline(c);  // one deadline for every attempt
   RetryingSmooth call(
@@ -110,6 +112,7 @@ int RunSmooth(const SmoothOptions& o, const ConnectionOptions& c) {
                      std::string(absl::StatusCodeToString(s.code())).c_str(), std::string(s.message()).c_str(),
                      static_cast<double>(wait.count()) / 1000.0);
       });
+  call.ReleaseAfterLastSend([&upload] { std::string().swap(upload->draco); });
   ProgressPrinter progress(quiet);
   absl::StatusOr<SmoothOutcome> outcome;
   bool interrupted = false;

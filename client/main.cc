@@ -214,10 +214,11 @@ void AddConnectionOptions(CLI::App* app, ConnectionOptions& c) {
   app->add_option("--tls-ca", c.tls_ca, "PEM CA certificates: connect with TLS");
   app->add_option("--timeout", c.timeout_seconds, "deadline of the call, seconds, retries included")
       ->capture_default_str();
-  app->add_option("--retries", c.retries,
-                  "retries of a call refused with UNAVAILABLE or RESOURCE_EXHAUSTED before any result arrived, "
-                  "after a random wait of up to 0.2 s, 0.4 s, ... 5 s (a job is a pure function of its input, "
-                  "so a retry is safe); 0 = none")
+  app->add_option(
+         "--retries", c.retries,
+         "retries of a call refused with UNAVAILABLE or RESOURCE_EXHAUSTED before any result arrived, "
+         "after a random wait of up to 0.2 s, 0.4 s, ... 5 s (a job is a pure function of its input, "
+         "so a retry is safe); 0 = none. Without --server (the in-process server) there is no network to retry over")
       ->capture_default_str()
       ->check(CLI::Range(0, 100));
 }

@@ -39,7 +39,9 @@ absl::StatusOr<SmoothOutcome> RetryingSmooth::Run(v1::MeshSmoother::StubInterfac
     }
     ++attempts_;
     CallState state;
-    absl::StatusOr<SmoothOutcome> outcome = CallSmooth(stub, context, spec, draco, on_progress, chunk_bytes, &state);
+    const bool last = attempts_ >= policy_.max_attempts;
+    absl::StatusOr<SmoothOutcome> outcome =
+        CallSmooth(stub, context, spec, draco, on_progress, chunk_bytes, &state, last ? release_ : nullptr);
     {
       std::lock_guard<std::mutex> lock(mu_);
       context_ = nullptr;

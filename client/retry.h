@@ -53,6 +53,9 @@ class RetryingSmooth {
                                     const std::function<void(const v1::Progress&)>& on_progress = nullptr,
                                     size_t chunk_bytes = 1 << 20);
 
+  // Called once the last attempt Run may make has sent the upload: its bytes may go then.
+  void ReleaseAfterLastSend(std::function<void()> release) { release_ = std::move(release); }
+
   void Cancel();
   bool cancelled();
   int attempts() const { return attempts_; }  // made by the last Run
@@ -62,6 +65,7 @@ class RetryingSmooth {
   const Prepare prepare_;
   const std::chrono::system_clock::time_point deadline_;
   const OnRetry on_retry_;
+  std::function<void()> release_;
   int attempts_ = 0;
   std::mutex mu_;  // guards context_ and cancelled_
   std::condition_variable cv_;

@@ -11,7 +11,7 @@ absl::Status FromGrpc(const grpc::Status& status) {
 absl::StatusOr<SmoothOutcome> CallSmooth(v1::MeshSmoother::StubInterface& stub, grpc::ClientContext& context,
                                          const v1::JobSpec& spec, std::string_view draco,
                                          const std::function<void(const v1::Progress&)>& on_progress,
-                                         size_t chunk_bytes, CallState* state) {
+                                         size_t chunk_bytes, CallState* state, const std::function<void()>& on_sent) {
   CallState ignored;
   if (state == nullptr) state = &ignored;
   chunk_bytes = std::clamp<size_t>(chunk_bytes, 1, 1 << 20);
@@ -26,6 +26,7 @@ absl::StatusOr<SmoothOutcome> CallSmooth(v1::MeshSmoother::StubInterface& stub, 
     writing = stream->Write(request);
   }
   if (writing) stream->WritesDone();
+  if (on_sent) on_sent();
 
   SmoothOutcome out;
   enum { kStart, kAccepted, kResult, kSummary } stage = kStart;

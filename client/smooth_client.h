@@ -28,11 +28,13 @@ struct CallState {
 // from another thread cancels). Sends `draco` in chunks of `chunk_bytes` (<= 1 MiB). Returns
 // the server's status as an absl::Status (same codes and message) when the call fails, and
 // Internal when the server breaks the message order. `state`, when given, says how far the
-// call got.
+// call got. `on_sent`, when given, is called once `draco` has been sent (or the server ended
+// the call before): the call no longer reads it.
 absl::StatusOr<SmoothOutcome> CallSmooth(v1::MeshSmoother::StubInterface& stub, grpc::ClientContext& context,
                                          const v1::JobSpec& spec, std::string_view draco,
                                          const std::function<void(const v1::Progress&)>& on_progress = nullptr,
-                                         size_t chunk_bytes = 1 << 20, CallState* state = nullptr);
+                                         size_t chunk_bytes = 1 << 20, CallState* state = nullptr,
+                                         const std::function<void()>& on_sent = nullptr);
 
 // gRPC status -> absl::Status (the codes share their numbers).
 absl::Status FromGrpc(const grpc::Status& status);

@@ -12,7 +12,8 @@ namespace meshsmooth::flows {
 
 AutoStop::AutoStop(const Mesh& mesh, const Topology& topo, const uint8_t* role, double h, int threads,
                    const NoiseEstimate* given, const std::vector<uint8_t>* measured)
-    : topo_(topo), role_(role), h_(h), threads_(threads), start_(mesh.positions) {
+    : topo_(topo), role_(role), h_(h), threads_(threads) {
+  const Vec3* const start = mesh.positions.data();
   const NoiseEstimate noise = given != nullptr ? *given : EstimateNoise(mesh, topo, h, threads);
   estimated_ = noise.reliable;
   const double floor2 = kEstimatorFloorH * kEstimatorFloorH;
@@ -28,28 +29,31 @@ AutoStop::AutoStop(const Mesh& mesh, const Topology& topo, const uint8_t* role, 
     closed_ &= topo.kind[v] == VertexKind::kInterior || topo.kind[v] == VertexKind::kIsolated;
     if (role[v] != kFree || topo.kind[v] != VertexKind::kInterior) continue;
     if (measured != nullptr && (*measured)[v] == 0) continue;
-    if (!UnitNormal(v)) continue;
+    if (!UnitNormal(start, v)) continue;
     has_normal_[v] = 1;
     counted_ += v % stride_ == 0;
   }
-  if (closed_) start_volume_ = Volume(start_.data());
+  if (closed_) start_volume_ = Volume(start);
+  // Only the measured vertices' positions are kept: a large mesh's run holds 1/stride_ of them.
+  start_.resize((n + stride_ - 1) / stride_);
+  for (int32_t v = 0; v < n; v += stride_) start_[v / stride_] = start[v];
 }
 
-std::optional<Vec3> AutoStop::UnitNormal(int32_t v) const {
-  const Vec3 normal = RingNormal(topo_, start_.data(), v);
+std::optional<Vec3> AutoStop::UnitNormal(const Vec3* pos, int32_t v) const {
+  const Vec3 normal = RingNormal(topo_, pos, v);
   const double len = Norm(normal);
   if (!(len > 0.0) || !std::isfinite(len)) return std::nullopt;
   return normal * (1.0 / len);
 }
 
-std::vector<Vec3> AutoStop::ProbeStart() {
+std::vector<Vec3> AutoStop::ProbeStart(const std::vector<Vec3>& start) {
   // The normals only a run with a probe reads (Risk): a run of a count chosen beforehand (a
   // large mesh's) holds a byte per vertex, not 24.
-  normal_.assign(start_.size(), Vec3{});
+  normal_.assign(start.size(), Vec3{});
   for (size_t v = 0; v < normal_.size(); ++v) {
-    if (has_normal_[v]) normal_[v] = *UnitNormal(static_cast<int32_t>(v));
+    if (has_normal_[v]) normal_[v] = *UnitNormal(start.data(), static_cast<int32_t>(v));
   }
-  std::vector<Vec3> probe = start_;
+  std::vector<Vec3> probe = start;
   const double eps = kProbeStep * sigma_;
   for (size_t v = 0; v < probe.size(); ++v) probe[v] += normal_[v] * (eps * Sign(static_cast<int32_t>(v)));
   return probe;
@@ -72,7 +76,7 @@ double AutoStop::Risk(const Vec3* pos, const Vec3* probe) const {
     double sum = 0.0;
     for (int32_t v = begin; v < end; ++v) {
       if (v % stride_ != 0 || normal_[v] == Vec3{}) continue;
-      const double d = Dot(pos[v] - start_[v], normal_[v]);
+      const double d = Dot(pos[v] - start_[v / stride_], normal_[v]);
       const double slope = Dot(probe[v] - pos[v], normal_[v]) * Sign(v);
       sum += d * d + weight * slope;
     }
@@ -201,7 +205,7 @@ double AutoStop::RmsNormalDisplacement(const Vec3* pos) const {
       const Vec3 normal = RingNormal(topo_, pos, v);
       const double len = Norm(normal);
       if (!(len > 0.0)) continue;
-      const double d = Dot(pos[v] - start_[v], normal) / len;
+      const double d = Dot(pos[v] - start_[v / stride_], normal) / len;
       sum += d * d;
     }
     block_sum[b] = sum;

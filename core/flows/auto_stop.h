@@ -94,7 +94,8 @@ inline constexpr double kFoldRepairReachH = 0.2;
 
 class AutoStop {
  public:
-  // Reads the noise of `mesh` (the run's input; its positions are copied as the reference),
+  // Reads the noise of `mesh` (the run's input; the positions of the measured vertices are
+  // kept as the reference),
   // or takes `noise` when it is not null. `role` is the run's vertex roles
   // (core/flows/flow_kernel.h), one per vertex; `measured` (null: all) the vertices the
   // estimate measures, among the free interior ones.
@@ -106,9 +107,9 @@ class AutoStop {
   // Why the run does nothing when nothing_to_do().
   StopReason idle_reason() const { return estimated_ ? StopReason::kNoNoise : StopReason::kNoEstimate; }
 
-  // The probe's input: the run's input moved by +-kProbeStep sigma along its normals. Called
-  // once, before the first After().
-  std::vector<Vec3> ProbeStart();
+  // The probe's input: `start` (the run's input, as given to the constructor) moved by
+  // +-kProbeStep sigma along its normals. Called once, before the first After().
+  std::vector<Vec3> ProbeStart(const std::vector<Vec3>& start);
 
   // After accepted iteration `it` with positions `pos` (the probe's: `probe`): the reason to
   // stop now, if any. improved() tells whether `pos` is the best iteration so far.
@@ -154,16 +155,17 @@ class AutoStop {
   const uint8_t* role_;
   double h_;
   int threads_;
-  std::vector<Vec3> start_;
-  bool estimated_ = false;  // the noise estimate is reliable (core/measure/noise.h)
-  int32_t stride_ = 1;      // every stride_-th vertex is measured
-  int64_t counted_ = 0;     // free interior vertices measured
+  std::vector<Vec3> start_;  // the input's position of every stride_-th vertex
+  bool estimated_ = false;   // the noise estimate is reliable (core/measure/noise.h)
+  int32_t stride_ = 1;       // every stride_-th vertex is measured
+  int64_t counted_ = 0;      // free interior vertices measured
   double cos_fold_ = std::cos(kFoldAngleDeg * std::numbers::pi / 180.0);
   bool closed_ = true;  // every vertex in use is interior
   double start_volume_ = 0.0;
   double sigma_ = 0.0;  // the noise's deviation, in mesh units
-  // The unit normal of the input's ring at v, or none where the ring has no area.
-  std::optional<Vec3> UnitNormal(int32_t v) const;
+  // The unit normal of the ring at v in the input's positions `pos`, or none where the ring
+  // has no area.
+  std::optional<Vec3> UnitNormal(const Vec3* pos, int32_t v) const;
 
   std::vector<uint8_t> has_normal_;  // per vertex: one of the measured vertices, with a normal
   std::vector<Vec3> normal_;         // ProbeStart's: their unit normals, else zero

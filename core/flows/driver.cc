@@ -107,6 +107,13 @@ class FlowRun {
 
   int passes() const { return kernel_->passes(); }
   const uint8_t* roles() const { return role_.data(); }
+  // The kernel and its buffers (bilaplacian's field, a normal filter's face graph), once the
+  // last iteration has run: what the run does after it needs only the roles.
+  void Release() {
+    kernel_.reset();
+    batches_ = {};
+    std::vector<double>().swap(threshold_);
+  }
   int threads() const { return threads_; }
 
   // Iteration `it` from `cur` into `*out` (one of next / mid): its displacement statistics.
@@ -316,7 +323,7 @@ absl::StatusOr<FlowResult> RunIterations(Mesh& mesh, const Topology& topo, const
   std::optional<FlowRun> probe;
   std::vector<Vec3> probe_next, probe_mid, best;
   if (estimate_risk) {
-    probe_mesh.positions = auto_stop->ProbeStart();
+    probe_mesh.positions = auto_stop->ProbeStart(cur);  // `cur`: the input still
     probe_mesh.triangles = mesh.triangles;
     probe.emplace(topo, run_params, h, *diagonal);
     FlowResult unused;
@@ -381,6 +388,12 @@ absl::StatusOr<FlowResult> RunIterations(Mesh& mesh, const Topology& topo, const
     cur.swap(best);
     result.iterations_run = auto_stop->best_iteration();
   }
+  // What follows (the measure, the fold repair, the volume) reads only `cur`: the run's other
+  // buffers go first, so that its own buffers do not add to theirs at the job's peak.
+  for (std::vector<Vec3>* buffer : {&next, &mid, &best, &probe_next, &probe_mid}) std::vector<Vec3>().swap(*buffer);
+  probe.reset();
+  probe_mesh = Mesh();
+  run.Release();
   if (auto_stop) {
     result.auto_stop = auto_stop->Measure(cur.data());
     auto_stop->RepairFolds(cur.data());

@@ -4,7 +4,11 @@
 #include <algorithm>
 #include <chrono>
 
+#include "core/io/draco_codec.h"
+#include "grpcpp/create_channel.h"
 #include "gtest/gtest.h"
+#include "tests/flow_fixtures.h"
+#include "tests/service/service_fixtures.h"
 
 namespace meshsmooth::client {
 namespace {
@@ -44,6 +48,41 @@ TEST(RetryTest, BackoffIsJitteredBelowAnExponentialCap) {
     // Full jitter: the waits cover the range, not one value.
     EXPECT_LT(lo.count(), cap.count() / 10) << retry;
     EXPECT_GT(hi.count(), cap.count() * 9 / 10) << retry;
+  }
+}
+
+// The CLI's upload goes as soon as no attempt can need it again: after the last attempt has
+// sent it, never after an attempt that a retry may follow.
+TEST(RetryTest, UploadIsReleasedOnceTheLastAttemptHasSentIt) {
+  const std::string draco = *EncodeDraco(testing::FloatMesh(testing::NoisySphere(2)));
+  const auto deadline = std::chrono::system_clock::now() + std::chrono::seconds(30);
+  auto prepare = [deadline](grpc::ClientContext& ctx) {
+    ctx.set_deadline(deadline);
+    return absl::OkStatus();
+  };
+  auto server = testing::StartServer();
+  ASSERT_TRUE(server);
+  auto live = v1::MeshSmoother::NewStub(server->InProcessChannel());
+  // Nothing listens on port 1: every attempt fails with UNAVAILABLE, which is retried.
+  auto dead = v1::MeshSmoother::NewStub(grpc::CreateChannel("127.0.0.1:1", grpc::InsecureChannelCredentials()));
+  struct Case {
+    v1::MeshSmoother::Stub* stub;
+    int attempts, released;
+    bool ok;
+  } cases[] = {{live.get(), 1, 1, true}, {live.get(), 3, 0, true}, {dead.get(), 2, 1, false}};
+  for (const Case& c : cases) {
+    SCOPED_TRACE(::testing::Message() << "max_attempts " << c.attempts << (c.ok ? ", live server" : ", no server"));
+    RetryPolicy policy;
+    policy.max_attempts = c.attempts;
+    policy.initial_backoff = milliseconds(1);
+    RetryingSmooth call(policy, prepare, deadline);
+    int released = 0;
+    call.ReleaseAfterLastSend([&] { ++released; });
+    absl::StatusOr<SmoothOutcome> out = call.Run(*c.stub, testing::Spec("laplacian", 3), draco);
+    EXPECT_EQ(out.ok(), c.ok) << out.status();
+    if (!c.ok) EXPECT_EQ(out.status().code(), absl::StatusCode::kUnavailable) << out.status();
+    EXPECT_EQ(call.attempts(), c.ok ? 1 : c.attempts);
+    EXPECT_EQ(released, c.released);
   }
 }
 
