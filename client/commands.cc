@@ -89,7 +89,8 @@ int RunSmooth(const SmoothOptions& o, const ConnectionOptions& c) {
     std::cerr << "meshsmooth: warning: --ridges labels are kept only in .ply and .obj (vertex colours) and .drc "
                  "(attributes) output; the summary still counts them\n";
   }
-  absl::StatusOr<Upload> upload = PrepareUpload(o.input);
+  // The attributes go to the service only for a .drc output, which is written as it comes back.
+  absl::StatusOr<Upload> upload = PrepareUpload(o.input, *out_format == MeshFormat::kDraco);
   if (!upload.ok()) return Fail("", upload.status());
   for (const std::string& w : upload->warnings) std::cerr << "meshsmooth: warning: " << w << "\n";
   const v1::JobSpec spec = SpecFrom(o);

@@ -131,7 +131,7 @@ bool IsGltfPath(const std::string& path) {
   return ext == ".gltf" || ext == ".glb";
 }
 
-absl::StatusOr<Upload> PrepareUpload(const std::string& input) {
+absl::StatusOr<Upload> PrepareUpload(const std::string& input, bool with_attributes) {
   Upload upload;
   upload.input = input;
   if (IsGltfPath(input)) {
@@ -172,7 +172,17 @@ absl::StatusOr<Upload> PrepareUpload(const std::string& input) {
   upload.origin = LocalOrigin(mesh->positions);
   upload.double_positions = info.double_positions || upload.origin != Vec3{};
   if (upload.origin != Vec3{}) Translate(mesh->positions, -upload.origin);
-  absl::StatusOr<std::string> bytes = EncodeDraco(*mesh);
+  absl::StatusOr<std::string> bytes;
+  if (with_attributes) {
+    bytes = EncodeDraco(*mesh);
+  } else {  // the positions and faces lent to a mesh of their own, then given back
+    Mesh bare;
+    bare.positions = std::move(mesh->positions);
+    bare.triangles = std::move(mesh->triangles);
+    bytes = EncodeDraco(bare);
+    mesh->positions = std::move(bare.positions);
+    mesh->triangles = std::move(bare.triangles);
+  }
   if (!bytes.ok()) return bytes.status();
   upload.draco = std::move(*bytes);
   upload.num_vertices = mesh->num_vertices();

@@ -41,9 +41,12 @@ bool IsGltfPath(const std::string& path);
 // points of all its triangle primitives (GltfScene::surface); anything else is read in
 // double, moved to its local origin and encoded losslessly and sequentially with its
 // attributes (texture coordinates, normals, colours, vertex properties: EncodeDraco), so
-// vertex i of the result is vertex i of the input. The reader's errors when the input cannot
-// be read.
-absl::StatusOr<Upload> PrepareUpload(const std::string& input);
+// vertex i of the result is vertex i of the input. Without `with_attributes` (an output other
+// than .drc, which WriteResult writes from the input's own attributes around the result's
+// positions) a non-Draco input sends its positions and faces only: the same vertices, so the
+// same result, without encoding, sending and decoding what does not come back from the
+// service. The reader's errors when the input cannot be read.
+absl::StatusOr<Upload> PrepareUpload(const std::string& input, bool with_attributes = true);
 
 // Writes `result` (the service's Draco bytes) to `output` in the format its extension names:
 // Draco bytes as they came, anything else decoded and moved back by the upload's origin, with

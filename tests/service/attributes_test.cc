@@ -101,10 +101,11 @@ class AttributesTest : public ::testing::Test {
   void TearDown() override { fs::remove_all(dir_); }
 
   // The CLI's path for `input` -> `output` with `spec`; the result read back; what was not
-  // kept to `dropped`.
+  // kept to `dropped`. `with_attributes`: as the CLI uploads for a .drc output (without: for
+  // any other).
   Mesh SmoothFile(const std::string& input, const std::string& output, std::vector<std::string>* dropped = nullptr,
-                  const v1::JobSpec& spec = v1::JobSpec()) {
-    absl::StatusOr<client::Upload> upload = client::PrepareUpload(input);
+                  const v1::JobSpec& spec = v1::JobSpec(), bool with_attributes = true) {
+    absl::StatusOr<client::Upload> upload = client::PrepareUpload(input, with_attributes);
     EXPECT_TRUE(upload.ok()) << upload.status();
     if (!upload.ok()) return {};
     absl::StatusOr<SmoothOutcome> outcome = Call(server_->InProcessChannel(), spec, upload->draco);
@@ -120,6 +121,23 @@ class AttributesTest : public ::testing::Test {
   }
 
   std::string Path(const std::string& name) const { return (dir_ / name).string(); }
+
+  // `input` smoothed into a file beside `output` with only its positions and faces uploaded:
+  // the same bytes as `output` (written from the full upload), from a smaller upload.
+  void ExpectSameFileWithoutAttributesSent(const std::string& input, const std::string& output) {
+    const absl::StatusOr<client::Upload> full = client::PrepareUpload(Path(input), true);
+    const absl::StatusOr<client::Upload> lean = client::PrepareUpload(Path(input), false);
+    ASSERT_TRUE(full.ok() && lean.ok());
+    EXPECT_LT(lean->draco.size(), full->draco.size());
+    const std::string lean_output =
+        (fs::path(output).parent_path() / ("lean-" + fs::path(output).filename().string())).string();
+    std::vector<std::string> dropped;
+    SmoothFile(Path(input), Path(lean_output), &dropped, v1::JobSpec(), false);
+    EXPECT_TRUE(dropped.empty()) << dropped.front();
+    const absl::StatusOr<std::string> want = ReadFileBytes(Path(output)), got = ReadFileBytes(Path(lean_output));
+    ASSERT_TRUE(want.ok() && got.ok());
+    EXPECT_TRUE(*got == *want) << lean_output << " differs from " << output;
+  }
 
   std::unique_ptr<server::Server> server_;
   fs::path dir_;
@@ -192,6 +210,9 @@ TEST_F(AttributesTest, TexturedObjWithSeamsComesBackWithItsUvsGroupsAndFreshNorm
                 SameBits(out.positions[v].y, bare.positions[v].y) && SameBits(out.positions[v].z, bare.positions[v].z));
   }
   EXPECT_EQ(differ, 0) << "vertices whose position differs from smoothing the mesh without attributes";
+
+  // The CLI sends positions and faces only for an output other than .drc: the same file out.
+  ExpectSameFileWithoutAttributesSent("sphere.obj", "out/sphere.obj");
 }
 
 TEST_F(AttributesTest, PlyWithUvsNormalsColoursAndConfidenceComesBackWhole) {
@@ -228,6 +249,7 @@ TEST_F(AttributesTest, PlyWithUvsNormalsColoursAndConfidenceComesBackWhole) {
     ExpectFreshNormals(out);
     const Mesh bare = SmoothFile(Path("stripped.ply"), Path("out/stripped.ply"));
     EXPECT_EQ(bare.positions, out.positions);
+    ExpectSameFileWithoutAttributesSent("scan.ply", "out/scan.ply");
   }
 }
 
