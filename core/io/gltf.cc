@@ -54,6 +54,7 @@ absl::StatusOr<GltfScene> GltfScene::Read(const std::string& path) {
   impl->scene = std::move(decoded).value();
   draco::Scene& scene = *impl->scene;
   const int n = scene.NumMeshes();
+  if (n == 0) return absl::InvalidArgumentError(absl::StrCat(path, ": the glTF scene has no triangles"));
   // Each primitive's glTF mesh (mesh group): the first that names it.
   std::vector<int> group_of(n, -1);
   for (int g = 0; g < scene.NumMeshGroups(); ++g) {

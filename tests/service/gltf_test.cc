@@ -4,6 +4,8 @@
 // as glTF: the same nodes, primitives, materials and textures, the same texture coordinates,
 // the translation kept, positions nearer the sphere than the noisy input's, and no crack
 // between the primitives.
+#include <unistd.h>
+
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -12,6 +14,7 @@
 #include <vector>
 
 #include "client/transfer.h"
+#include "core/io/file_bytes.h"
 #include "core/io/gltf.h"
 #include "core/render/image.h"
 #include "core/render/png.h"
@@ -229,6 +232,22 @@ TEST(GltfTest, ScenesComeBackWithTheirNodesMaterialsTexturesAndUvs) {
     }
   }
   fs::remove_all(dir);
+}
+
+// A valid glTF document without a mesh (only its asset), as GLB: refused with a message, not
+// read past the end of an empty list of meshes.
+TEST(GltfTest, SceneWithoutMeshesIsRefused) {
+  std::string json = R"({"asset":{"version":"2.0"},"scenes":[{"nodes":[]}],"scene":0})";
+  json.resize((json.size() + 3) / 4 * 4, ' ');
+  auto le32 = [](uint32_t v) { return std::string{char(v), char(v >> 8), char(v >> 16), char(v >> 24)}; };
+  const std::string glb = "glTF" + le32(2) + le32(12 + 8 + json.size()) + le32(json.size()) + "JSON" + json;
+  const fs::path path = fs::temp_directory_path() / ("meshsmooth_empty_" + std::to_string(getpid()) + ".glb");
+  ASSERT_TRUE(WriteFileBytes(path.string(), glb).ok());
+  const absl::StatusOr<GltfScene> scene = GltfScene::Read(path.string());
+  fs::remove(path);
+  ASSERT_FALSE(scene.ok());
+  EXPECT_EQ(scene.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_NE(scene.status().message().find("no triangles"), std::string::npos) << scene.status();
 }
 
 }  // namespace
