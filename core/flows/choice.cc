@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "absl/status/status.h"
+#include "core/flows/auto_stop.h"
 #include "core/measure/noise.h"
 
 namespace meshsmooth::flows {
@@ -22,6 +23,11 @@ constexpr int32_t kMaxSample = 20000;
 constexpr int32_t kMinPatch = 2500;
 constexpr int32_t kMaxPatches = 8;
 constexpr int32_t kCorePercent = 60;
+// On a sample, a later candidate (bilateral_normal) is chosen only when its estimate is below
+// the first's (bilaplacian's) by more than this share of sigma^2: the patches' fixed rims hold
+// back bilaplacian's wider reach more than the normal filter's, so its estimate on a sample reads
+// high (docs/decisions.md, "The default job chooses on a sample", has the figures).
+constexpr double kSampleBias = 0.025;
 
 void Report(const RunControl& control, Phase phase, FlowId flow) {
   if (!control.on_progress) return;
@@ -32,11 +38,12 @@ void Report(const RunControl& control, Phase phase, FlowId flow) {
 }
 
 // Every candidate (p.flow when set, else kChoiceFlows) on a copy of `mesh` with automatic
-// stopping; the least estimated error gives the result (the first candidate's estimate decides
-// whether there is anything to do). Progress: one kChoosing report per candidate.
+// stopping; the least estimated error gives the result, a later candidate's less `margin_h2`
+// (the first candidate's estimate decides whether there is anything to do). Progress: one
+// kChoosing report per candidate.
 absl::StatusOr<FlowResult> Choose(Mesh& mesh, const Topology& topo, const FlowParams& p, const RunControl& control,
-                                  double h, const NoiseEstimate& noise,
-                                  const std::vector<uint8_t>* measured = nullptr) {
+                                  double h, const NoiseEstimate& noise, const std::vector<uint8_t>* measured = nullptr,
+                                  double margin_h2 = 0.0) {
   std::vector<FlowId> candidates(std::begin(kChoiceFlows), std::end(kChoiceFlows));
   if (p.flow) candidates.assign(1, *p.flow);
   RunControl quiet = control;
@@ -49,7 +56,7 @@ absl::StatusOr<FlowResult> Choose(Mesh& mesh, const Topology& topo, const FlowPa
     FlowParams q = p;
     q.flow = flow;
     AutoPlan plan{0, &noise, measured, std::nullopt};
-    if (best && best->auto_stop && best->iterations_run > 0) plan.rival_risk_h2 = best->auto_stop->risk_h2;
+    if (best && best->auto_stop && best->iterations_run > 0) plan.rival_risk_h2 = best->auto_stop->risk_h2 - margin_h2;
     absl::StatusOr<FlowResult> r = SmoothOneFlow(copy, topo, q, quiet, h, plan);
     if (!r.ok()) {
       // A candidate that diverges is not chosen (unless it is the only one); cancellation and
@@ -58,7 +65,7 @@ absl::StatusOr<FlowResult> Choose(Mesh& mesh, const Topology& topo, const FlowPa
       return r.status();
     }
     const bool idle = r->iterations_run == 0;
-    if (!best || (r->auto_stop && best->auto_stop && r->auto_stop->risk_h2 < best->auto_stop->risk_h2)) {
+    if (!best || (r->auto_stop && best->auto_stop && r->auto_stop->risk_h2 < best->auto_stop->risk_h2 - margin_h2)) {
       best = *std::move(r);
       best_positions = std::move(copy.positions);
     }
@@ -146,7 +153,9 @@ absl::StatusOr<FlowResult> SmoothAutomatic(Mesh& mesh, const Topology& topo, con
   on_sample.reorder = ReorderMode::kNever;  // `core` is in the sample's order
   // The sample runs with the mesh's h (the step of a curvature flow scales with it): its count
   // is then a count of the same iterations.
-  absl::StatusOr<FlowResult> chosen = Choose(sample.mesh, sample_topo, on_sample, control, h, noise, &sample.core);
+  const double sigma_h = kRiskSigmaMargin * noise.deviation_h;
+  absl::StatusOr<FlowResult> chosen =
+      Choose(sample.mesh, sample_topo, on_sample, control, h, noise, &sample.core, kSampleBias * sigma_h * sigma_h);
   if (!chosen.ok()) return chosen.status();
   FlowParams whole = q;
   whole.flow = chosen->flow;

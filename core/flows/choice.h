@@ -4,7 +4,8 @@
 // The input's noise is read once. A mesh of more than kMaxChoiceVertices (catalogue.h) vertices then chooses on
 // a sample of itself, patches of SampleSize(n) vertices in all: every candidate flow (one when
 // the job names it) runs there with automatic stopping (auto_stop.h), the least estimated error
-// gives the flow and its count, and the whole mesh runs once, at that count, with no risk
+// (bilateral_normal's by a margin, kSampleBias in choice.cc) gives the flow and its count, and
+// the whole mesh runs once, at that count, with no risk
 // estimate. A smaller mesh is its own sample: the best candidate's run is the result. Progress
 // names the phase (Phase in flow.h): iteration numbers come only from the final run, whose
 // count is known before it starts.
