@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "absl/strings/numbers.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_join.h"
 #include "client/inputs.h"
@@ -192,14 +193,18 @@ int RunInfo(const std::string& input) {
   return 0;
 }
 
-int RunRidges(const std::string& input, const std::string& output, double threshold) {
+int RunRidges(const std::string& input, const std::string& output, const std::string& threshold) {
   absl::StatusOr<MeshFormat> format = FormatFromPath(output);
   if (!format.ok() || *format != MeshFormat::kPly) {
     std::cerr << "meshsmooth: ridges writes PLY (labels as vertex colours): give -o FILE.ply\n";
     return kExitUsage;
   }
-  if (!std::isfinite(threshold) || threshold < 0.0) {
-    std::cerr << "meshsmooth: --threshold must be finite and >= 0\n";
+  FeatureOptions options;
+  if (threshold == "auto") {
+    options.relative_threshold = kDefaultRelativeThreshold;
+  } else if (!absl::SimpleAtod(threshold, &options.min_abs_curvature) || !std::isfinite(options.min_abs_curvature) ||
+             options.min_abs_curvature < 0.0) {
+    std::cerr << "meshsmooth: --threshold must be auto or a finite number >= 0, got '" << threshold << "'\n";
     return kExitUsage;
   }
   absl::StatusOr<Mesh> mesh = LoadInput(input);
@@ -208,17 +213,16 @@ int RunRidges(const std::string& input, const std::string& output, double thresh
     return kExitFailure;
   }
   const Topology topo = BuildTopology(*mesh);
-  FeatureOptions options;
-  options.min_abs_curvature = threshold;
   const Features features = DetectFeatures(*mesh, topo, options);
   mesh->colors = FeatureColors(features.labels);
   if (absl::Status s = WriteMesh(output, *mesh); !s.ok()) {
     std::cerr << "meshsmooth: " << s.message() << "\n";
     return kExitFailure;
   }
-  std::printf("%lld ridge and %lld ravine vertices of %lld classified (%d vertices); wrote %s\n",
-              static_cast<long long>(features.ridges), static_cast<long long>(features.ravines),
-              static_cast<long long>(features.classified), mesh->num_vertices(), output.c_str());
+  std::printf(
+      "%lld ridge and %lld ravine vertices of %lld classified (%d vertices; |curvature| threshold %g); wrote %s\n",
+      static_cast<long long>(features.ridges), static_cast<long long>(features.ravines),
+      static_cast<long long>(features.classified), mesh->num_vertices(), features.threshold, output.c_str());
   return 0;
 }
 

@@ -54,7 +54,9 @@ int RunFlows(const ConnectionOptions& connection, bool json);
 int RunInfo(const std::string& input);
 
 // Ridges and ravines of a mesh as it is (no smoothing), written as PLY vertex colours.
-int RunRidges(const std::string& input, const std::string& output, double threshold);
+// `threshold`: "auto" (FeatureOptions::relative_threshold = kDefaultRelativeThreshold) or an
+// absolute |curvature| >= 0.
+int RunRidges(const std::string& input, const std::string& output, const std::string& threshold);
 
 // A picture of a mesh, rendered locally into a PNG.
 int RunRender(const RenderCommand& command);

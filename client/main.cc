@@ -269,13 +269,16 @@ int main(int argc, char** argv) {
   info->add_option("input", info_input, "mesh file (.obj .ply .off .stl .drc) or builtin:NAME")->capture_default_str();
 
   std::string ridges_input, ridges_output;
-  double ridges_threshold = 0.0;
+  std::string ridges_threshold = "auto";
   CLI::App* ridges = app.add_subcommand(
       "ridges", "Detect ridge (black) and ravine (white) vertices of a mesh as it is, locally, into a PLY");
   ridges->add_option("input", ridges_input, "mesh file or builtin:NAME")->required();
   ridges->add_option("-o,--output", ridges_output, "output .ply (labels as vertex colours)")->required();
   ridges
-      ->add_option("--threshold", ridges_threshold, "ignore features with |curvature| at or below this (1/mesh units)")
+      ->add_option("--threshold", ridges_threshold,
+                   "ignore features with |curvature| at or below this: a number in 1/mesh units (0 keeps every "
+                   "extremum), or auto: a tenth of the mesh's own curvature scale (the 90th percentile of "
+                   "max(|kmax|, |kmin|)), whatever the mesh's units and size")
       ->capture_default_str();
 
   RenderCommand rc;

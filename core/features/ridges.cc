@@ -1,5 +1,6 @@
 #include "core/features/ridges.h"
 
+#include <algorithm>
 #include <array>
 #include <atomic>
 #include <cmath>
@@ -129,13 +130,26 @@ Features DetectFeatures(const Mesh& mesh, const Topology& topology, const Featur
   out.labels.assign(n, static_cast<uint8_t>(FeatureLabel::kNone));
   const CurvatureField& f = out.curvature;
   const std::vector<Compared> compared = RingMeans(topology, f);
+  out.threshold = std::max(0.0, options.min_abs_curvature);
+  if (options.relative_threshold > 0.0) {
+    std::vector<double> scale;
+    for (int32_t v = 0; v < n; ++v) {
+      const double k = std::max(std::abs(compared[v].k[0]), std::abs(compared[v].k[1]));
+      if (f.valid[v] && std::isfinite(k)) scale.push_back(k);
+    }
+    if (!scale.empty()) {
+      const auto at = scale.begin() + static_cast<std::ptrdiff_t>(0.9 * static_cast<double>(scale.size() - 1));
+      std::nth_element(scale.begin(), at, scale.end());
+      if (std::isfinite(*at)) out.threshold = std::max(out.threshold, options.relative_threshold * *at);
+    }
+  }
   // Each vertex writes only its own label: the result does not depend on the thread count.
   std::atomic<bool> stopped{false};
 #pragma omp parallel for schedule(static) if (n >= kParallelMin)
   for (int32_t v = 0; v < n; ++v) {
     if (v % kStopPollInterval == 0 && stop.Fired()) stopped.store(true, std::memory_order_relaxed);
     if (stopped.load(std::memory_order_relaxed)) continue;
-    out.labels[v] = static_cast<uint8_t>(Classify(mesh, topology, f, compared, v, options.min_abs_curvature));
+    out.labels[v] = static_cast<uint8_t>(Classify(mesh, topology, f, compared, v, out.threshold));
   }
   for (uint8_t valid : f.valid) out.classified += valid != 0;
   for (uint8_t l : out.labels) {

@@ -22,13 +22,22 @@ struct FeatureOptions {
   // A vertex whose |kappa| (kmax for a ridge, kmin for a ravine) is at or below this is not a
   // feature; absolute, in 1/mesh units. 0 keeps every strict extremum of the right sign.
   double min_abs_curvature = 0.0;
+  // > 0: the threshold is also at least this share of the mesh's own curvature scale, the 90th
+  // percentile of max(|kmax|, |kmin|) (the ring means compared) over the classified vertices: a
+  // threshold that follows the mesh's size and shape, so that the estimate's scatter where a
+  // principal curvature is zero (a cylinder's axis, a wave's flanks) is not labelled.
+  double relative_threshold = 0.0;
 };
+
+// The share of the curvature scale `meshsmooth ridges` uses when given no threshold.
+inline constexpr double kDefaultRelativeThreshold = 0.1;
 
 struct Features {
   CurvatureField curvature;     // EstimateCurvature() of the mesh
   std::vector<uint8_t> labels;  // a FeatureLabel per vertex
   int64_t ridges = 0, ravines = 0;
   int64_t classified = 0;  // vertices with a curvature estimate (valid)
+  double threshold = 0.0;  // the |kappa| threshold applied, in 1/mesh units
 };
 
 // Labels every vertex of `mesh` (`topology` = BuildTopology(mesh)), Section 5 of the paper.

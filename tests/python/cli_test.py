@@ -196,11 +196,13 @@ def cli_checks(a, check, tmp):
     def ridges_command():
         r = run([cli, "ridges", "builtin:noisy-sphere", "-o", ridges_ply])
         assert r.returncode == 0, (r.returncode, r.stderr)
-        m = re.search(r"(\d+) ridge and (\d+) ravine vertices of (\d+) classified \((\d+) vertices\); wrote (\S+)",
-                      r.stdout)
+        m = re.search(r"(\d+) ridge and (\d+) ravine vertices of (\d+) classified \((\d+) vertices; "
+                      r"\|curvature\| threshold (\S+)\); wrote (\S+)", r.stdout)
         assert m, r.stdout
         ridges, ravines, classified, vertices = (int(m.group(i)) for i in range(1, 5))
-        assert m.group(5) == ridges_ply, m.group(5)
+        # No --threshold: auto, a share of the mesh's own curvature scale (above 0).
+        assert float(m.group(5)) > 0, m.group(5)
+        assert m.group(6) == ridges_ply, m.group(6)
         n, faces, colors = read_ply_colors(ridges_ply)
         assert (n, faces) == (2562, 5120), (n, faces)
         assert vertices == n, (vertices, n)
@@ -221,9 +223,10 @@ def cli_checks(a, check, tmp):
         assert r.returncode == 2, (r.returncode, r.stderr)
         assert ".ply" in r.stderr, r.stderr
         assert not os.path.exists(obj)
-        r = run([cli, "ridges", "builtin:noisy-sphere", "-o", os.path.join(tmp, "neg.ply"), "--threshold", "-1"])
-        assert r.returncode == 2 and "--threshold" in r.stderr, (r.returncode, r.stderr)
-    check("ridges to a non-PLY file or with a negative threshold exits 2", ridges_bad_usage)
+        for bad in ["-1", "abc", "nan"]:
+            r = run([cli, "ridges", "builtin:noisy-sphere", "-o", os.path.join(tmp, "neg.ply"), "--threshold", bad])
+            assert r.returncode == 2 and "--threshold" in r.stderr, (bad, r.returncode, r.stderr)
+    check("ridges to a non-PLY file or with a negative or unreadable threshold exits 2", ridges_bad_usage)
 
     def smooth_with_ridges():
         out = os.path.join(tmp, "smoothed_ridges.ply")
