@@ -193,7 +193,7 @@ absl::StatusOr<Upload> PrepareUpload(const std::string& input, bool with_attribu
   return upload;
 }
 
-absl::Status WriteResult(const Upload& upload, const std::string& result, const std::string& output, bool ridges,
+absl::Status WriteResult(Upload& upload, const std::string& result, const std::string& output, bool ridges,
                          std::vector<std::string>* dropped, bool gltf_draco) {
   std::vector<std::string> ignored;
   std::vector<std::string>& lost = dropped != nullptr ? *dropped : ignored;
@@ -232,11 +232,11 @@ absl::Status WriteResult(const Upload& upload, const std::string& result, const 
           absl::StrCat("it has ", decoded->num_vertices(), " points for ", upload.num_vertices, " vertices")));
     }
     mesh.positions.assign(decoded->positions.begin(), decoded->positions.begin() + upload.num_vertices);
-    mesh.triangles = upload.kept.triangles;
-    mesh.colors = upload.kept.colors;
-    mesh.uvs = upload.kept.uvs;
-    mesh.properties = upload.kept.properties;
-    mesh.obj_directives = upload.kept.obj_directives;
+    mesh.triangles = std::move(upload.kept.triangles);
+    mesh.colors = std::move(upload.kept.colors);
+    mesh.uvs = std::move(upload.kept.uvs);
+    mesh.properties = std::move(upload.kept.properties);
+    mesh.obj_directives = std::move(upload.kept.obj_directives);
     if (!upload.kept.normals.empty()) mesh.normals = FreshNormals(mesh, upload.kept.normals);
   }
   if (upload.origin != Vec3{}) Translate(mesh.positions, upload.origin);

@@ -57,8 +57,10 @@ absl::StatusOr<Upload> PrepareUpload(const std::string& input, bool with_attribu
 // texture image) is appended to `dropped`, one phrase each. Errors about the result itself
 // start with "the result: ". A glTF input is written as the same scene with the smoothed
 // positions (GltfScene::Write; primitives Draco-compressed when `gltf_draco`) and only to
-// .gltf or .glb: InvalidArgument otherwise, as for glTF output of another input.
-absl::Status WriteResult(const Upload& upload, const std::string& result, const std::string& output, bool ridges,
+// .gltf or .glb: InvalidArgument otherwise, as for glTF output of another input. The input's
+// triangles and attributes are moved out of `upload.kept` into the output (not copied): one
+// WriteResult per upload.
+absl::Status WriteResult(Upload& upload, const std::string& result, const std::string& output, bool ridges,
                          std::vector<std::string>* dropped = nullptr, bool gltf_draco = false);
 
 }  // namespace meshsmooth::client
