@@ -151,9 +151,8 @@ void NormalFilterKernel::Bind(const Mesh& mesh, const Topology& topo, int thread
 void NormalFilterKernel::ComputeGeometry(const Vec3* pos) {
   const int32_t nf = static_cast<int32_t>(graph_.faces.size());
   // Buffers kept from round to round: fresh ones would cost a page fault per 4 KiB each round.
-  std::vector<Vec3>& raw = raw_;
   std::vector<Vec3>& centroid = centroid_;
-  raw.resize(nf);
+  normal_.resize(nf);  // first each face's own unit normal, then (below) what the filter starts from
   weighted_.resize(nf);
   centroid.resize(nf);
   cross_.resize(nf);
@@ -165,14 +164,15 @@ void NormalFilterKernel::ComputeGeometry(const Vec3* pos) {
     const double len = Norm(cross);
     // A face without area (or a needle whose cross product is all rounding) has no normal.
     const bool ok = 1e-12 * (SquaredNorm(ab) + SquaredNorm(ac)) < len && std::isfinite(len);
-    raw[f] = ok ? cross * (1.0 / len) : Vec3{};
+    normal_[f] = ok ? cross * (1.0 / len) : Vec3{};
     cross_[f] = cross;
     area_[f] = ok ? 0.5 * len : 0.0;
-    weighted_[f] = raw[f] * area_[f];
+    weighted_[f] = normal_[f] * area_[f];
     centroid[f] = Centroid(pos, t);
   });
-  normal_.resize(nf);
+  // Each face reads its own normal_ entry before it writes it, and only weighted_ of the others.
   ForFaces([&](int32_t i) {
+    const Vec3 raw = normal_[i];
     Vec3 around;
     for (int32_t k = graph_.offsets[i]; k < graph_.offsets[i + 1]; ++k) {
       const int32_t j = graph_.neighbours[k];
@@ -182,7 +182,7 @@ void NormalFilterKernel::ComputeGeometry(const Vec3* pos) {
     // Noise folds thin faces over: a folded face's own normal would keep it folded, since the
     // range weight shuts out every neighbour on the other side; it takes its neighbours'.
     const double len = Norm(around);
-    normal_[i] = area_[i] > 0.0 && Dot(raw[i], around) < 0.0 && len > 0.0 ? around * (1.0 / len) : raw[i];
+    normal_[i] = area_[i] > 0.0 && Dot(raw, around) < 0.0 && len > 0.0 ? around * (1.0 / len) : raw;
   });
 }
 

@@ -134,7 +134,7 @@ class NormalFilterKernel : public FlowKernel {
   std::vector<Vec3> normal_;                                // per face: unit, or zero without area
   std::vector<double> area_;                                // per face
   double inv_two_sigma_s2_ = 0.0, inv_two_sigma_r2_ = 0.0;  // 1 / (2 sigma^2)
-  std::vector<Vec3> raw_, centroid_, filtered_;             // buffers kept from round to round
+  std::vector<Vec3> centroid_, filtered_;                   // buffers kept from round to round
   std::vector<Vec3> cross_;                                 // per face: its cross product in the round's positions
   std::vector<Vec3> weighted_;                              // per face: its area times its unit normal
 

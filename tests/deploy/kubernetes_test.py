@@ -28,7 +28,7 @@ sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."
 from harness import parser, run, run_checks  # noqa: E402
 
 # meshsmoothd's peak resident memory per vertex of one job (the most any flow measured on a
-# noisy scan, guided_normal's 1,098 on nefertiti, rounded up) and an allowance for the process
+# noisy scan, guided_normal's 1,010 on the dragon, rounded up) and an allowance for the process
 # itself (17 MiB idle): scripts/peak-memory.sh, docs/deployment.md "Memory".
 PEAK_BYTES_PER_VERTEX = 1100
 IDLE_BYTES = 64 << 20
