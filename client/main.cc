@@ -102,7 +102,8 @@ void AddSmoothOptions(CLI::App* smooth, SmoothOptions& so) {
           absl::StrCat(absl::StrJoin(flow_choices, " | "), ". auto (with --iterations auto and no --step): run ",
                        ChoiceFlowNames(), " and keep the result with the smaller estimated error (meshes above ",
                        kMaxChoiceVertices / 1000, absl::StrFormat(",%03d", kMaxChoiceVertices % 1000),
-                       " vertices choose flow and count on patches of themselves, then run once); otherwise ",
+                       " vertices choose flow and count on patches of themselves, where bilateral_normal must be "
+                       "better by a margin, then run once); otherwise ",
                        std::string(FlowName(kDefaultFlow))))
       ->capture_default_str()
       ->check(CLI::IsMember(flow_choices));
