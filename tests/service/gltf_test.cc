@@ -234,6 +234,36 @@ TEST(GltfTest, ScenesComeBackWithTheirNodesMaterialsTexturesAndUvs) {
   fs::remove_all(dir);
 }
 
+// A Draco-compressed GLB whose "buffers" key is misspelt (as fuzz_gltf found it): Draco's own glTF
+// reader dereferences a null pointer on it. The CLI reads a glTF file in a child process first,
+// so the upload is refused with a message instead of the CLI crashing.
+TEST(GltfTest, FileThatCrashesDracosReaderIsRefused) {
+  const fs::path dir = fs::temp_directory_path() / ("meshsmooth_gltf_crash_" + std::to_string(getpid()));
+  fs::create_directories(dir);
+  Image image;
+  image.width = image.height = 4;
+  image.rgb.assign(3 * 4 * 4, 128);
+  absl::StatusOr<std::string> png = EncodePng(image);
+  ASSERT_TRUE(png.ok());
+  const std::unique_ptr<draco::Scene> scene = SphereScene(Icosphere(2), *png);
+  for (int m = 0; m < scene->NumMeshes(); ++m) scene->GetMesh(draco::MeshIndex(m)).SetCompressionEnabled(true);
+  const std::string packed = (dir / "draco.glb").string(), broken = (dir / "broken.glb").string();
+  UseDracoFileIo();
+  ASSERT_TRUE(draco::WriteSceneToFile(packed, *scene).ok());
+  absl::StatusOr<std::string> bytes = ReadFileBytes(packed);
+  ASSERT_TRUE(bytes.ok());
+  const size_t at = bytes->find("\"buffers\"");
+  ASSERT_NE(at, std::string::npos);
+  bytes->replace(at, 9, "\"bufferm\"");  // the same length: the GLB's chunk sizes still hold
+  ASSERT_TRUE(WriteFileBytes(broken, *bytes).ok());
+  ASSERT_TRUE(client::PrepareUpload(packed).ok());
+  const absl::StatusOr<client::Upload> upload = client::PrepareUpload(broken);
+  fs::remove_all(dir);
+  ASSERT_FALSE(upload.ok());
+  EXPECT_EQ(upload.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_NE(upload.status().message().find("crashed"), std::string::npos) << upload.status();
+}
+
 // A valid glTF document without a mesh (only its asset), as GLB: refused with a message, not
 // read past the end of an empty list of meshes.
 TEST(GltfTest, SceneWithoutMeshesIsRefused) {
