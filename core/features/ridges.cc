@@ -140,7 +140,7 @@ Features DetectFeatures(const Mesh& mesh, const Topology& topology, const Featur
     if (!scale.empty()) {
       const auto at = scale.begin() + static_cast<std::ptrdiff_t>(0.9 * static_cast<double>(scale.size() - 1));
       std::nth_element(scale.begin(), at, scale.end());
-      if (std::isfinite(*at)) out.threshold = std::max(out.threshold, options.relative_threshold * *at);
+      out.threshold = std::max(out.threshold, options.relative_threshold * *at);
     }
   }
   // Each vertex writes only its own label: the result does not depend on the thread count.

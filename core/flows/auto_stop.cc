@@ -21,7 +21,7 @@ AutoStop::AutoStop(const Mesh& mesh, const Topology& topo, const uint8_t* role, 
   report_.noise_to_remove_h = std::sqrt(std::max(0.0, noise.sigma_h * noise.sigma_h - floor2));
   // Not less the floor: SURE weighs the fidelity to the input against the noise, and a floor
   // taken off small noise (0.06 h) makes it stop after an iteration or two.
-  sigma_ = kRiskSigmaMargin * noise.deviation_h * h;
+  sigma_ = RiskSigmaH(noise) * h;
   const int32_t n = topo.num_vertices();
   stride_ = std::max<int32_t>(1, (n + kMaxMeasured - 1) / kMaxMeasured);
   has_normal_.assign(n, 0);

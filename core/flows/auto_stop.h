@@ -64,6 +64,8 @@ inline constexpr double kConvergedShare = 1e-2;
 // count's error is then within 1.13 times the best count's for bilateral_normal (1.05 for
 // bilaplacian), mean 1.03 (1.01); docs/quality.md.
 inline constexpr double kRiskSigmaMargin = 1.1;
+// The sigma the risk estimate works with, in h: the noise's deviation taken kRiskSigmaMargin high.
+inline double RiskSigmaH(const NoiseEstimate& noise) { return kRiskSigmaMargin * noise.deviation_h; }
 // The probe copy is moved by +-kProbeStep sigma along the normals: small enough for the
 // finite difference to be a derivative, large enough to stay far above rounding.
 inline constexpr double kProbeStep = 0.05;

@@ -153,7 +153,7 @@ absl::StatusOr<FlowResult> SmoothAutomatic(Mesh& mesh, const Topology& topo, con
   on_sample.reorder = ReorderMode::kNever;  // `core` is in the sample's order
   // The sample runs with the mesh's h (the step of a curvature flow scales with it): its count
   // is then a count of the same iterations.
-  const double sigma_h = kRiskSigmaMargin * noise.deviation_h;
+  const double sigma_h = RiskSigmaH(noise);
   absl::StatusOr<FlowResult> chosen =
       Choose(sample.mesh, sample_topo, on_sample, control, h, noise, &sample.core, kSampleBias * sigma_h * sigma_h);
   if (!chosen.ok()) return chosen.status();
