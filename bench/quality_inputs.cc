@@ -61,6 +61,10 @@ absl::StatusOr<Subject> LoadSubject(const std::string& name, const std::filesyst
   } else if (name == "holey-sphere") {
     clean = HoleySphere(5, 60, 0.07, 7);
     s.what = "icosphere level 5, 60 round holes";
+  } else if (name == "perforated-sphere") {
+    // An open scan's worth of rims: 431 holes, 40% of the vertices on one.
+    clean = HoleySphere(5, 700, 0.03, 7);
+    s.what = "icosphere level 5, 431 small holes (40% of vertices on a rim)";
   } else {
     std::filesystem::path path = meshes / (name + ".obj");
     if (!std::filesystem::exists(path)) path = meshes / (name + ".ply");

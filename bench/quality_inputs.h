@@ -15,11 +15,12 @@
 namespace meshsmooth::bench {
 
 // The real meshes that serve as ground truth (docs/quality-method.md says why these and not the
-// beetle), then the synthetic shapes: the paper's, iso-surface output and a sphere with many
-// holes (LoadSubject).
+// beetle), then the synthetic shapes: the paper's, iso-surface output and two spheres with
+// holes, the second an open scan's share of rims (LoadSubject).
 inline const std::vector<std::string> kDefaultMeshes = {
-    "fandisk",         "bunny-small", "max-planck",     "camelhead", "turbine",     "nefertiti",   "stanford-bunny",
-    "stanford-dragon", "sphere",      "two-rate-torus", "mt-torus",  "mt-cylinder", "holey-sphere"};
+    "fandisk",   "bunny-small",    "max-planck",      "camelhead",        "turbine",
+    "nefertiti", "stanford-bunny", "stanford-dragon", "sphere",           "two-rate-torus",
+    "mt-torus",  "mt-cylinder",    "holey-sphere",    "perforated-sphere"};
 
 // Meshes from this many vertices get `large_seeds` seeds (unless it is 0).
 inline constexpr int32_t kLargeMesh = 200000;

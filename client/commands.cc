@@ -64,7 +64,9 @@ v1::JobSpec SpecFrom(const SmoothOptions& o) {
   spec.mutable_adaptive()->set_mode(kModes.at(o.adaptive));
   spec.mutable_adaptive()->set_threshold(o.threshold);
   spec.mutable_adaptive()->set_recompute_every(o.recompute_every);
-  spec.set_boundary(o.boundary == "curve" ? v1::BOUNDARY_MODE_CURVE : v1::BOUNDARY_MODE_FIXED);
+  spec.set_boundary(o.boundary == "curve"   ? v1::BOUNDARY_MODE_CURVE
+                    : o.boundary == "fixed" ? v1::BOUNDARY_MODE_FIXED
+                                            : v1::BOUNDARY_MODE_UNSPECIFIED);
   spec.set_tolerance(o.tolerance);
   spec.mutable_output()->set_quantization_bits(o.quantization_bits);
   spec.mutable_output()->set_edgebreaker(o.edgebreaker);

@@ -28,7 +28,7 @@ struct SmoothOptions {
   std::string adaptive = "none";
   double threshold = 0.0;
   unsigned recompute_every = 10;
-  std::string boundary = "fixed";
+  std::string boundary = "auto";
   double tolerance = 0.0;
   unsigned quantization_bits = 0;
   bool edgebreaker = false;

@@ -90,6 +90,7 @@ void PrintSummary(const v1::Summary& s) {
                 p.flow().c_str(), p.iterations_run(), p.iterations_requested(), p.stop_reason().c_str(), p.step(),
                 p.effective_step());
   }
+  if (p.boundary() == v1::BOUNDARY_MODE_CURVE) std::printf("boundary vertices moved too (boundary: curve)\n");
   std::printf("%-28s %14s %14s\n", "", "before", "after");
   std::printf("%-28s %14.6g %14.6g\n", "area", a.area(), b.area());
   std::printf("%-28s %14.6g %14.6g\n", "signed volume", a.signed_volume(), b.signed_volume());

@@ -23,14 +23,16 @@ std::vector<Vec3> VertexNormals(std::span<const Vec3> positions, std::span<const
 // Twice the area-weighted normal of interior vertex `v` from its cyclic ring (the sum of the
 // cross products of its faces, not normalised): the same direction VertexNormals() gives it
 // when its faces are all usable, computed from the ring alone so that a parallel loop over
-// vertices needs no scatter. Zero for a vertex that is not interior.
+// vertices needs no scatter. A boundary vertex's from its open fan; zero for any other.
 inline Vec3 RingNormal(const Topology& topo, const Vec3* positions, int32_t v) {
-  if (topo.kind[v] != VertexKind::kInterior) return {};
+  const bool closed = topo.kind[v] == VertexKind::kInterior;
+  if (!closed && topo.kind[v] != VertexKind::kBoundary) return {};
   const int32_t begin = topo.ring_offsets[v], end = topo.ring_offsets[v + 1];
   const Vec3 p = positions[v];
   Vec3 sum;
-  Vec3 prev = positions[topo.ring[end - 1]] - p;
-  for (int32_t k = begin; k < end; ++k) {
+  // A boundary vertex's fan is open: from its first ring entry to its last, no closing face.
+  Vec3 prev = positions[topo.ring[closed ? end - 1 : begin]] - p;
+  for (int32_t k = closed ? begin : begin + 1; k < end; ++k) {
     const Vec3 cur = positions[topo.ring[k]] - p;
     sum += Cross(prev, cur);
     prev = cur;

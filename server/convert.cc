@@ -102,7 +102,9 @@ absl::StatusOr<JobParams> FromProto(const v1::JobSpec& spec, int max_iterations)
   if (spec.adaptive().recompute_every() > 0) {
     p.adaptive_recompute_every = static_cast<int>(std::min<uint32_t>(spec.adaptive().recompute_every(), 1u << 30));
   }
-  p.boundary = spec.boundary() == v1::BOUNDARY_MODE_CURVE ? BoundaryMode::kCurve : BoundaryMode::kFixed;
+  p.boundary = spec.boundary() == v1::BOUNDARY_MODE_CURVE   ? BoundaryMode::kCurve
+               : spec.boundary() == v1::BOUNDARY_MODE_FIXED ? BoundaryMode::kFixed
+                                                            : BoundaryMode::kAuto;
   p.tolerance = spec.tolerance();
   if (absl::Status s = ValidateFlowParams(p, 0); !s.ok()) return s;
 
@@ -203,7 +205,7 @@ void ToProto(const JobParams& params, const FlowResult& result, v1::EffectivePar
   }
   out->set_weights(p.weights == UmbrellaWeights::kInverseDistance ? v1::UMBRELLA_WEIGHTS_INVERSE_DISTANCE
                                                                   : v1::UMBRELLA_WEIGHTS_UNIFORM);
-  out->set_boundary(p.boundary == BoundaryMode::kCurve ? v1::BOUNDARY_MODE_CURVE : v1::BOUNDARY_MODE_FIXED);
+  out->set_boundary(result.boundary == BoundaryMode::kCurve ? v1::BOUNDARY_MODE_CURVE : v1::BOUNDARY_MODE_FIXED);
   v1::AdaptiveThreshold* a = out->mutable_adaptive();
   a->set_mode(p.adaptive == AdaptiveMode::kConstant ? v1::ADAPTIVE_MODE_CONSTANT
               : p.adaptive == AdaptiveMode::kRing1  ? v1::ADAPTIVE_MODE_RING1

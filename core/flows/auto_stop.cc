@@ -11,7 +11,7 @@
 namespace meshsmooth::flows {
 
 AutoStop::AutoStop(const Mesh& mesh, const Topology& topo, const uint8_t* role, double h, int threads,
-                   const NoiseEstimate* given, const std::vector<uint8_t>* measured)
+                   const NoiseEstimate* given, const std::vector<uint8_t>* measured, bool rims)
     : topo_(topo), role_(role), h_(h), threads_(threads) {
   const Vec3* const start = mesh.positions.data();
   const NoiseEstimate noise = given != nullptr ? *given : EstimateNoise(mesh, topo, h, threads);
@@ -27,7 +27,8 @@ AutoStop::AutoStop(const Mesh& mesh, const Topology& topo, const uint8_t* role, 
   has_normal_.assign(n, 0);
   for (int32_t v = 0; v < n; ++v) {
     closed_ &= topo.kind[v] == VertexKind::kInterior || topo.kind[v] == VertexKind::kIsolated;
-    if (role[v] != kFree || topo.kind[v] != VertexKind::kInterior) continue;
+    const bool rim = rims && topo.kind[v] == VertexKind::kBoundary;
+    if (!rim && (role[v] != kFree || topo.kind[v] != VertexKind::kInterior)) continue;
     if (measured != nullptr && (*measured)[v] == 0) continue;
     if (!UnitNormal(start, v)) continue;
     has_normal_[v] = 1;

@@ -100,9 +100,10 @@ class AutoStop {
   // kept as the reference),
   // or takes `noise` when it is not null. `role` is the run's vertex roles
   // (core/flows/flow_kernel.h), one per vertex; `measured` (null: all) the vertices the
-  // estimate measures, among the free interior ones.
+  // estimate measures, among the free interior ones, and with `rims` the boundary ones too,
+  // whatever their role (a fixed rim keeps its noise: the estimate counts it).
   AutoStop(const Mesh& mesh, const Topology& topo, const uint8_t* role, double h, int threads,
-           const NoiseEstimate* noise, const std::vector<uint8_t>* measured);
+           const NoiseEstimate* noise, const std::vector<uint8_t>* measured, bool rims = false);
 
   // True when the input has no noise to remove: the run does no iteration.
   bool nothing_to_do() const { return !estimated_ || report_.noise_to_remove_h < kNoNoiseH; }

@@ -29,6 +29,15 @@ constexpr int32_t kCorePercent = 60;
 // high (docs/decisions.md, "The default job chooses on a sample", has the figures).
 constexpr double kSampleBias = 0.025;
 
+// The boundary mode a run of `flow` takes under the job's `requested` one: BoundaryMode::kAuto
+// moves the rims with the normal filters' vertex update (the planes of their faces: a rim does
+// not shrink) and keeps them fixed with the umbrella flows, whose boundary curve umbrella would
+// shrink small holes.
+BoundaryMode BoundaryFor(FlowId flow, BoundaryMode requested) {
+  if (requested != BoundaryMode::kAuto) return requested;
+  return KindOf(flow) == FlowKind::kNormalFilter ? BoundaryMode::kCurve : BoundaryMode::kFixed;
+}
+
 void Report(const RunControl& control, Phase phase, FlowId flow) {
   if (!control.on_progress) return;
   Progress progress;
@@ -55,7 +64,8 @@ absl::StatusOr<FlowResult> Choose(Mesh& mesh, const Topology& topo, const FlowPa
     Mesh copy = mesh;
     FlowParams q = p;
     q.flow = flow;
-    AutoPlan plan{0, &noise, measured, std::nullopt};
+    q.boundary = BoundaryFor(flow, p.boundary);
+    AutoPlan plan{0, &noise, measured, std::nullopt, p.boundary != BoundaryMode::kFixed};
     if (best && best->auto_stop && best->iterations_run > 0) plan.rival_risk_h2 = best->auto_stop->risk_h2 - margin_h2;
     absl::StatusOr<FlowResult> r = SmoothOneFlow(copy, topo, q, quiet, h, plan);
     if (!r.ok()) {
@@ -81,6 +91,8 @@ struct Sample {
   // Per sample vertex: in a patch's core (at most kCorePercent of the patch's radius, in rings,
   // from its seed), where the patch's fixed rim hardly reaches.
   std::vector<uint8_t> core;
+  // Per sample vertex: its vertex in the mesh.
+  std::vector<int32_t> origin;
 };
 
 // About `size` vertices of `mesh` in patches grown breadth-first from seeds spread over the
@@ -100,6 +112,7 @@ Sample SamplePatches(const Mesh& mesh, const Topology& topo, int32_t size) {
     const size_t first = sample.positions.size();
     index[seed] = static_cast<int32_t>(first);
     sample.positions.push_back(mesh.positions[seed]);
+    out.origin.push_back(seed);
     depth.push_back(0);
     for (size_t head = 0; head < queue.size() && sample.positions.size() < budget; ++head) {
       const int32_t v = queue[head];
@@ -108,6 +121,7 @@ Sample SamplePatches(const Mesh& mesh, const Topology& topo, int32_t size) {
         if (index[w] >= 0) continue;
         index[w] = static_cast<int32_t>(sample.positions.size());
         sample.positions.push_back(mesh.positions[w]);
+        out.origin.push_back(w);
         depth.push_back(depth[index[v]] + 1);
         queue.push_back(w);
       }
@@ -149,8 +163,17 @@ absl::StatusOr<FlowResult> SmoothAutomatic(Mesh& mesh, const Topology& topo, con
   Sample sample = SamplePatches(mesh, topo, size);
   const Topology sample_topo = BuildTopology(sample.mesh);
   FlowParams on_sample = q;
-  on_sample.locked.clear();                 // the sample's vertices are not the mesh's
   on_sample.reorder = ReorderMode::kNever;  // `core` is in the sample's order
+  // The patches' rims are cuts, not the mesh's boundary: they stay fixed and unmeasured
+  // whatever the boundary mode. The mesh's own locked vertices stay locked.
+  on_sample.locked.assign(sample_topo.num_vertices(), 0);
+  for (int32_t s = 0; s < sample_topo.num_vertices(); ++s) {
+    const int32_t v = sample.origin[s];
+    const bool cut = sample_topo.kind[s] == VertexKind::kBoundary && topo.kind[v] != VertexKind::kBoundary;
+    const bool locked = !q.locked.empty() && q.locked[v] != 0;
+    on_sample.locked[s] = cut || locked;
+    if (cut) sample.core[s] = 0;
+  }
   // The sample runs with the mesh's h (the step of a curvature flow scales with it): its count
   // is then a count of the same iterations.
   const double sigma_h = RiskSigmaH(noise);
@@ -159,13 +182,15 @@ absl::StatusOr<FlowResult> SmoothAutomatic(Mesh& mesh, const Topology& topo, con
   if (!chosen.ok()) return chosen.status();
   FlowParams whole = q;
   whole.flow = chosen->flow;
+  whole.boundary = BoundaryFor(chosen->flow, q.boundary);
   if (chosen->iterations_run == 0) {
     // An idle sample (no noise, or no estimate on it) leaves the decision to the whole mesh's
     // own estimate and stopping (nothing to do on a clean mesh: as cheap as the sample).
     return Choose(mesh, topo, whole, control, h, noise);
   }
-  absl::StatusOr<FlowResult> result =
-      SmoothOneFlow(mesh, topo, whole, control, h, AutoPlan{chosen->iterations_run, &noise, nullptr, std::nullopt});
+  absl::StatusOr<FlowResult> result = SmoothOneFlow(
+      mesh, topo, whole, control, h,
+      AutoPlan{chosen->iterations_run, &noise, nullptr, std::nullopt, q.boundary != BoundaryMode::kFixed});
   if (result.ok() && result->iterations_run > 0) {
     result->stop_reason = chosen->stop_reason;
     if (result->auto_stop && chosen->auto_stop) result->auto_stop->risk_h2 = chosen->auto_stop->risk_h2;

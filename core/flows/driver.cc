@@ -2,6 +2,7 @@
 
 #include <omp.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <memory>
@@ -291,6 +292,10 @@ absl::StatusOr<FlowResult> RunIterations(Mesh& mesh, const Topology& topo, const
   if (side_by_side) run_params.threads = 1;
   FlowRun run(topo, run_params, h, *diagonal);
   run.SetUp(result);
+  const uint8_t* const roles = run.roles();
+  result.boundary = std::any_of(roles, roles + topo.num_vertices(), [](uint8_t r) { return r == kCurve; })
+                        ? BoundaryMode::kCurve
+                        : BoundaryMode::kFixed;
 
   // The positions move into `cur` for the run (no copy; the mesh gets them back on every return
   // below). `cur` keeps the iteration's start until the iteration is accepted; passes write
@@ -299,7 +304,7 @@ absl::StatusOr<FlowResult> RunIterations(Mesh& mesh, const Topology& topo, const
   std::optional<AutoStop> auto_stop;
   int last_iteration = p.iterations;
   if (p.iterations == kAutoIterations) {
-    auto_stop.emplace(mesh, topo, run.roles(), h, run.threads(), plan.noise, plan.measured);
+    auto_stop.emplace(mesh, topo, run.roles(), h, run.threads(), plan.noise, plan.measured, plan.measure_rims);
     if (plan.rival_risk_h2) auto_stop->SetRival(*plan.rival_risk_h2);
     result.auto_stop = auto_stop->report();
     if (auto_stop->nothing_to_do()) {

@@ -31,11 +31,14 @@ struct AutoPlan {
   // null: the run reads it.
   const NoiseEstimate* noise = nullptr;
   // Per vertex: non-zero where the risk estimate measures (the cores of a sample's patches,
-  // away from their fixed rims); null: every free interior vertex.
+  // away from their fixed rims); null: every free interior vertex (and see measure_rims).
   const std::vector<uint8_t>* measured = nullptr;
   // The estimated error (risk_h2) of a rival run on the same input: the run gives up once its
   // own estimate can no longer fall below it (AutoStop::SetRival).
   std::optional<double> rival_risk_h2;
+  // The estimate also measures the boundary vertices (among `measured`), moved or not: candidates
+  // that treat the rims differently are then compared on the same vertices.
+  bool measure_rims = false;
 };
 
 // `h` is the input's mean edge length; `plan` applies with automatic iterations. Errors as

@@ -38,8 +38,14 @@ enum class UmbrellaWeights {
 };
 
 enum class BoundaryMode {
-  kFixed,  // boundary vertices do not move (default)
+  kFixed,  // boundary vertices do not move
   kCurve,  // boundary loops are smoothed as polygonal curves (1-D umbrella along the loop)
+  // The default job (ChoosesFlow()): its boundary vertices take the normal filter's vertex
+  // update when it tries or chooses bilateral_normal (kCurve for that flow: the planes of their
+  // faces, so a rim loses its noise without its hole shrinking) and stay fixed with
+  // bilaplacian, and the error estimate counts them, so the choice sees the noise a fixed rim
+  // keeps. Any other job: kFixed. The default.
+  kAuto,
 };
 
 enum class AdaptiveMode {
@@ -108,7 +114,7 @@ struct FlowParams {
   double adaptive_threshold = 0.0;    // T for kConstant
   int adaptive_recompute_every = 10;  // K: T(P) is recomputed every K iterations
 
-  BoundaryMode boundary = BoundaryMode::kFixed;
+  BoundaryMode boundary = BoundaryMode::kAuto;
   // Optional per-vertex lock mask (non-zero = keep fixed); empty = none. Vertices on
   // non-manifold edges or vertices and isolated vertices are always fixed.
   std::vector<uint8_t> locked;
@@ -186,6 +192,9 @@ struct FlowResult {
   double effective_step = 0.0;    // lambda actually used (mesh units for the curvature flows)
   double effective_mu = 0.0;      // taubin's mu
   double mean_edge_length = 0.0;  // h of the input
+  // kCurve when some boundary vertex moved with the run (BoundaryMode::kCurve on a mesh with a
+  // boundary), else kFixed.
+  BoundaryMode boundary = BoundaryMode::kFixed;
   Progress last;
   std::optional<AutoStopReport> auto_stop;  // set when the run stopped automatically
 };
