@@ -49,6 +49,7 @@ struct Options {
   std::vector<std::string> meshes = kDefaultMeshes;
   std::vector<double> sigmas = {0.0, 0.1, 0.2, 0.3};
   std::vector<double> random_sigmas = {0.1, 0.2, 0.3};
+  std::vector<double> impulsive;
   int seeds = 3;
   int large_seeds = 1;             // 0: as many as `seeds`
   std::vector<std::string> flows;  // empty: every flow of the table, unless no_flows
@@ -92,6 +93,8 @@ constexpr char kUsage[] =
     "                   `perforated-sphere`\n"
     "  --sigmas         Gaussian noise along the normals, in mean edge lengths h (0 = the clean mesh)\n"
     "  --random-sigmas  Gaussian noise in random directions (\"\": none)\n"
+    "  --impulsive      impulsive noise: 10% of the vertices thrown S h to 3 S h along their normals,\n"
+    "                   for each S listed (default: none)\n"
     "  --seeds          noisy copies per mesh and sigma; --large-seeds for meshes of 200k+ vertices\n"
     "                   (default 1; 0: as --seeds)\n"
     "  --flows          oracle rows for these flows of the flow table (default: all; `none`: none)\n"
@@ -133,6 +136,8 @@ int main(int argc, char** argv) {
       opt.sigmas = ParseDoubles(next());
     } else if (a == "--random-sigmas") {
       opt.random_sigmas = ParseDoubles(next());
+    } else if (a == "--impulsive") {
+      opt.impulsive = ParseDoubles(next());
     } else if (a == "--seeds") {
       opt.seeds = std::max(1, std::atoi(next().c_str()));
     } else if (a == "--large-seeds") {
@@ -183,7 +188,7 @@ int main(int argc, char** argv) {
     }
   }
   const std::vector<Job> jobs = MakeJobs(opt.flows, opt.no_flows, opt.jobs, opt.oracle_jobs);
-  const std::vector<Case> cases = MakeCases(opt.sigmas, opt.random_sigmas);
+  const std::vector<Case> cases = MakeCases(opt.sigmas, opt.random_sigmas, opt.impulsive);
   const std::filesystem::path mesh_dir = opt.shared / "data" / "meshes";
 
   std::string body, inputs;

@@ -17,15 +17,22 @@ namespace meshsmooth::bench {
 
 std::string Case::Name() const {
   if (sigma == 0.0) return "clean input (sigma = 0)";
+  if (noise == Noise::kImpulsive) {
+    return absl::StrFormat("impulsive noise, %g%% of vertices thrown %g-%g h", 100 * kImpulsiveShare, sigma, 3 * sigma);
+  }
   return absl::StrFormat("%s, sigma = %g h", noise == Noise::kNormal ? "normal noise" : "random-direction noise",
                          sigma);
 }
 
-std::vector<Case> MakeCases(const std::vector<double>& sigmas, const std::vector<double>& random_sigmas) {
+std::vector<Case> MakeCases(const std::vector<double>& sigmas, const std::vector<double>& random_sigmas,
+                            const std::vector<double>& impulsive_scales) {
   std::vector<Case> cases;
   for (double s : sigmas) cases.push_back({Noise::kNormal, s});
   for (double s : random_sigmas) {
     if (s > 0.0) cases.push_back({Noise::kRandom, s});
+  }
+  for (double s : impulsive_scales) {
+    if (s > 0.0) cases.push_back({Noise::kImpulsive, s});
   }
   return cases;
 }
@@ -98,6 +105,8 @@ Mesh MakeNoisy(const Mesh& clean, const Case& c, uint64_t seed) {
   if (c.sigma == 0.0) return m;
   if (c.noise == Noise::kNormal) {
     AddNormalNoise(m, c.sigma, seed);
+  } else if (c.noise == Noise::kImpulsive) {
+    AddImpulsiveNoise(m, kImpulsiveShare, c.sigma, seed);
   } else {
     AddRandomDirectionNoise(m, c.sigma, seed);
   }

@@ -25,7 +25,10 @@ inline const std::vector<std::string> kDefaultMeshes = {
 // Meshes from this many vertices get `large_seeds` seeds (unless it is 0).
 inline constexpr int32_t kLargeMesh = 200000;
 
-enum class Noise { kNormal, kRandom };
+// kImpulsive: a scanner's outliers, kImpulsiveShare of the vertices thrown sigma h to 3 sigma h
+// along their normals (AddImpulsiveNoise), the others clean.
+enum class Noise { kNormal, kRandom, kImpulsive };
+inline constexpr double kImpulsiveShare = 0.1;
 
 // Gaussian noise of `sigma` h along the vertex normals or in random directions; sigma 0 is the
 // clean mesh itself.
@@ -38,7 +41,8 @@ struct Case {
 
 // The cases of a run: `sigmas` along the normals, then the positive `random_sigmas` in random
 // directions.
-std::vector<Case> MakeCases(const std::vector<double>& sigmas, const std::vector<double>& random_sigmas);
+std::vector<Case> MakeCases(const std::vector<double>& sigmas, const std::vector<double>& random_sigmas,
+                            const std::vector<double>& impulsive_scales = {});
 
 // The clean mesh of a benchmark input and what it is.
 struct Subject {

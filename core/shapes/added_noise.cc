@@ -44,6 +44,20 @@ void AddNormalNoise(Mesh& mesh, double sigma_fraction_of_mean_edge, uint64_t see
   AddGaussianNoise(mesh, sigma_fraction_of_mean_edge, seed, [&](int32_t v, SplitMix64&) { return normals[v]; });
 }
 
+void AddImpulsiveNoise(Mesh& mesh, double share, double scale_fraction_of_mean_edge, uint64_t seed) {
+  const std::vector<Vec3> normals = VertexNormals(mesh);
+  const Topology topo = BuildTopology(mesh);
+  const double scale = scale_fraction_of_mean_edge * MeanEdgeLength(mesh, topo);
+  SplitMix64 rng(seed);
+  for (int32_t v = 0; v < topo.num_vertices(); ++v) {
+    if (topo.kind[v] == VertexKind::kIsolated) continue;
+    // Three draws per vertex, whether thrown or not: the same vertices for any share's run.
+    const double pick = 0.5 * (rng.NextSigned() + 1.0), size = 0.5 * (rng.NextSigned() + 1.0);
+    const double side = rng.NextSigned() < 0.0 ? -1.0 : 1.0;
+    if (pick < share) mesh.positions[v] += normals[v] * (side * scale * (1.0 + 2.0 * size));
+  }
+}
+
 void AddRandomDirectionNoise(Mesh& mesh, double sigma_fraction_of_mean_edge, uint64_t seed) {
   AddGaussianNoise(mesh, sigma_fraction_of_mean_edge, seed,
                    [](int32_t, SplitMix64& rng) { return rng.NextDirection(); });

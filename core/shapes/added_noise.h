@@ -24,4 +24,9 @@ void AddNormalNoise(Mesh& mesh, double sigma_fraction_of_mean_edge, uint64_t see
 // along its normal: the displacement's RMS is again sigma h, its normal part sigma h / sqrt(3).
 void AddRandomDirectionNoise(Mesh& mesh, double sigma_fraction_of_mean_edge, uint64_t seed);
 
+// Impulsive noise, a scanner's outliers: each vertex a usable face touches is, with probability
+// `share`, thrown along its vertex normal (either way) by a distance drawn uniformly from
+// [scale h, 3 scale h]; the others stay put.
+void AddImpulsiveNoise(Mesh& mesh, double share, double scale_fraction_of_mean_edge, uint64_t seed);
+
 }  // namespace meshsmooth
