@@ -105,8 +105,9 @@ constexpr char kUsage[] =
     "  --no-paper       skip the fixed-iteration tables of the paper's setting\n"
     "  --quick          fandisk, bunny-small and the sphere, sigma 0 and 0.2 (random: 0.2), one seed,\n"
     "                   no paper tables\n"
-    "  --write-noisy MESH SIGMA SEED OUT  only write the benchmark's input for MESH with Gaussian noise\n"
-    "                   of SIGMA h along the normals and SEED (as the tables use it) to OUT, and exit\n";
+    "  --write-noisy MESH SIGMA SEED OUT [random|impulsive]  only write the benchmark's input for MESH\n"
+    "                   with Gaussian noise of SIGMA h along the normals (or in random directions, or\n"
+    "                   impulsive noise of scale SIGMA) and SEED (as the tables use it) to OUT, and exit\n";
 
 }  // namespace
 }  // namespace meshsmooth::bench
@@ -169,7 +170,12 @@ int main(int argc, char** argv) {
         std::fprintf(stderr, "meshsmooth_quality: %s\n", subject.status().ToString().c_str());
         return 1;
       }
-      const Mesh noisy = MakeNoisy(subject->truth->mesh(), Case{Noise::kNormal, std::atof(sigma.c_str())},
+      // An optional fifth word names the noise: normal (the default), random or impulsive.
+      Noise kind = Noise::kNormal;
+      if (i + 1 < argc && (std::string(argv[i + 1]) == "random" || std::string(argv[i + 1]) == "impulsive")) {
+        kind = next() == "random" ? Noise::kRandom : Noise::kImpulsive;
+      }
+      const Mesh noisy = MakeNoisy(subject->truth->mesh(), Case{kind, std::atof(sigma.c_str())},
                                    std::strtoull(seed.c_str(), nullptr, 10));
       if (absl::Status s = WriteMesh(out, noisy); !s.ok()) {
         std::fprintf(stderr, "meshsmooth_quality: %s\n", s.ToString().c_str());

@@ -139,6 +139,29 @@ TEST(ShapesTest, NoiseIsSeededAndBounded) {
   EXPECT_NEAR(sum / (3.0 * clean.positions.size()), 0.0, 0.02 * h);  // zero mean
 }
 
+TEST(ShapesTest, ImpulsiveNoiseThrowsItsShareAlongTheNormals) {
+  const Mesh clean = Icosphere(5);
+  Mesh a = clean, b = clean;
+  AddImpulsiveNoise(a, 0.1, 1.0, 7);
+  AddImpulsiveNoise(b, 0.1, 1.0, 7);
+  EXPECT_EQ(a.positions, b.positions);
+  const double h = MeanEdgeLength(clean, BuildTopology(clean));
+  int64_t thrown = 0, out = 0;
+  for (size_t i = 0; i < clean.positions.size(); ++i) {
+    const Vec3 d = a.positions[i] - clean.positions[i];
+    if (d == Vec3{}) continue;
+    ++thrown;
+    const double along = Dot(d, clean.positions[i]);  // the unit sphere's normal is the position
+    out += along > 0.0;
+    EXPECT_NEAR(std::abs(along), Norm(d), 1e-2 * h);  // along the normal (the mesh's, close to the sphere's)
+    EXPECT_GE(Norm(d), 0.999 * h);
+    EXPECT_LE(Norm(d), 3.001 * h);
+  }
+  const auto n = static_cast<double>(clean.positions.size());
+  EXPECT_NEAR(thrown / n, 0.1, 0.01);
+  EXPECT_NEAR(out / static_cast<double>(thrown), 0.5, 0.05);
+}
+
 TEST(ShapesTest, MarchingTetrahedraTorusIsClosedOutwardAndOnTheSurface) {
   const double R = 1.0, r = 0.4, step = 0.05;
   auto torus = [&](const Vec3& p) { return std::hypot(std::hypot(p.x, p.y) - R, p.z) - r; };
