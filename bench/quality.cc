@@ -49,7 +49,7 @@ struct Options {
   std::vector<std::string> meshes = kDefaultMeshes;
   std::vector<double> sigmas = {0.0, 0.1, 0.2, 0.3};
   std::vector<double> random_sigmas = {0.1, 0.2, 0.3};
-  std::vector<double> impulsive;
+  std::vector<double> impulsive = {1.0};
   int seeds = 3;
   int large_seeds = 1;             // 0: as many as `seeds`
   std::vector<std::string> flows;  // empty: every flow of the table, unless no_flows
@@ -94,7 +94,7 @@ constexpr char kUsage[] =
     "  --sigmas         Gaussian noise along the normals, in mean edge lengths h (0 = the clean mesh)\n"
     "  --random-sigmas  Gaussian noise in random directions (\"\": none)\n"
     "  --impulsive      impulsive noise: 10% of the vertices thrown S h to 3 S h along their normals,\n"
-    "                   for each S listed (default: none)\n"
+    "                   for each S listed (default 1; \"\": none)\n"
     "  --seeds          noisy copies per mesh and sigma; --large-seeds for meshes of 200k+ vertices\n"
     "                   (default 1; 0: as --seeds)\n"
     "  --flows          oracle rows for these flows of the flow table (default: all; `none`: none)\n"
@@ -186,6 +186,7 @@ int main(int argc, char** argv) {
       opt.meshes = {"fandisk", "bunny-small", "sphere"};
       opt.sigmas = {0.0, 0.2};
       opt.random_sigmas = {0.2};
+      opt.impulsive = {};
       opt.seeds = 1;
       opt.paper = false;
     } else {

@@ -91,6 +91,10 @@ void PrintSummary(const v1::Summary& s) {
                 p.effective_step());
   }
   if (p.boundary() == v1::BOUNDARY_MODE_CURVE) std::printf("boundary vertices moved too (boundary: curve)\n");
+  if (p.outliers_moved() > 0) {
+    std::printf("%lld outliers (vertices thrown off the surface) moved back onto it first\n",
+                static_cast<long long>(p.outliers_moved()));
+  }
   std::printf("%-28s %14s %14s\n", "", "before", "after");
   std::printf("%-28s %14.6g %14.6g\n", "area", a.area(), b.area());
   std::printf("%-28s %14.6g %14.6g\n", "signed volume", a.signed_volume(), b.signed_volume());

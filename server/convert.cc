@@ -203,6 +203,7 @@ void ToProto(const JobParams& params, const FlowResult& result, v1::EffectivePar
     out->set_noise_estimate(result.auto_stop->noise_sigma_h);
     out->set_noise_removed(result.auto_stop->displacement_h);
   }
+  out->set_outliers_moved(result.outliers_moved);
   out->set_weights(p.weights == UmbrellaWeights::kInverseDistance ? v1::UMBRELLA_WEIGHTS_INVERSE_DISTANCE
                                                                   : v1::UMBRELLA_WEIGHTS_UNIFORM);
   out->set_boundary(result.boundary == BoundaryMode::kCurve ? v1::BOUNDARY_MODE_CURVE : v1::BOUNDARY_MODE_FIXED);

@@ -149,14 +149,12 @@ bool ChoosesFlow(const FlowParams& p) {
   return !p.flow.has_value() && p.iterations == kAutoIterations && !p.step.has_value();
 }
 
-absl::StatusOr<FlowResult> SmoothAutomatic(Mesh& mesh, const Topology& topo, const FlowParams& p,
-                                           const RunControl& control, double h) {
-  FlowParams q = p;
-  if (!ChoosesFlow(p)) q.flow = p.flow.value_or(kDefaultFlow);
-  Report(control, Phase::kNoiseEstimate, q.flow.value_or(kDefaultFlow));
+namespace {
+
+// SmoothAutomatic once the noise is read: `q` has its flow set unless the job chooses it.
+absl::StatusOr<FlowResult> SmoothWithEstimate(Mesh& mesh, const Topology& topo, const FlowParams& q,
+                                              const RunControl& control, double h, const NoiseEstimate& noise) {
   const int32_t n = mesh.num_vertices();
-  // Every thread the job may use, whatever the mesh's size: the fits are independent and costly.
-  const NoiseEstimate noise = EstimateNoise(mesh, topo, h, p.threads);
   const int32_t size = SampleSize(n);
   if (size >= n) return Choose(mesh, topo, q, control, h, noise);
 
@@ -195,6 +193,33 @@ absl::StatusOr<FlowResult> SmoothAutomatic(Mesh& mesh, const Topology& topo, con
     result->stop_reason = chosen->stop_reason;
     if (result->auto_stop && chosen->auto_stop) result->auto_stop->risk_h2 = chosen->auto_stop->risk_h2;
   }
+  return result;
+}
+
+}  // namespace
+
+absl::StatusOr<FlowResult> SmoothAutomatic(Mesh& mesh, const Topology& topo, const FlowParams& p,
+                                           const RunControl& control, double h) {
+  FlowParams q = p;
+  if (!ChoosesFlow(p)) q.flow = p.flow.value_or(kDefaultFlow);
+  Report(control, Phase::kNoiseEstimate, q.flow.value_or(kDefaultFlow));
+  // Every thread the job may use, whatever the mesh's size: the fits are independent and costly.
+  NoiseEstimate noise = EstimateNoise(mesh, topo, h, p.threads, control.stop);
+  int64_t outliers = 0;
+  if (ChoosesFlow(p) && noise.reliable && noise.outlier_share > kImpulsiveShare) {
+    // Twice, the second time at the threshold of the noise read without the first pass's
+    // outliers, which had pulled their neighbours' fits and raised it.
+    std::vector<uint8_t> moved(mesh.positions.size(), 0);
+    for (int pass = 0; pass < 2 && noise.reliable; ++pass) {
+      RemoveOutliers(mesh, topo, h, OutlierThresholdH(noise), kOutlierRounds, moved, p.threads, control.stop,
+                     q.locked.empty() ? nullptr : q.locked.data());
+      noise = EstimateNoise(mesh, topo, h, p.threads, control.stop);
+    }
+    for (uint8_t m : moved) outliers += m;
+  }
+  if (absl::Status s = control.stop.Check(); !s.ok()) return s;
+  absl::StatusOr<FlowResult> result = SmoothWithEstimate(mesh, topo, q, control, h, noise);
+  if (result.ok()) result->outliers_moved = outliers;
   return result;
 }
 

@@ -195,6 +195,9 @@ struct FlowResult {
   // kCurve when some boundary vertex moved with the run (BoundaryMode::kCurve on a mesh with a
   // boundary), else kFixed.
   BoundaryMode boundary = BoundaryMode::kFixed;
+  // The default job's outliers moved onto their fitted surfaces before the run (kImpulsiveShare,
+  // core/flows/auto_stop.h); 0 for any other job.
+  int64_t outliers_moved = 0;
   Progress last;
   std::optional<AutoStopReport> auto_stop;  // set when the run stopped automatically
 };

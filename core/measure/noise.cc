@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <vector>
 
 #include "core/normals.h"
@@ -48,15 +49,20 @@ constexpr int64_t kMinWellPosed = 25;
 constexpr size_t kMaxGather = 1024;
 constexpr int64_t kMinWellPosedPerTried = 4;  // one in four
 
-// The normalised residual r / sqrt(1 + g) of vertex v (header comment), or NaN when its fit is
-// not well posed (or v's second ring too large to gather: a fan's rim around a centre of huge
-// valence, skipped in bounded time).
-double NormalisedResidual(const Mesh& mesh, const Topology& topo, int32_t v, double inv_h,
-                          std::vector<int32_t>& ring2) {
+// The fit at vertex v (header comment): its residual r (v's height above the fitted surface, in
+// h), the fit's own variance g at v, and the frame's normal n.
+struct Fit {
+  double r = 0.0, g = 0.0;
+  Vec3 n;
+};
+
+// The fit at vertex v, or none when it is not well posed (or v's second ring is too large to
+// gather: a fan's rim around a centre of huge valence, skipped in bounded time).
+std::optional<Fit> FitAt(const Mesh& mesh, const Topology& topo, int32_t v, double inv_h, std::vector<int32_t>& ring2) {
   const Vec3* pos = mesh.positions.data();
   const Vec3 normal = RingNormal(topo, pos, v);
   const double len = Norm(normal);
-  if (!(len > 0.0) || !std::isfinite(len)) return std::numeric_limits<double>::quiet_NaN();
+  if (!(len > 0.0) || !std::isfinite(len)) return std::nullopt;
   const Vec3 n = normal * (1.0 / len);
   // Any unit vector across n, then the third axis.
   const Vec3 helper = std::abs(n.x) < 0.9 ? Vec3{1, 0, 0} : Vec3{0, 1, 0};
@@ -69,7 +75,7 @@ double NormalisedResidual(const Mesh& mesh, const Topology& topo, int32_t v, dou
     const int32_t u = topo.ring[k];
     const int32_t first = topo.ring_offsets[u], last = topo.ring_offsets[u + 1];
     if (ring2.size() + 1 + static_cast<size_t>(last - first) > kMaxGather) {
-      return std::numeric_limits<double>::quiet_NaN();
+      return std::nullopt;
     }
     ring2.push_back(u);
     ring2.insert(ring2.end(), topo.ring.begin() + first, topo.ring.begin() + last);
@@ -77,7 +83,7 @@ double NormalisedResidual(const Mesh& mesh, const Topology& topo, int32_t v, dou
   std::sort(ring2.begin(), ring2.end());
   ring2.erase(std::unique(ring2.begin(), ring2.end()), ring2.end());
   ring2.erase(std::remove(ring2.begin(), ring2.end(), v), ring2.end());
-  if (static_cast<int>(ring2.size()) < kMinFitPoints) return std::numeric_limits<double>::quiet_NaN();
+  if (static_cast<int>(ring2.size()) < kMinFitPoints) return std::nullopt;
 
   // The ring in the tangent plane, whitened: along the principal axes of its second moment
   // about v, each scaled to unit spread. A cubic in (x, y) is a cubic in any linear map of them,
@@ -93,7 +99,7 @@ double NormalisedResidual(const Mesh& mesh, const Topology& topo, int32_t v, dou
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> axes(moment);
   const Eigen::Vector2d spread = axes.eigenvalues();
   if (axes.info() != Eigen::Success || !(spread(0) > kMinRelativePivot * spread(1))) {
-    return std::numeric_limits<double>::quiet_NaN();
+    return std::nullopt;
   }
   Eigen::Matrix2d whiten = axes.eigenvectors().transpose();
   whiten.row(0) /= std::sqrt(spread(0) / static_cast<double>(ring2.size()));
@@ -112,18 +118,91 @@ double NormalisedResidual(const Mesh& mesh, const Topology& topo, int32_t v, dou
   }
   ata = ata.selfadjointView<Eigen::Lower>();
   const Eigen::LDLT<Mat> ldlt(ata);
-  if (ldlt.info() != Eigen::Success) return std::numeric_limits<double>::quiet_NaN();
+  if (ldlt.info() != Eigen::Success) return std::nullopt;
   const auto d = ldlt.vectorD();
   const double largest = d.cwiseAbs().maxCoeff();
-  if (!(largest > 0.0) || !(d.minCoeff() > kMinRelativePivot * largest))
-    return std::numeric_limits<double>::quiet_NaN();
+  if (!(largest > 0.0) || !(d.minCoeff() > kMinRelativePivot * largest)) return std::nullopt;
   const Col coef = ldlt.solve(atz);
   Col unit_f = Col::Zero();
   unit_f(0) = 1.0;
   const double g = ldlt.solve(unit_f)(0);
   const double r = -coef(0);
-  if (!std::isfinite(r) || !(g >= 0.0)) return std::numeric_limits<double>::quiet_NaN();
-  return r / std::sqrt(1.0 + g);
+  if (!std::isfinite(r) || !(g >= 0.0)) return std::nullopt;
+  return Fit{r, g, n};
+}
+
+// The normalised residual r / sqrt(1 + g) of vertex v, or NaN when its fit is not well posed.
+double NormalisedResidual(const Mesh& mesh, const Topology& topo, int32_t v, double inv_h,
+                          std::vector<int32_t>& ring2) {
+  const std::optional<Fit> fit = FitAt(mesh, topo, v, inv_h, ring2);
+  return fit ? fit->r / std::sqrt(1.0 + fit->g) : std::numeric_limits<double>::quiet_NaN();
+}
+
+// The median height above v of its ring's inliers (the vertices not flagged in `skip`, when at
+// least three are not; else all of them), along the normal of the plane that fits the inliers of
+// its first and second rings (principal components: a dozen points or more, where the ring's own
+// polygon leans by tens of degrees when some of it is thrown). None for a degenerate ring.
+std::optional<double> RingMedianHeight(const Vec3* pos, const Topology& topo, int32_t v, const uint8_t* skip,
+                                       std::vector<int32_t>& ids, Vec3* axis = nullptr) {
+  auto inlier = [&](int32_t w) { return skip == nullptr || !skip[w]; };
+  const int32_t first = topo.ring_offsets[v], last = topo.ring_offsets[v + 1];
+  int32_t inliers = 0;
+  for (int32_t k = first; k < last; ++k) inliers += inlier(topo.ring[k]);
+  const bool all = inliers < 3;
+  if (last - first < 3) return std::nullopt;
+  ids.clear();
+  for (int32_t k = first; k < last; ++k) {
+    const int32_t w = topo.ring[k];
+    if (!all && !inlier(w)) continue;
+    ids.push_back(w);
+    for (int32_t j = topo.ring_offsets[w]; j < topo.ring_offsets[w + 1] && ids.size() < kMaxGather; ++j) {
+      const int32_t u = topo.ring[j];
+      if (u != v && (all || inlier(u))) ids.push_back(u);
+    }
+  }
+  std::sort(ids.begin(), ids.end());
+  ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
+  // The plane, then again without the points far off it (thrown vertices not flagged yet).
+  Vec3 unit;
+  std::vector<double> off;
+  for (int pass = 0; pass < 2; ++pass) {
+    if (ids.size() < 3) return std::nullopt;
+    Vec3 centre;
+    for (int32_t u : ids) centre += pos[u];
+    centre *= 1.0 / static_cast<double>(ids.size());
+    Eigen::Matrix3d moment = Eigen::Matrix3d::Zero();
+    for (int32_t u : ids) {
+      const Vec3 d = pos[u] - centre;
+      const Eigen::Vector3d e(d.x, d.y, d.z);
+      moment += e * e.transpose();
+    }
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> pca(moment);
+    if (pca.info() != Eigen::Success || !(pca.eigenvalues()(1) > 0.0)) return std::nullopt;
+    const Eigen::Vector3d least = pca.eigenvectors().col(0);  // eigenvalues ascending
+    unit = Vec3{least(0), least(1), least(2)};
+    if (!IsFinite(unit)) return std::nullopt;
+    if (pass == 1) break;
+    off.resize(ids.size());
+    for (size_t i = 0; i < ids.size(); ++i) off[i] = std::abs(Dot(pos[ids[i]] - centre, unit));
+    std::vector<double> sorted = off;
+    const auto mid = sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2);
+    std::nth_element(sorted.begin(), mid, sorted.end());
+    const double keep = 3.0 * *mid;
+    size_t kept = 0;
+    for (size_t i = 0; i < ids.size(); ++i) {
+      if (off[i] <= keep) ids[kept++] = ids[i];
+    }
+    if (kept == ids.size() || kept < 3) break;
+    ids.resize(kept);
+  }
+  std::vector<double> heights;
+  for (int32_t k = first; k < last; ++k) {
+    if (all || inlier(topo.ring[k])) heights.push_back(Dot(pos[topo.ring[k]] - pos[v], unit));
+  }
+  const auto mid = heights.begin() + static_cast<std::ptrdiff_t>(heights.size() / 2);
+  std::nth_element(heights.begin(), mid, heights.end());
+  if (axis != nullptr) *axis = unit;
+  return *mid;
 }
 
 }  // namespace
@@ -179,7 +258,70 @@ NoiseEstimate EstimateNoise(const Mesh& mesh, const Topology& topo, double h, in
   double sum = 0.0;
   for (double r : residual) sum += r <= cut ? r * r : 0.0;
   estimate.deviation_h = std::sqrt(sum / static_cast<double>(residual.size()) / kTrimmedSecondMoment);
+  const double outlier = OutlierThresholdH(estimate);
+  int64_t outliers = 0;
+  for (double r : residual) outliers += r > outlier;
+  estimate.outlier_share = static_cast<double>(outliers) / static_cast<double>(residual.size());
   return estimate;
+}
+
+void RemoveOutliers(Mesh& mesh, const Topology& topo, double h, double threshold_h, int rounds,
+                    std::vector<uint8_t>& moved, int threads, const StopToken& stop, const uint8_t* keep) {
+  const int32_t n = topo.num_vertices();
+  moved.resize(n, 0);
+  if (!(h > 0.0) || !std::isfinite(h) || n == 0) return;
+  if (threads <= 0) threads = omp_get_max_threads();
+  const double inv_h = 1.0 / h;
+  std::vector<Vec3> target(n);
+  std::vector<uint8_t> moves(n, 0);
+  for (int round = 0; round < rounds && !stop.Fired(); ++round) {
+    // The outliers first, then each one's place from its ring's other vertices: a thrown
+    // neighbour would tilt the ring's plane (a ring with one vertex 2 h up leans by ~40 degrees)
+    // and leave the vertex beside its place, with faces turned over.
+#pragma omp parallel num_threads(threads) if (threads > 1 && n >= kMinParallelFits)
+    {
+      std::vector<int32_t> ring2;
+      std::vector<int32_t> ring;
+#pragma omp for schedule(static, 128)
+      for (int32_t v = 0; v < n; ++v) {
+        moves[v] = 0;
+        if (topo.kind[v] != VertexKind::kInterior || (keep != nullptr && keep[v] != 0)) continue;
+        const std::optional<Fit> fit = FitAt(mesh, topo, v, inv_h, ring2);
+        if (fit) {
+          moves[v] = std::abs(fit->r) / std::sqrt(1.0 + fit->g) > threshold_h;
+        } else {  // too few neighbours for a fit (a valence-3 vertex, a small second ring): its ring
+          const std::optional<double> height = RingMedianHeight(mesh.positions.data(), topo, v, nullptr, ring);
+          moves[v] = height && std::abs(*height) > threshold_h * h;
+        }
+      }
+    }
+#pragma omp parallel num_threads(threads) if (threads > 1 && n >= kMinParallelFits)
+    {
+      std::vector<int32_t> ring;
+#pragma omp for schedule(static, 128)
+      for (int32_t v = 0; v < n; ++v) {
+        if (!moves[v]) continue;
+        // Back to the median height of its ring's inliers, along the normal of their polygon
+        // (the fit, pulled by the other outliers around, can reach far, and a thrown vertex's
+        // faces tilt its own normal).
+        Vec3 axis;
+        const std::optional<double> height =
+            RingMedianHeight(mesh.positions.data(), topo, v, moves.data(), ring, &axis);
+        if (height)
+          target[v] = mesh.positions[v] + axis * *height;
+        else
+          moves[v] = 0;
+      }
+    }
+    bool any = false;
+    for (int32_t v = 0; v < n; ++v) {
+      if (!moves[v]) continue;
+      mesh.positions[v] = target[v];
+      moved[v] = 1;
+      any = true;
+    }
+    if (!any) break;
+  }
 }
 
 }  // namespace meshsmooth

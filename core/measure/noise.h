@@ -2,19 +2,24 @@
 // from the surface they sample, along the surface normal: what automatic stopping
 // (FlowParams::iterations == 0, docs/quality-method.md) compares the flow's displacement with.
 //
-// For each interior vertex v, a quadric height field z = a x^2 + b xy + c y^2 + d x + e y + f
-// is fitted by least squares to v's second ring (v left out), in a frame whose z axis is v's
+// For each interior vertex v, a cubic height field z(x, y) (ten terms, constant f) is fitted by
+// least squares to v's first and second rings (v left out), in a frame whose z axis is v's
 // area-weighted normal; v's residual is r = -f (v sits at the origin). With independent noise
 // of deviation sigma along the normals, r has variance sigma^2 (1 + g), where g = [(A^T A)^-1]_ff
 // is the fit's own variance at the origin (A: the fit's design matrix), so r / sqrt(1 + g) has
 // deviation sigma. The estimate is 1.4826 x the median of |r| / sqrt(1 + g): the median
-// ignores the minority of vertices on creases and corners, where a quadric cannot follow the
-// surface. On a smooth, clean mesh the residuals are the fit's third-order terms, a small
+// ignores the minority of vertices on creases and corners, where a cubic cannot follow the
+// surface. On a smooth, clean mesh the residuals are the fit's fourth-order terms, a small
 // fraction of h; docs/quality.md gives the estimates of the benchmark's clean and noisy meshes.
 // A mesh of more than 20,000 vertices is sampled: every k-th vertex is fitted.
+//
+// The same fits find outliers, vertices thrown far off the surface (a scanner's impulsive
+// noise): their share tells that kind of noise (NoiseEstimate::outlier_share), and
+// RemoveOutliers() moves them back (docs/quality-method.md, "Outliers").
 #pragma once
 
 #include <cstdint>
+#include <vector>
 
 #include "core/mesh.h"
 #include "core/topology.h"
@@ -32,6 +37,10 @@ struct NoiseEstimate {
   double deviation_h = 0.0;
   int64_t vertices_used = 0;   // interior vertices with a well-posed fit
   int64_t vertices_tried = 0;  // interior vertices fitted (every k-th one of a large mesh)
+  // The share of the well-posed fits whose normalised residual exceeds kOutlierScales robust
+  // scales and kOutlierFloorH: a few percent on clean CAD parts (creases a cubic cannot follow)
+  // and under Gaussian noise, about the thrown share under impulsive noise (a scanner's outliers).
+  double outlier_share = 0.0;
   // False when too few fits were well posed for the median to mean anything (fewer than 25,
   // or fewer than a quarter of those tried: e.g. a fan whose rim vertices all see one circle);
   // sigma is then 0.
@@ -43,5 +52,27 @@ struct NoiseEstimate {
 // Deterministic for any thread count. Returns early (an estimate of zero) once `stop` fires.
 NoiseEstimate EstimateNoise(const Mesh& mesh, const Topology& topo, double h, int threads = 0,
                             const StopToken& stop = {});
+
+// A vertex is an outlier when its normalised residual exceeds this many robust scales...
+inline constexpr double kOutlierScales = 5.0;
+// ... and this many h (a cubic misses a clean crease by less: 0.05% of fandisk's vertices and
+// 1.6% of the turbine's narrow strips exceed it).
+inline constexpr double kOutlierFloorH = 0.5;
+// The outlier threshold of `estimate`, in h.
+inline double OutlierThresholdH(const NoiseEstimate& estimate) {
+  return estimate.sigma_h * kOutlierScales > kOutlierFloorH ? estimate.sigma_h * kOutlierScales : kOutlierFloorH;
+}
+
+// Moves every interior vertex whose normalised residual exceeds `threshold_h` to the median
+// height of its ring along the normal of the ring's polygon (the ring's alone: the fit, pulled by
+// the other outliers around, can reach far, and a thrown vertex's faces tilt its own normal),
+// all at once from the same positions, then
+// again, at most `rounds` times, until none exceeds it: a thrown vertex pulls its neighbours'
+// fits, so the first round can leave some. Vertices where `keep` (per vertex) is non-zero stay;
+// `moved` (one entry per vertex) is set where a vertex moved.
+// Deterministic for any thread count; stops early once `stop` fires.
+void RemoveOutliers(Mesh& mesh, const Topology& topo, double h, double threshold_h, int rounds,
+                    std::vector<uint8_t>& moved, int threads = 0, const StopToken& stop = {},
+                    const uint8_t* keep = nullptr);
 
 }  // namespace meshsmooth
