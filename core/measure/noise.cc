@@ -274,6 +274,9 @@ void RemoveOutliers(Mesh& mesh, const Topology& topo, double h, double threshold
   const double inv_h = 1.0 / h;
   std::vector<Vec3> target(n);
   std::vector<uint8_t> moves(n, 0);
+  // The vertices to look at in a round: all in the first, then those within two rings of a
+  // vertex the round before moved (no other fit has changed).
+  std::vector<uint8_t> check(n, 1);
   for (int round = 0; round < rounds && !stop.Fired(); ++round) {
     // The outliers first, then each one's place from its ring's other vertices: a thrown
     // neighbour would tilt the ring's plane (a ring with one vertex 2 h up leans by ~40 degrees)
@@ -285,7 +288,7 @@ void RemoveOutliers(Mesh& mesh, const Topology& topo, double h, double threshold
 #pragma omp for schedule(static, 128)
       for (int32_t v = 0; v < n; ++v) {
         moves[v] = 0;
-        if (topo.kind[v] != VertexKind::kInterior || (keep != nullptr && keep[v] != 0)) continue;
+        if (!check[v] || topo.kind[v] != VertexKind::kInterior || (keep != nullptr && keep[v] != 0)) continue;
         const std::optional<Fit> fit = FitAt(mesh, topo, v, inv_h, ring2);
         if (fit) {
           moves[v] = std::abs(fit->r) / std::sqrt(1.0 + fit->g) > threshold_h;
@@ -314,11 +317,18 @@ void RemoveOutliers(Mesh& mesh, const Topology& topo, double h, double threshold
       }
     }
     bool any = false;
+    std::fill(check.begin(), check.end(), 0);
     for (int32_t v = 0; v < n; ++v) {
       if (!moves[v]) continue;
       mesh.positions[v] = target[v];
       moved[v] = 1;
       any = true;
+      check[v] = 1;
+      for (int32_t k = topo.ring_offsets[v]; k < topo.ring_offsets[v + 1]; ++k) {
+        const int32_t w = topo.ring[k];
+        check[w] = 1;
+        for (int32_t j = topo.ring_offsets[w]; j < topo.ring_offsets[w + 1]; ++j) check[topo.ring[j]] = 1;
+      }
     }
     if (!any) break;
   }

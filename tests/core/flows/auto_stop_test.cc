@@ -133,6 +133,21 @@ TEST(NoiseEstimateTest, RemoveOutliersPutsAThrownVertexBackInItsPlane) {
   EXPECT_EQ(flat.positions, plane.positions);
 }
 
+TEST(NoiseEstimateTest, RemoveOutliersIsTheSameForAnyThreadCount) {
+  const Mesh clean = Icosphere(5);  // above kMinParallelFits: the threads share the rounds
+  const Topology topo = BuildTopology(clean);
+  const double h = MeanEdgeLength(clean, topo);
+  Mesh one = clean;
+  AddImpulsiveNoise(one, 0.1, 1.0, 5);
+  Mesh two = one;
+  std::vector<uint8_t> moved_one, moved_two;
+  RemoveOutliers(one, topo, h, 0.5, 3, moved_one, 1);
+  RemoveOutliers(two, topo, h, 0.5, 3, moved_two, 2);
+  EXPECT_EQ(one.positions, two.positions);
+  EXPECT_EQ(moved_one, moved_two);
+  EXPECT_GT(std::count(moved_one.begin(), moved_one.end(), 1), clean.num_vertices() / 20);
+}
+
 // A tenth of the vertices thrown 1-3 h: the default job moves them back before it reads the noise
 // again. Without that it stopped after one iteration, further from the clean surface's normals
 // than its input (fandisk: 21.7 against 18.4 degrees; 3.4 with it).
