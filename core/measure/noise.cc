@@ -288,8 +288,10 @@ void RemoveOutliers(Mesh& mesh, const Topology& topo, double h, double threshold
 #pragma omp for schedule(static, 128)
       for (int32_t v = 0; v < n; ++v) {
         moves[v] = 0;
-        if (!check[v] || topo.kind[v] != VertexKind::kInterior || (keep != nullptr && keep[v] != 0)) continue;
-        const std::optional<Fit> fit = FitAt(mesh, topo, v, inv_h, ring2);
+        // A boundary vertex has no fit (a half ring): its ring's median height tells.
+        const bool rim = topo.kind[v] == VertexKind::kBoundary;
+        if (!check[v] || (topo.kind[v] != VertexKind::kInterior && !rim) || (keep != nullptr && keep[v] != 0)) continue;
+        const std::optional<Fit> fit = rim ? std::nullopt : FitAt(mesh, topo, v, inv_h, ring2);
         if (fit) {
           moves[v] = std::abs(fit->r) / std::sqrt(1.0 + fit->g) > threshold_h;
         } else {  // too few neighbours for a fit (a valence-3 vertex, a small second ring): its ring

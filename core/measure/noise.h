@@ -63,7 +63,8 @@ inline double OutlierThresholdH(const NoiseEstimate& estimate) {
   return estimate.sigma_h * kOutlierScales > kOutlierFloorH ? estimate.sigma_h * kOutlierScales : kOutlierFloorH;
 }
 
-// Moves every interior vertex whose normalised residual exceeds `threshold_h` to the median
+// Moves every interior vertex whose normalised residual exceeds `threshold_h` (a boundary vertex,
+// which has no fit: whose ring's median height, below, exceeds threshold_h h) to the median
 // height of its ring along the normal of the ring's polygon (the ring's alone: the fit, pulled by
 // the other outliers around, can reach far, and a thrown vertex's faces tilt its own normal),
 // all at once from the same positions, then
