@@ -130,9 +130,9 @@ absl::StatusOr<FlowResult> Smooth(Mesh& mesh, const Topology& topo, const FlowPa
     return absl::InvalidArgumentError("the topology was built for another mesh");
   }
   const double h = MeanEdgeLength(mesh, topo);
-  if (flows::ChoosesFlow(p)) return flows::SmoothAutomatic(mesh, topo, p, control, h);
   FlowParams q = p;
-  if (q.boundary == BoundaryMode::kAuto) q.boundary = BoundaryMode::kFixed;  // only the default job moves rims
+  // Only the default job moves rims of its own accord (BoundaryMode::kAuto).
+  if (q.boundary == BoundaryMode::kAuto && !flows::ChoosesFlow(p)) q.boundary = BoundaryMode::kFixed;
   if (p.iterations == kAutoIterations) return flows::SmoothAutomatic(mesh, topo, q, control, h);
   q.flow = p.flow.value_or(kDefaultFlow);
   return flows::SmoothOneFlow(mesh, topo, q, control, h, flows::AutoPlan{});

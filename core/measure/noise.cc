@@ -138,33 +138,47 @@ double NormalisedResidual(const Mesh& mesh, const Topology& topo, int32_t v, dou
   return fit ? fit->r / std::sqrt(1.0 + fit->g) : std::numeric_limits<double>::quiet_NaN();
 }
 
+// Per-thread buffers of RingMedianHeight.
+struct RingScratch {
+  std::vector<int32_t> ids;
+  std::vector<double> off, sorted, heights;
+};
+
+// The median of `values` (the upper one of an even count); reorders them.
+double Median(std::vector<double>& values) {
+  const auto mid = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
+  std::nth_element(values.begin(), mid, values.end());
+  return *mid;
+}
+
 // The median height above v of its ring's inliers (the vertices not flagged in `skip`, when at
 // least three are not; else all of them), along the normal of the plane that fits the inliers of
 // its first and second rings (principal components: a dozen points or more, where the ring's own
-// polygon leans by tens of degrees when some of it is thrown). None for a degenerate ring.
+// polygon leans by tens of degrees when some of it is thrown), into `axis`. None for a
+// degenerate ring.
 std::optional<double> RingMedianHeight(const Vec3* pos, const Topology& topo, int32_t v, const uint8_t* skip,
-                                       std::vector<int32_t>& ids, Vec3* axis = nullptr) {
-  auto inlier = [&](int32_t w) { return skip == nullptr || !skip[w]; };
+                                       RingScratch& s, Vec3* axis = nullptr) {
   const int32_t first = topo.ring_offsets[v], last = topo.ring_offsets[v + 1];
-  int32_t inliers = 0;
-  for (int32_t k = first; k < last; ++k) inliers += inlier(topo.ring[k]);
-  const bool all = inliers < 3;
   if (last - first < 3) return std::nullopt;
+  int32_t inliers = 0;
+  for (int32_t k = first; k < last; ++k) inliers += skip == nullptr || !skip[topo.ring[k]];
+  const bool all = inliers < 3;
+  auto inlier = [&](int32_t w) { return all || skip == nullptr || !skip[w]; };
+  std::vector<int32_t>& ids = s.ids;
   ids.clear();
   for (int32_t k = first; k < last; ++k) {
     const int32_t w = topo.ring[k];
-    if (!all && !inlier(w)) continue;
+    if (!inlier(w)) continue;
     ids.push_back(w);
     for (int32_t j = topo.ring_offsets[w]; j < topo.ring_offsets[w + 1] && ids.size() < kMaxGather; ++j) {
       const int32_t u = topo.ring[j];
-      if (u != v && (all || inlier(u))) ids.push_back(u);
+      if (u != v && inlier(u)) ids.push_back(u);
     }
   }
   std::sort(ids.begin(), ids.end());
   ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
   // The plane, then again without the points far off it (thrown vertices not flagged yet).
   Vec3 unit;
-  std::vector<double> off;
   for (int pass = 0; pass < 2; ++pass) {
     if (ids.size() < 3) return std::nullopt;
     Vec3 centre;
@@ -182,27 +196,23 @@ std::optional<double> RingMedianHeight(const Vec3* pos, const Topology& topo, in
     unit = Vec3{least(0), least(1), least(2)};
     if (!IsFinite(unit)) return std::nullopt;
     if (pass == 1) break;
-    off.resize(ids.size());
-    for (size_t i = 0; i < ids.size(); ++i) off[i] = std::abs(Dot(pos[ids[i]] - centre, unit));
-    std::vector<double> sorted = off;
-    const auto mid = sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2);
-    std::nth_element(sorted.begin(), mid, sorted.end());
-    const double keep = 3.0 * *mid;
+    s.off.resize(ids.size());
+    for (size_t i = 0; i < ids.size(); ++i) s.off[i] = std::abs(Dot(pos[ids[i]] - centre, unit));
+    s.sorted = s.off;
+    const double keep = 3.0 * Median(s.sorted);
     size_t kept = 0;
     for (size_t i = 0; i < ids.size(); ++i) {
-      if (off[i] <= keep) ids[kept++] = ids[i];
+      if (s.off[i] <= keep) ids[kept++] = ids[i];
     }
     if (kept == ids.size() || kept < 3) break;
     ids.resize(kept);
   }
-  std::vector<double> heights;
+  s.heights.clear();
   for (int32_t k = first; k < last; ++k) {
-    if (all || inlier(topo.ring[k])) heights.push_back(Dot(pos[topo.ring[k]] - pos[v], unit));
+    if (inlier(topo.ring[k])) s.heights.push_back(Dot(pos[topo.ring[k]] - pos[v], unit));
   }
-  const auto mid = heights.begin() + static_cast<std::ptrdiff_t>(heights.size() / 2);
-  std::nth_element(heights.begin(), mid, heights.end());
   if (axis != nullptr) *axis = unit;
-  return *mid;
+  return Median(s.heights);
 }
 
 }  // namespace
@@ -278,40 +288,38 @@ void RemoveOutliers(Mesh& mesh, const Topology& topo, double h, double threshold
   // vertex the round before moved (no other fit has changed).
   std::vector<uint8_t> check(n, 1);
   for (int round = 0; round < rounds && !stop.Fired(); ++round) {
-    // The outliers first, then each one's place from its ring's other vertices: a thrown
-    // neighbour would tilt the ring's plane (a ring with one vertex 2 h up leans by ~40 degrees)
-    // and leave the vertex beside its place, with faces turned over.
+    // The outliers first, then each one's place from the other vertices around: a thrown
+    // neighbour would tilt the plane (a ring with one vertex 2 h up leans by ~40 degrees) and
+    // leave the vertex beside its place, with faces turned over.
 #pragma omp parallel num_threads(threads) if (threads > 1 && n >= kMinParallelFits)
     {
       std::vector<int32_t> ring2;
-      std::vector<int32_t> ring;
+      RingScratch scratch;
 #pragma omp for schedule(static, 128)
       for (int32_t v = 0; v < n; ++v) {
         moves[v] = 0;
-        // A boundary vertex has no fit (a half ring): its ring's median height tells.
         const bool rim = topo.kind[v] == VertexKind::kBoundary;
         if (!check[v] || (topo.kind[v] != VertexKind::kInterior && !rim) || (keep != nullptr && keep[v] != 0)) continue;
+        // A vertex without a fit (a boundary vertex's half ring, a ring too small) is judged by
+        // its ring's median height.
         const std::optional<Fit> fit = rim ? std::nullopt : FitAt(mesh, topo, v, inv_h, ring2);
         if (fit) {
           moves[v] = std::abs(fit->r) / std::sqrt(1.0 + fit->g) > threshold_h;
-        } else {  // too few neighbours for a fit (a valence-3 vertex, a small second ring): its ring
-          const std::optional<double> height = RingMedianHeight(mesh.positions.data(), topo, v, nullptr, ring);
+        } else {
+          const std::optional<double> height = RingMedianHeight(mesh.positions.data(), topo, v, nullptr, scratch);
           moves[v] = height && std::abs(*height) > threshold_h * h;
         }
       }
     }
 #pragma omp parallel num_threads(threads) if (threads > 1 && n >= kMinParallelFits)
     {
-      std::vector<int32_t> ring;
+      RingScratch scratch;
 #pragma omp for schedule(static, 128)
       for (int32_t v = 0; v < n; ++v) {
         if (!moves[v]) continue;
-        // Back to the median height of its ring's inliers, along the normal of their polygon
-        // (the fit, pulled by the other outliers around, can reach far, and a thrown vertex's
-        // faces tilt its own normal).
         Vec3 axis;
         const std::optional<double> height =
-            RingMedianHeight(mesh.positions.data(), topo, v, moves.data(), ring, &axis);
+            RingMedianHeight(mesh.positions.data(), topo, v, moves.data(), scratch, &axis);
         if (height)
           target[v] = mesh.positions[v] + axis * *height;
         else

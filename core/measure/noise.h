@@ -18,6 +18,7 @@
 // RemoveOutliers() moves them back (docs/quality-method.md, "Outliers").
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -60,18 +61,19 @@ inline constexpr double kOutlierScales = 5.0;
 inline constexpr double kOutlierFloorH = 0.5;
 // The outlier threshold of `estimate`, in h.
 inline double OutlierThresholdH(const NoiseEstimate& estimate) {
-  return estimate.sigma_h * kOutlierScales > kOutlierFloorH ? estimate.sigma_h * kOutlierScales : kOutlierFloorH;
+  return std::max(kOutlierScales * estimate.sigma_h, kOutlierFloorH);
 }
 
-// Moves every interior vertex whose normalised residual exceeds `threshold_h` (a boundary vertex,
-// which has no fit: whose ring's median height, below, exceeds threshold_h h) to the median
-// height of its ring along the normal of the ring's polygon (the ring's alone: the fit, pulled by
-// the other outliers around, can reach far, and a thrown vertex's faces tilt its own normal),
-// all at once from the same positions, then
-// again, at most `rounds` times, until none exceeds it: a thrown vertex pulls its neighbours'
-// fits, so the first round can leave some. Vertices where `keep` (per vertex) is non-zero stay;
-// `moved` (one entry per vertex) is set where a vertex moved.
-// Deterministic for any thread count; stops early once `stop` fires.
+// Moves the outliers back: an interior vertex whose normalised residual exceeds `threshold_h`, or
+// a vertex without a fit (a boundary vertex, a ring too small) whose ring's median height exceeds
+// threshold_h h. Each goes along the normal of the plane through the inliers of its first and
+// second rings (fitted again without the points far off it) to the median height of its first
+// ring's inliers: the fit, pulled by the other outliers around, can reach far, and a thrown
+// vertex's faces tilt its own normal. A round flags the outliers, then moves them all from the
+// same positions; at most `rounds` rounds, until none is left (a thrown vertex pulls its
+// neighbours' fits, so the first round can leave some). Vertices where `keep` (per vertex) is
+// non-zero stay; `moved` (one entry per vertex) is set where a vertex moved. Deterministic for
+// any thread count; stops early once `stop` fires.
 void RemoveOutliers(Mesh& mesh, const Topology& topo, double h, double threshold_h, int rounds,
                     std::vector<uint8_t>& moved, int threads = 0, const StopToken& stop = {},
                     const uint8_t* keep = nullptr);

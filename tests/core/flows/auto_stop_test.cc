@@ -345,7 +345,9 @@ TEST(AutoStopTest, OpenMeshLosesTheNoiseOfItsRims) {
         "rims' mean move along the sphere %.4f h\n",
         c.name, m.num_vertices(), static_cast<long long>(rims), std::string(FlowName(r->flow)).c_str(),
         r->iterations_run, rms(noisy, false), rms(m, false), rms(noisy, true), rms(m, true), tangential);
-    if (c.clean.num_vertices() <= kMaxChoiceVertices) EXPECT_GE(10 * rims, 4LL * m.num_vertices()) << c.name;
+    if (c.clean.num_vertices() <= kMaxChoiceVertices) {
+      EXPECT_GE(10 * rims, 4LL * m.num_vertices()) << c.name;
+    }
     EXPECT_EQ(r->flow, FlowId::kBilateralNormal) << c.name;
     EXPECT_EQ(r->boundary, BoundaryMode::kCurve) << c.name;
     EXPECT_LT(rms(m, false), c.rms_share * rms(noisy, false)) << c.name;
