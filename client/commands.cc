@@ -93,7 +93,7 @@ int RunSmooth(const SmoothOptions& o, const ConnectionOptions& c) {
                  "(attributes) output; the summary still counts them\n";
   }
   // The attributes go to the service only for a .drc output, which is written as it comes back.
-  absl::StatusOr<Upload> upload = PrepareUpload(o.input, *out_format == MeshFormat::kDraco);
+  absl::StatusOr<Upload> upload = PrepareUpload(o.input, *out_format == MeshFormat::kDraco, o.gltf_draco);
   if (!upload.ok()) return Fail("", upload.status());
   for (const std::string& w : upload->warnings) std::cerr << "meshsmooth: warning: " << w << "\n";
   const v1::JobSpec spec = SpecFrom(o);

@@ -1,12 +1,7 @@
 #include "client/transfer.h"
 
-#include <sys/wait.h>
-#include <unistd.h>
-
 #include <algorithm>
 #include <cctype>
-#include <cerrno>
-#include <cstdio>
 #include <filesystem>
 #include <fstream>
 
@@ -128,30 +123,6 @@ std::vector<std::string> NotHeldBy(const Mesh& mesh, MeshFormat format) {
   return lost;
 }
 
-// Draco 1.5.5's glTF reading crashes on some malformed files (a null dereference in its copy of
-// tinygltf, heap overflows in its triangle-soup builder: docs/development.md), which no check
-// of ours can stop before it parses them. So the file is read once in a child process first:
-// a child that dies (a signal, or a sanitizer's exit) means the file is malformed, and the
-// CLI says so instead of crashing. Called before the CLI starts any thread.
-absl::Status ReadGltfInChild(const std::string& path) {
-  constexpr int kRead = 0, kRefused = 3;
-  std::fflush(nullptr);
-  const pid_t child = fork();
-  if (child < 0) return absl::OkStatus();  // no child: read as before
-  if (child == 0) _exit(GltfScene::Read(path).ok() ? kRead : kRefused);
-  int status = 0;
-  while (waitpid(child, &status, 0) < 0) {
-    if (errno != EINTR) return absl::OkStatus();
-  }
-  if (WIFEXITED(status) && (WEXITSTATUS(status) == kRead || WEXITSTATUS(status) == kRefused)) {
-    return absl::OkStatus();  // the read in this process gives the same result (or refusal)
-  }
-  const std::string how = WIFSIGNALED(status) ? absl::StrCat("signal ", WTERMSIG(status))
-                                              : absl::StrCat("exit status ", WEXITSTATUS(status));
-  return absl::InvalidArgumentError(absl::StrCat(path, ": a malformed glTF file: Draco's glTF reader crashed on it (",
-                                                 how, "; tried in a child process)"));
-}
-
 }  // namespace
 
 bool IsGltfPath(const std::string& path) {
@@ -160,12 +131,12 @@ bool IsGltfPath(const std::string& path) {
   return ext == ".gltf" || ext == ".glb";
 }
 
-absl::StatusOr<Upload> PrepareUpload(const std::string& input, bool with_attributes) {
+absl::StatusOr<Upload> PrepareUpload(const std::string& input, bool with_attributes, bool gltf_draco) {
   Upload upload;
   upload.input = input;
   if (IsGltfPath(input)) {
-    if (absl::Status s = ReadGltfInChild(input); !s.ok()) return s;
-    absl::StatusOr<GltfScene> scene = GltfScene::Read(input);
+    // Before any thread starts (ReadInChildFirst forks).
+    absl::StatusOr<GltfScene> scene = GltfScene::ReadInChildFirst(input, gltf_draco);
     if (!scene.ok()) return scene.status();
     upload.gltf = std::make_shared<GltfScene>(std::move(*scene));
     upload.dropped = upload.gltf->stale();

@@ -45,8 +45,10 @@ bool IsGltfPath(const std::string& path);
 // than .drc, which WriteResult writes from the input's own attributes around the result's
 // positions) a non-Draco input sends its positions and faces only: the same vertices, so the
 // same result, without encoding, sending and decoding what does not come back from the
-// service. The reader's errors when the input cannot be read.
-absl::StatusOr<Upload> PrepareUpload(const std::string& input, bool with_attributes = true);
+// service. The reader's errors when the input cannot be read. A glTF input is first read and
+// written in a child process (GltfScene::ReadInChildFirst; Draco-compressed too with
+// `gltf_draco`, the output the CLI will write): call this before starting threads.
+absl::StatusOr<Upload> PrepareUpload(const std::string& input, bool with_attributes = true, bool gltf_draco = false);
 
 // Writes `result` (the service's Draco bytes) to `output` in the format its extension names:
 // Draco bytes as they came, anything else decoded and moved back by the upload's origin, with

@@ -1,5 +1,8 @@
-// libFuzzer target: the glTF path (core/io/gltf.h). Bytes -> a .glb file -> GltfScene::Read
-// (Draco's glTF decoder); a refusal must be INVALID_ARGUMENT. A scene read must hold:
+// libFuzzer target: the glTF path (core/io/gltf.h) as the CLI takes it. Bytes -> a .glb file ->
+// GltfScene::ReadInChildFirst (Draco's glTF decoder and encoder, first in a child process:
+// Draco 1.5.5's own crashes on malformed files, which this target finds within seconds, kill
+// the child and make the file refused); a refusal must be INVALID_ARGUMENT. A scene read must
+// hold:
 //   - its surface has triangles, every index in range;
 //   - written back with its own positions, plain and Draco-compressed, it reads again with the
 //     same nodes, meshes, primitives, materials and textures.
@@ -48,7 +51,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string in = fuzz::TempPath("in.glb");
   fuzz::Check(WriteFileBytes(in, std::string_view(reinterpret_cast<const char*>(data), size)).ok(),
               "cannot write the input file");
-  absl::StatusOr<GltfScene> scene = GltfScene::Read(in);
+  absl::StatusOr<GltfScene> scene = GltfScene::ReadInChildFirst(in, /*draco_compressed=*/true);
   if (!scene.ok()) {
     fuzz::Check(scene.status().code() == absl::StatusCode::kInvalidArgument, "a refusal that is not INVALID_ARGUMENT");
     return 0;

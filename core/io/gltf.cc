@@ -1,7 +1,12 @@
 #include "core/io/gltf.h"
 
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 
 #include "absl/strings/str_cat.h"
@@ -11,6 +16,10 @@
 #include "draco/io/stdio_file_reader.h"
 #include "draco/io/stdio_file_writer.h"
 #include "draco/scene/scene.h"
+
+// A sanitizer's hook (present in sanitized builds only): what runs when a sanitizer stops the
+// process. libFuzzer sets it to save the input as a finding.
+extern "C" void __sanitizer_set_death_callback(void (*callback)()) __attribute__((weak));
 
 namespace meshsmooth {
 
@@ -119,6 +128,55 @@ absl::StatusOr<GltfScene> GltfScene::Read(const std::string& path) {
   }
   if (s.triangles.empty()) return absl::InvalidArgumentError(absl::StrCat(path, ": the glTF scene has no triangles"));
   return GltfScene(std::move(impl));
+}
+
+absl::StatusOr<GltfScene> GltfScene::ReadInChildFirst(const std::string& path, bool draco_compressed) {
+  // The child writes one byte to `read` once it has read the scene: a child that dies after it
+  // crashed in Draco's writer, before it in its reader.
+  int read[2];
+  if (pipe(read) != 0) return Read(path);  // no pipe, no child: read as before
+  std::fflush(nullptr);
+  const pid_t child = fork();
+  if (child == 0) {
+    // A crash here is the finding this child exists for, not the fuzzer's (fuzz/gltf_fuzzer.cc).
+    if (__sanitizer_set_death_callback != nullptr) __sanitizer_set_death_callback(nullptr);
+    close(read[0]);
+    absl::StatusOr<GltfScene> scene = Read(path);
+    if (!scene.ok()) _exit(0);
+    const char byte = 1;
+    if (write(read[1], &byte, 1) != 1) _exit(0);
+    const std::string out =
+        (std::filesystem::temp_directory_path() / absl::StrCat("meshsmooth_gltf_check_", getpid(), ".glb")).string();
+    const std::vector<Vec3> positions = scene->surface().positions;
+    for (bool draco : {false, true}) {
+      if (draco && !draco_compressed) continue;
+      (void)scene->Write(positions, out, draco);
+      std::remove(out.c_str());
+    }
+    _exit(0);
+  }
+  close(read[1]);
+  if (child < 0) {
+    close(read[0]);
+    return Read(path);
+  }
+  char byte = 0;
+  ssize_t got;
+  while ((got = ::read(read[0], &byte, 1)) < 0 && errno == EINTR) {
+  }
+  close(read[0]);
+  int status = 0;
+  pid_t waited;
+  while ((waited = waitpid(child, &status, 0)) < 0 && errno == EINTR) {
+  }
+  if (waited == child && !(WIFEXITED(status) && WEXITSTATUS(status) == 0)) {
+    const std::string how = WIFSIGNALED(status) ? absl::StrCat("signal ", WTERMSIG(status))
+                                                : absl::StrCat("exit status ", WEXITSTATUS(status));
+    return absl::InvalidArgumentError(absl::StrCat(path, ": a malformed glTF file: Draco's glTF ",
+                                                   got == 1 ? "writer" : "reader", " crashed on it (", how,
+                                                   "; tried in a child process)"));
+  }
+  return Read(path);  // the child read it (or refused it): this process gets the same result
 }
 
 const Mesh& GltfScene::surface() const { return impl_->surface; }

@@ -33,6 +33,15 @@ class GltfScene {
   // InvalidArgument (with Draco's message) for a file Draco's glTF decoder refuses, or one
   // without a triangle primitive; NotFound for a missing file.
   static absl::StatusOr<GltfScene> Read(const std::string& path);
+  // Read, after reading the file once in a forked child process and writing the scene it
+  // reads there (as .glb, plain and, with `draco_compressed`, Draco-compressed, to a temporary
+  // file). Draco 1.5.5's glTF reading and writing crash on some malformed files (a null
+  // dereference in its copy of tinygltf, heap overflows in its triangle-soup builder, a wild
+  // write in its entropy coder: docs/development.md), which no check of ours can stop before
+  // Draco parses them: a child that dies (a signal, or a sanitizer's exit) makes the file
+  // refused (InvalidArgument, "... crashed on it ...") instead of crashing this process.
+  // Fork-safe only where no other thread holds a lock: call it before starting threads.
+  static absl::StatusOr<GltfScene> ReadInChildFirst(const std::string& path, bool draco_compressed);
 
   GltfScene(GltfScene&&) noexcept;
   GltfScene& operator=(GltfScene&&) noexcept;

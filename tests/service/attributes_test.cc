@@ -268,6 +268,19 @@ TEST_F(AttributesTest, WhatCannotBeCarriedIsNamed) {
                                                "1 OBJ material and group lines (.off has no place for them)",
                                                "texture coordinates (.off has no place for them)"}));
 
+  // A material library that is there, with one texture image there and one missing: only the
+  // missing image is named, and the library is linked from the output's folder.
+  std::ofstream(Path("found.mtl")) << "newmtl skin\nmap_Kd skin.png\nmap_Bump -bm 0.5 bumps.png\n";
+  std::ofstream(Path("skin.png")) << "not read, only looked for";
+  std::ofstream(Path("found.obj")) << "mtllib found.mtl\nusemtl skin\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n"
+                                      "f 1 2 3\nf 1 2 4\nf 1 3 4\nf 2 3 4\n";
+  std::filesystem::create_directories(Path("out"));
+  SmoothFile(Path("found.obj"), Path("out/found.obj"), &dropped, spec);
+  EXPECT_EQ(dropped, (std::vector<std::string>{"texture image 'bumps.png' of found.mtl (not found)"}));
+  const absl::StatusOr<std::string> written = ReadFileBytes(Path("out/found.obj"));
+  ASSERT_TRUE(written.ok());
+  EXPECT_NE(written->find("\nmtllib ../found.mtl\n"), std::string::npos) << *written;
+
   Mesh scan = TexturedSphere();
   scan.obj_directives.clear();
   ASSERT_TRUE(WriteMesh(Path("scan.ply"), scan).ok());

@@ -1,15 +1,16 @@
 // glTF scenes through the CLI's upload and write-back (client/transfer.h) and the service: a
-// noisy textured sphere in two primitives that share their border positions, in a node whose
-// translation holds survey coordinates, as plain and Draco-compressed GLB, written as GLB and
-// as glTF: the same nodes, primitives, materials and textures, the same texture coordinates,
-// the translation kept, positions nearer the sphere than the noisy input's, and no crack
-// between the primitives.
+// noisy textured sphere with UV seams in two primitives that share their border positions, in
+// a node whose translation holds survey coordinates, as plain and Draco-compressed GLB, written
+// as GLB and as glTF: the same nodes, primitives, materials, textures and images, the same
+// texture coordinates and seams, fresh normals, the translation kept, positions nearer the
+// sphere than the noisy input's, and no crack between the primitives.
 #include <unistd.h>
 
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <map>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -32,19 +33,30 @@ namespace fs = std::filesystem;
 
 const Eigen::Vector3d kSurvey(512345.0, 5412345.0, 231.0);
 
+// The longitude of unit vector u as a texture coordinate in [0, 1).
+float Longitude(const Vec3& u) { return static_cast<float>(0.5 + std::atan2(u.y, u.x) / (2 * M_PI)); }
+
 // The primitive of `sphere`'s triangles for which `keep` holds: its own points (the vertices its
-// triangles use, in order of first use), lat-long texture coordinates and unit normals.
+// triangles use, in order of first use), lat-long texture coordinates and unit normals. A face
+// across the date line takes its western corners as points of their own whose longitude
+// coordinate is past 1: a UV seam, one position with two texture coordinates.
 template <typename Keep>
 std::unique_ptr<draco::Mesh> Primitive(const Mesh& sphere, const Keep& keep) {
-  std::map<int32_t, uint32_t> point_of;
-  std::vector<int32_t> vertex_of;
+  std::map<std::pair<int32_t, bool>, uint32_t> point_of;  // (vertex, past 1)
+  std::vector<std::pair<int32_t, bool>> vertex_of;
   std::vector<std::array<uint32_t, 3>> faces;
   for (const Triangle& t : sphere.triangles) {
     if (!keep(t)) continue;
+    float lo = 1.0f, hi = 0.0f;
+    for (int32_t v : t) {
+      lo = std::min(lo, Longitude(Normalized(sphere.positions[v])));
+      hi = std::max(hi, Longitude(Normalized(sphere.positions[v])));
+    }
     std::array<uint32_t, 3> f;
     for (int k = 0; k < 3; ++k) {
-      auto [it, fresh] = point_of.try_emplace(t[k], static_cast<uint32_t>(vertex_of.size()));
-      if (fresh) vertex_of.push_back(t[k]);
+      const bool past = hi - lo > 0.5f && Longitude(Normalized(sphere.positions[t[k]])) < 0.5f;
+      auto [it, fresh] = point_of.try_emplace({t[k], past}, static_cast<uint32_t>(vertex_of.size()));
+      if (fresh) vertex_of.push_back({t[k], past});
       f[k] = it->second;
     }
     faces.push_back(f);
@@ -61,12 +73,11 @@ std::unique_ptr<draco::Mesh> Primitive(const Mesh& sphere, const Keep& keep) {
   draco::PointAttribute* uv = add(draco::GeometryAttribute::TEX_COORD, 2);
   draco::PointAttribute* nrm = add(draco::GeometryAttribute::NORMAL, 3);
   for (uint32_t p = 0; p < n; ++p) {
-    const Vec3& q = sphere.positions[vertex_of[p]];
+    const Vec3& q = sphere.positions[vertex_of[p].first];
     const float xyz[3] = {static_cast<float>(q.x), static_cast<float>(q.y), static_cast<float>(q.z)};
     pos->SetAttributeValue(draco::AttributeValueIndex(p), xyz);
     const Vec3 u = Normalized(q);
-    const float st[2] = {static_cast<float>(0.5 + std::atan2(u.y, u.x) / (2 * M_PI)),
-                         static_cast<float>(std::acos(u.z) / M_PI)};
+    const float st[2] = {Longitude(u) + (vertex_of[p].second ? 1.0f : 0.0f), static_cast<float>(std::acos(u.z) / M_PI)};
     uv->SetAttributeValue(draco::AttributeValueIndex(p), st);
     const float nn[3] = {static_cast<float>(u.x), static_cast<float>(u.y), static_cast<float>(u.z)};
     nrm->SetAttributeValue(draco::AttributeValueIndex(p), nn);
@@ -75,6 +86,53 @@ std::unique_ptr<draco::Mesh> Primitive(const Mesh& sphere, const Keep& keep) {
     dm->AddFace({draco::PointIndex(f[0]), draco::PointIndex(f[1]), draco::PointIndex(f[2])});
   }
   return dm;
+}
+
+// Per primitive: how many of its points share their position with another point of it that
+// has other texture coordinates (UV seams), and the largest angle (degrees) between a point's
+// normal and the area-weighted normal of the primitive's faces at its position.
+struct SeamsAndNormals {
+  int64_t seam_points = 0;
+  double worst_normal_deg = 0.0;
+};
+SeamsAndNormals MeasureSeamsAndNormals(const draco::Scene& s) {
+  SeamsAndNormals out;
+  for (int m = 0; m < s.NumMeshes(); ++m) {
+    const draco::Mesh& dm = s.GetMesh(draco::MeshIndex(m));
+    const draco::PointAttribute* pos = dm.GetNamedAttribute(draco::GeometryAttribute::POSITION);
+    const draco::PointAttribute* uv = dm.GetNamedAttribute(draco::GeometryAttribute::TEX_COORD);
+    const draco::PointAttribute* nrm = dm.GetNamedAttribute(draco::GeometryAttribute::NORMAL);
+    auto position = [&](draco::PointIndex p) {
+      std::array<float, 3> q;
+      pos->GetMappedValue(p, q.data());
+      return q;
+    };
+    std::map<std::array<float, 3>, std::set<std::array<float, 2>>> uvs_at;
+    for (uint32_t p = 0; p < dm.num_points(); ++p) {
+      std::array<float, 2> st;
+      uv->GetMappedValue(draco::PointIndex(p), st.data());
+      uvs_at[position(draco::PointIndex(p))].insert(st);
+    }
+    std::map<std::array<float, 3>, Vec3> normal_at;
+    for (uint32_t f = 0; f < dm.num_faces(); ++f) {
+      const draco::Mesh::Face& face = dm.face(draco::FaceIndex(f));
+      Vec3 c[3];
+      for (int k = 0; k < 3; ++k) {
+        const std::array<float, 3> q = position(face[k]);
+        c[k] = {q[0], q[1], q[2]};
+      }
+      for (int k = 0; k < 3; ++k) normal_at[position(face[k])] += Cross(c[1] - c[0], c[2] - c[0]);
+    }
+    for (uint32_t p = 0; p < dm.num_points(); ++p) {
+      const std::array<float, 3> q = position(draco::PointIndex(p));
+      out.seam_points += uvs_at[q].size() > 1;
+      float n[3];
+      nrm->GetMappedValue(draco::PointIndex(p), n);
+      const double cosine = Dot(Normalized(normal_at[q]), Vec3{n[0], n[1], n[2]});
+      out.worst_normal_deg = std::max(out.worst_normal_deg, std::acos(std::min(1.0, cosine)) * 180.0 / M_PI);
+    }
+  }
+  return out;
 }
 
 // The scene: one node translated to survey coordinates, one glTF mesh of two primitives (the
@@ -190,6 +248,17 @@ TEST(GltfTest, ScenesComeBackWithTheirNodesMaterialsTexturesAndUvs) {
       ASSERT_TRUE(in_scene.ok() && out_scene.ok());
       EXPECT_EQ(out_scene->counts(), in_scene->counts());
       EXPECT_EQ(out_scene->counts(), (GltfCounts{1, 1, 2, 2, 1}));
+      if (fs::path(output).extension() == ".gltf") {  // its image written beside it, and named in it
+        const absl::StatusOr<std::string> json = ReadFileBytes(output);
+        ASSERT_TRUE(json.ok());
+        int images = 0;
+        for (const fs::directory_entry& e : fs::directory_iterator(fs::path(output).parent_path())) {
+          if (e.path().extension() != ".png") continue;
+          ++images;
+          EXPECT_NE(json->find("\"" + e.path().filename().string() + "\""), std::string::npos);
+        }
+        EXPECT_EQ(images, 1);
+      }
       const auto translation = out->GetNode(draco::SceneNodeIndex(0))->GetTrsMatrix().Translation();
       ASSERT_TRUE(translation.ok());
       EXPECT_EQ(translation.value(), kSurvey);
@@ -221,14 +290,23 @@ TEST(GltfTest, ScenesComeBackWithTheirNodesMaterialsTexturesAndUvs) {
       }
       // Draco's glTF compression quantizes each primitive on a grid of its own, so the border
       // points of the compressed input already differ by up to a grid step: none shared there.
-      if (input == plain) EXPECT_GT(shared, 0);
+      if (input == plain) {
+        EXPECT_GT(shared, 0);
+      }
       EXPECT_EQ(cracks, 0);
-      // Normals: unit and fresh (they no longer point along the noisy input's radius).
+      // Normals: unit, and fresh: each point's is the area-weighted normal of its primitive's
+      // faces at its position in the output, the same on both sides of a UV seam (the input's
+      // point along the noisy input's radius, up to 40 degrees off).
       const std::vector<float> normals = Values(*out, draco::GeometryAttribute::NORMAL, 3);
       ASSERT_EQ(normals.size(), out_pos.size());
       for (size_t i = 0; i < normals.size(); i += 3) {
         EXPECT_NEAR(std::hypot(normals[i], normals[i + 1], normals[i + 2]), 1.0, 1e-5);
       }
+      const SeamsAndNormals before_seams = MeasureSeamsAndNormals(*in), after_seams = MeasureSeamsAndNormals(*out);
+      EXPECT_GT(before_seams.seam_points, 20);                       // the input has UV seams...
+      EXPECT_EQ(after_seams.seam_points, before_seams.seam_points);  // ...and keeps them
+      EXPECT_GT(before_seams.worst_normal_deg, 10.0);
+      EXPECT_LT(after_seams.worst_normal_deg, 0.05);  // float rounding
     }
   }
   fs::remove_all(dir);

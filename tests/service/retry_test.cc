@@ -80,7 +80,9 @@ TEST(RetryTest, UploadIsReleasedOnceTheLastAttemptHasSentIt) {
     call.ReleaseAfterLastSend([&] { ++released; });
     absl::StatusOr<SmoothOutcome> out = call.Run(*c.stub, testing::Spec("laplacian", 3), draco);
     EXPECT_EQ(out.ok(), c.ok) << out.status();
-    if (!c.ok) EXPECT_EQ(out.status().code(), absl::StatusCode::kUnavailable) << out.status();
+    if (!c.ok) {
+      EXPECT_EQ(out.status().code(), absl::StatusCode::kUnavailable) << out.status();
+    }
     EXPECT_EQ(call.attempts(), c.ok ? 1 : c.attempts);
     EXPECT_EQ(released, c.released);
   }
