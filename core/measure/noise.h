@@ -71,8 +71,11 @@ inline double OutlierThresholdH(const NoiseEstimate& estimate) {
 // ring's inliers: the fit, pulled by the other outliers around, can reach far, and a thrown
 // vertex's faces tilt its own normal. A round flags the outliers, then moves them all from the
 // same positions; at most `rounds` rounds, until none is left (a thrown vertex pulls its
-// neighbours' fits, so the first round can leave some). Vertices where `keep` (per vertex) is
-// non-zero stay; `moved` (one entry per vertex) is set where a vertex moved. Deterministic for
+// neighbours' fits, so the first round can leave some). Then the folds the throws leave: a
+// vertex with a face of its fan turned against the fan goes to its ring's centroid (a boundary
+// vertex to the midpoint of its rim neighbours), a few rounds, until none folds. Vertices where
+// `keep` (per vertex) is non-zero stay; `moved` (one entry per vertex) is set where a vertex
+// moved. Deterministic for
 // any thread count; stops early once `stop` fires.
 void RemoveOutliers(Mesh& mesh, const Topology& topo, double h, double threshold_h, int rounds,
                     std::vector<uint8_t>& moved, int threads = 0, const StopToken& stop = {},
