@@ -277,12 +277,8 @@ NoiseEstimate EstimateNoise(const Mesh& mesh, const Topology& topo, double h, in
   return estimate;
 }
 
-// True when a face of v's fan turns against the fan's own orientation: for an interior vertex
-// the vector area of its ring polygon (which does not depend on where v is), for a boundary
-// vertex the sum of its open fan's faces. A vertex put back beside its place, or a neighbour a
-// thrown vertex dragged, leaves such a fold, and no flow runs after the outliers when the
-// noise left reads clean.
-bool FanFolds(const Vec3* pos, const Topology& topo, int32_t v) {
+// True when a face of v's fan turns against the fan's orientation (UnfoldFans, noise.h).
+static bool FanFolds(const Vec3* pos, const Topology& topo, int32_t v) {
   const int32_t first = topo.ring_offsets[v], end = topo.ring_offsets[v + 1];
   const bool rim = topo.kind[v] == VertexKind::kBoundary;
   const int32_t faces = rim ? end - first - 1 : end - first;
@@ -365,10 +361,18 @@ void RemoveOutliers(Mesh& mesh, const Topology& topo, double h, double threshold
     }
     if (!any) break;
   }
-  // Then the folds left: a vertex whose fan folds goes to the centroid of its ring (a boundary
-  // vertex to the midpoint of its two neighbours along the rim, so that a hole keeps its size),
-  // in Jacobi rounds until no fan folds, at most kUnfoldRounds.
-  for (int round = 0; round < kUnfoldRounds && !stop.Fired(); ++round) {
+  UnfoldFans(mesh, topo, kUnfoldRounds, moved, threads, stop, keep);
+}
+
+int64_t UnfoldFans(Mesh& mesh, const Topology& topo, int rounds, std::vector<uint8_t>& moved, int threads,
+                   const StopToken& stop, const uint8_t* keep) {
+  const int32_t n = topo.num_vertices();
+  moved.resize(n, 0);
+  if (threads <= 0) threads = omp_get_max_threads();
+  std::vector<Vec3> target(n);
+  std::vector<uint8_t> moves(n, 0);
+  int64_t count = 0;
+  for (int round = 0; round < rounds && !stop.Fired(); ++round) {
 #pragma omp parallel for num_threads(threads) if (threads > 1 && n >= kMinParallelFits) schedule(static, 512)
     for (int32_t v = 0; v < n; ++v) {
       moves[v] = 0;
@@ -390,11 +394,13 @@ void RemoveOutliers(Mesh& mesh, const Topology& topo, double h, double threshold
     for (int32_t v = 0; v < n; ++v) {
       if (!moves[v]) continue;
       mesh.positions[v] = target[v];
+      count += !moved[v];
       moved[v] = 1;
       any = true;
     }
     if (!any) break;
   }
+  return count;
 }
 
 }  // namespace meshsmooth

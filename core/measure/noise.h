@@ -64,6 +64,16 @@ inline double OutlierThresholdH(const NoiseEstimate& estimate) {
   return std::max(kOutlierScales * estimate.sigma_h, kOutlierFloorH);
 }
 
+// A vertex whose fan has a face turned against the fan's orientation (an interior vertex's:
+// the vector area of its ring polygon, which does not depend on where the vertex is; a boundary
+// vertex's: the sum of its open fan's faces) goes to its ring's centroid (a boundary vertex to
+// the midpoint of its two neighbours along the rim, so that a hole keeps its size); Jacobi
+// rounds, at most `rounds`, until no fan folds. Vertices where `keep` is non-zero stay;
+// `moved` is set where a vertex moved. Returns how many vertices moved that `moved` did not
+// hold yet. Deterministic for any thread count; stops early once `stop` fires.
+int64_t UnfoldFans(Mesh& mesh, const Topology& topo, int rounds, std::vector<uint8_t>& moved, int threads = 0,
+                   const StopToken& stop = {}, const uint8_t* keep = nullptr);
+
 // Moves the outliers back: an interior vertex whose normalised residual exceeds `threshold_h`, or
 // a vertex without a fit (a boundary vertex, a ring too small) whose ring's median height exceeds
 // threshold_h h. Each goes along the normal of the plane through the inliers of its first and
@@ -71,12 +81,10 @@ inline double OutlierThresholdH(const NoiseEstimate& estimate) {
 // ring's inliers: the fit, pulled by the other outliers around, can reach far, and a thrown
 // vertex's faces tilt its own normal. A round flags the outliers, then moves them all from the
 // same positions; at most `rounds` rounds, until none is left (a thrown vertex pulls its
-// neighbours' fits, so the first round can leave some). Then the folds the throws leave: a
-// vertex with a face of its fan turned against the fan goes to its ring's centroid (a boundary
-// vertex to the midpoint of its rim neighbours), a few rounds, until none folds. Vertices where
-// `keep` (per vertex) is non-zero stay; `moved` (one entry per vertex) is set where a vertex
-// moved. Deterministic for
-// any thread count; stops early once `stop` fires.
+// neighbours' fits, so the first round can leave some). Then the folds the throws leave
+// (UnfoldFans, a few rounds). Vertices where `keep` (per vertex) is non-zero stay; `moved` (one
+// entry per vertex) is set where a vertex moved. Deterministic for any thread count; stops
+// early once `stop` fires.
 void RemoveOutliers(Mesh& mesh, const Topology& topo, double h, double threshold_h, int rounds,
                     std::vector<uint8_t>& moved, int threads = 0, const StopToken& stop = {},
                     const uint8_t* keep = nullptr);

@@ -133,6 +133,62 @@ TEST(NoiseEstimateTest, RemoveOutliersPutsAThrownVertexBackInItsPlane) {
   EXPECT_EQ(flat.positions, plane.positions);
 }
 
+// A vertex slid past its neighbour in a plane folds faces over, and so does a boundary vertex
+// slid inwards across its neighbours: after UnfoldFans every face faces up again, only
+// vertices within two rings of them moved, and the boundary stays on its line.
+TEST(NoiseEstimateTest, UnfoldFansTurnsFoldedFacesBack) {
+  const Mesh plane = TwoRatePlane(24, 16, 1.0);
+  const Topology topo = BuildTopology(plane);
+  int32_t inner = -1, rim = -1;
+  for (int32_t v = 0; v < plane.num_vertices(); ++v) {
+    const Vec3& p = plane.positions[v];
+    if (inner < 0 && topo.kind[v] == VertexKind::kInterior && p.x > 0.4 && p.y > 0.4) inner = v;
+    if (rim < 0 && topo.kind[v] == VertexKind::kBoundary && p.y == 0.0 && p.x > 0.3) rim = v;
+  }
+  ASSERT_GE(inner, 0);
+  ASSERT_GE(rim, 0);
+  auto turned = [&](const Mesh& mesh) {
+    int count = 0;
+    for (const Triangle& f : mesh.triangles)
+      count += Cross(mesh.positions[f[1]] - mesh.positions[f[0]], mesh.positions[f[2]] - mesh.positions[f[0]]).z <= 0.0;
+    return count;
+  };
+  const int up = turned(plane) == 0 ? 1 : -1;  // the plane's faces all face one way
+  auto turned_over = [&](const Mesh& mesh) {
+    return up > 0 ? turned(mesh) : static_cast<int>(mesh.triangles.size()) - turned(mesh);
+  };
+  Mesh m = plane;
+  m.positions[inner] += (plane.positions[topo.ring[topo.ring_offsets[inner]]] - plane.positions[inner]) * 1.3;
+  Vec3 inward;
+  for (int32_t k = topo.ring_offsets[rim] + 1; k + 1 < topo.ring_offsets[rim + 1]; ++k) {
+    inward += plane.positions[topo.ring[k]] - plane.positions[rim];
+  }
+  m.positions[rim] += inward * (1.5 / (topo.valence(rim) - 2));
+  ASSERT_GT(turned_over(m), 0);
+  std::vector<uint8_t> moved;
+  EXPECT_GT(UnfoldFans(m, topo, 6, moved), 0);
+  EXPECT_EQ(turned_over(m), 0);
+  std::vector<uint8_t> near(plane.num_vertices(), 0);
+  for (int32_t s : {inner, rim}) {
+    near[s] = 1;
+    for (int32_t k = topo.ring_offsets[s]; k < topo.ring_offsets[s + 1]; ++k) {
+      const int32_t w = topo.ring[k];
+      near[w] = 1;
+      for (int32_t j = topo.ring_offsets[w]; j < topo.ring_offsets[w + 1]; ++j) near[topo.ring[j]] = 1;
+    }
+  }
+  for (int32_t v = 0; v < m.num_vertices(); ++v) {
+    EXPECT_EQ(m.positions[v].z, 0.0) << v;
+    if (!near[v]) EXPECT_EQ(m.positions[v], plane.positions[v]) << v;
+    if (topo.kind[v] == VertexKind::kBoundary && plane.positions[v].y == 0.0) EXPECT_EQ(m.positions[v].y, 0.0) << v;
+  }
+  // Nothing folded: nothing moves.
+  Mesh flat = plane;
+  std::vector<uint8_t> none;
+  EXPECT_EQ(UnfoldFans(flat, topo, 6, none), 0);
+  EXPECT_EQ(flat.positions, plane.positions);
+}
+
 TEST(NoiseEstimateTest, RemoveOutliersIsTheSameForAnyThreadCount) {
   const Mesh clean = Icosphere(5);  // above kMinParallelFits: the threads share the rounds
   const Topology topo = BuildTopology(clean);
