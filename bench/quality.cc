@@ -1,9 +1,10 @@
 // The quality benchmark: the mesh-denoising literature's protocol on the real meshes clean
 // enough to serve as ground truth and on the synthetic shapes. Each clean mesh gets Gaussian
-// noise along its vertex normals (sigma = 0, 0.1, 0.2, 0.3 of its mean edge length h, several
-// seeds) and in random directions; then the default job (a default JobSpec through the
-// service's FromProto), every flow of the flow table at its best iteration count ("oracle"),
-// and any job given on the command line run on it, and core/measure/evaluation.h measures each
+// noise along its vertex normals (sigma = 0, 0.1, 0.2, 0.3, 0.5, 0.7 of its mean edge length h,
+// several seeds), in random directions and impulsive noise; then the default job (a default
+// JobSpec through the service's FromProto), BNF and GNF as their authors' code runs by default,
+// every flow of the flow table at its best iteration count ("oracle"), and any job given on the
+// command line run on it, and core/measure/evaluation.h measures each
 // result against the clean mesh. Markdown tables to stdout; docs/quality.md is its output:
 //   nice -n 10 build/bench/meshsmooth_quality --seeds 1 > docs/quality.md
 // docs/quality-method.md, written by hand, says how to read them; a change to what the tables
@@ -47,7 +48,7 @@ namespace {
 struct Options {
   std::filesystem::path shared = std::filesystem::path(MESHSMOOTH_SOURCE_DIR) / ".." / "shared";
   std::vector<std::string> meshes = kDefaultMeshes;
-  std::vector<double> sigmas = {0.0, 0.1, 0.2, 0.3};
+  std::vector<double> sigmas = {0.0, 0.1, 0.2, 0.3, 0.5, 0.7};
   std::vector<double> random_sigmas = {0.1, 0.2, 0.3};
   std::vector<double> impulsive = {1.0};
   int seeds = 3;
@@ -85,7 +86,7 @@ constexpr char kMethodPointer[] =
     "[docs/quality-method.md](quality-method.md).\n";
 
 constexpr char kUsage[] =
-    "usage: meshsmooth_quality [--meshes a,b,...] [--sigmas 0,0.1,0.2,0.3] [--random-sigmas 0.1,0.2,0.3]\n"
+    "usage: meshsmooth_quality [--meshes a,b,...] [--sigmas 0,0.1,0.2,0.3,0.5,0.7] [--random-sigmas 0.1,0.2,0.3]\n"
     "                          [--seeds 3] [--large-seeds 1] [--flows a,b,...] [--job SPEC]... [--oracle-job SPEC]...\n"
     "                          [--shared DIR] [--paper-iterations 20] [--no-paper] [--quick]\n"
     "  --meshes         real meshes by file name without extension, and `sphere`, `two-rate-torus`,\n"
@@ -97,7 +98,8 @@ constexpr char kUsage[] =
     "                   for each S listed (default 1; \"\": none)\n"
     "  --seeds          noisy copies per mesh and sigma; --large-seeds for meshes of 200k+ vertices\n"
     "                   (default 1; 0: as --seeds)\n"
-    "  --flows          oracle rows for these flows of the flow table (default: all; `none`: none)\n"
+    "  --flows          oracle rows for these flows of the flow table (default: all; `none`: none);\n"
+    "                   the default job's row and the authors' BNF and GNF rows are always there\n"
     "  --job SPEC       one more row: a meshsmooth.v1.JobSpec in protobuf text format, run as given,\n"
     "                   e.g. --job 'flow: \"median\" iterations: 5 boundary: BOUNDARY_MODE_CURVE'\n"
     "  --oracle-job SPEC  the same, swept over iteration counts like the flows' rows\n"

@@ -39,6 +39,17 @@ Run RunJob(const GroundTruth& truth, const Mesh& noisy, const FlowParams& p) {
 std::vector<Job> MakeJobs(const std::vector<std::string>& flows, bool no_flows, const std::vector<std::string>& jobs,
                           const std::vector<std::string>& oracle_jobs) {
   std::vector<Job> out = {{"default job", v1::JobSpec(), false}};
+  for (const auto& [label, flow] : {std::pair{kBnfLabel, "bilateral_normal"}, std::pair{kGnfLabel, "guided_normal"}}) {
+    Job j{label, v1::JobSpec(), false};
+    j.spec.set_flow(flow);
+    j.spec.set_iterations(1);
+    v1::NormalFilter* f = j.spec.mutable_normal_filter();
+    f->set_normal_iterations(20);
+    f->set_vertex_iterations(10);
+    f->set_sigma_spatial(1.0);
+    f->set_sigma_range(0.35);
+    out.push_back(j);
+  }
   for (const FlowRow& flow : FlowTable()) {
     if (no_flows) break;
     if (!flows.empty() && std::find(flows.begin(), flows.end(), flow.name) == flows.end()) continue;
@@ -152,6 +163,13 @@ Quality MeanQuality(const Row& row, int* ok, double* seconds) {
   if (seconds != nullptr) *seconds = secs * k;
   if (ok != nullptr) *ok = n;
   return m;
+}
+
+const Row* FindRow(const MeshCase& mc, const std::string& label) {
+  for (const Row& row : mc.rows) {
+    if (row.label == label) return &row;
+  }
+  return nullptr;
 }
 
 const Row* BestOracle(const MeshCase& mc, const std::vector<Job>& jobs) {

@@ -48,12 +48,23 @@ struct MeshCase {
   std::vector<Row> rows;  // rows[0] is the default job
 };
 
-// The rows of a run, in order: the default job, an oracle row for each flow of the flow table
-// in `flows` (all when empty, none when `no_flows`), then `jobs` as given and `oracle_jobs`
-// swept (JobSpecs in protobuf text format). Exits with status 2 on a spec that does not parse
-// or that the service would refuse.
+// The rows of the two normal filters as their authors' reference code runs by default, the
+// figures the denoising literature's tables report: one iteration of 20 filter passes (sigma_s
+// 1, the mean distance between the centroids of edge-adjacent faces; sigma_r 0.35) and 10
+// vertex updates, bilateral_normal for BNF (Zheng et al. 2011) and guided_normal for GNF (Zhang
+// et al. 2015).
+inline constexpr char kBnfLabel[] = "BNF, authors' defaults";
+inline constexpr char kGnfLabel[] = "GNF, authors' defaults";
+
+// The rows of a run, in order: the default job, the authors' BNF and GNF, an oracle row for
+// each flow of the flow table in `flows` (all when empty, none when `no_flows`), then `jobs` as
+// given and `oracle_jobs` swept (JobSpecs in protobuf text format). Exits with status 2 on a
+// spec that does not parse or that the service would refuse.
 std::vector<Job> MakeJobs(const std::vector<std::string>& flows, bool no_flows, const std::vector<std::string>& jobs,
                           const std::vector<std::string>& oracle_jobs);
+
+// The row labelled `label` of `mc` (e.g. kBnfLabel), or null.
+const Row* FindRow(const MeshCase& mc, const std::string& label);
 
 // The flow parameters the service's FromProto makes of `spec`; exits with status 2 on a spec
 // it refuses.
