@@ -179,8 +179,12 @@ TEST(NoiseEstimateTest, UnfoldFansTurnsFoldedFacesBack) {
   }
   for (int32_t v = 0; v < m.num_vertices(); ++v) {
     EXPECT_EQ(m.positions[v].z, 0.0) << v;
-    if (!near[v]) EXPECT_EQ(m.positions[v], plane.positions[v]) << v;
-    if (topo.kind[v] == VertexKind::kBoundary && plane.positions[v].y == 0.0) EXPECT_EQ(m.positions[v].y, 0.0) << v;
+    if (!near[v]) {
+      EXPECT_EQ(m.positions[v], plane.positions[v]) << v;
+    }
+    if (topo.kind[v] == VertexKind::kBoundary && plane.positions[v].y == 0.0) {
+      EXPECT_EQ(m.positions[v].y, 0.0) << v;
+    }
   }
   // Nothing folded: nothing moves.
   Mesh flat = plane;
