@@ -131,20 +131,20 @@ absl::StatusOr<GltfScene> GltfScene::Read(const std::string& path) {
 }
 
 absl::StatusOr<GltfScene> GltfScene::ReadInChildFirst(const std::string& path, bool draco_compressed) {
-  // The child writes one byte to `read` once it has read the scene: a child that dies after it
+  // The child writes one byte to `fds` once it has read the scene: a child that dies after it
   // crashed in Draco's writer, before it in its reader.
-  int read[2];
-  if (pipe(read) != 0) return Read(path);  // no pipe, no child: read as before
+  int fds[2];
+  if (pipe(fds) != 0) return Read(path);  // no pipe, no child: read as before
   std::fflush(nullptr);
   const pid_t child = fork();
   if (child == 0) {
     // A crash here is the finding this child exists for, not the fuzzer's (fuzz/gltf_fuzzer.cc).
     if (__sanitizer_set_death_callback != nullptr) __sanitizer_set_death_callback(nullptr);
-    close(read[0]);
+    close(fds[0]);
     absl::StatusOr<GltfScene> scene = Read(path);
     if (!scene.ok()) _exit(0);
     const char byte = 1;
-    if (write(read[1], &byte, 1) != 1) _exit(0);
+    if (write(fds[1], &byte, 1) != 1) _exit(0);
     const std::string out =
         (std::filesystem::temp_directory_path() / absl::StrCat("meshsmooth_gltf_check_", getpid(), ".glb")).string();
     const std::vector<Vec3> positions = scene->surface().positions;
@@ -155,16 +155,16 @@ absl::StatusOr<GltfScene> GltfScene::ReadInChildFirst(const std::string& path, b
     }
     _exit(0);
   }
-  close(read[1]);
+  close(fds[1]);
   if (child < 0) {
-    close(read[0]);
+    close(fds[0]);
     return Read(path);
   }
   char byte = 0;
   ssize_t got;
-  while ((got = ::read(read[0], &byte, 1)) < 0 && errno == EINTR) {
+  while ((got = read(fds[0], &byte, 1)) < 0 && errno == EINTR) {
   }
-  close(read[0]);
+  close(fds[0]);
   int status = 0;
   pid_t waited;
   while ((waited = waitpid(child, &status, 0)) < 0 && errno == EINTR) {
