@@ -296,7 +296,7 @@ TEST(GltfTest, ScenesComeBackWithTheirNodesMaterialsTexturesAndUvs) {
       EXPECT_EQ(cracks, 0);
       // Normals: unit, and fresh: each point's is the area-weighted normal of its primitive's
       // faces at its position in the output, the same on both sides of a UV seam (the input's
-      // point along the noisy input's radius, up to 40 degrees off).
+      // point along the noisy input's radius, more than 10 degrees off somewhere).
       const std::vector<float> normals = Values(*out, draco::GeometryAttribute::NORMAL, 3);
       ASSERT_EQ(normals.size(), out_pos.size());
       for (size_t i = 0; i < normals.size(); i += 3) {
