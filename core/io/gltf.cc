@@ -147,10 +147,9 @@ absl::StatusOr<GltfScene> GltfScene::ReadInChildFirst(const std::string& path, b
     if (write(fds[1], &byte, 1) != 1) _exit(0);
     const std::string out =
         (std::filesystem::temp_directory_path() / absl::StrCat("meshsmooth_gltf_check_", getpid(), ".glb")).string();
-    const std::vector<Vec3> positions = scene->surface().positions;
     for (bool draco : {false, true}) {
       if (draco && !draco_compressed) continue;
-      (void)scene->Write(positions, out, draco);
+      (void)scene->Write(scene->surface().positions, out, draco);
       std::remove(out.c_str());
     }
     _exit(0);

@@ -217,6 +217,23 @@ std::optional<double> RingMedianHeight(const Vec3* pos, const Topology& topo, in
   return Median(s.heights);
 }
 
+// True when a face of v's fan turns against the fan's orientation (UnfoldFans, noise.h).
+bool FanFolds(const Vec3* pos, const Topology& topo, int32_t v) {
+  const int32_t first = topo.ring_offsets[v], end = topo.ring_offsets[v + 1];
+  const bool rim = topo.kind[v] == VertexKind::kBoundary;
+  const int32_t faces = rim ? end - first - 1 : end - first;
+  auto next = [&](int32_t k) { return k + 1 < end ? k + 1 : first; };
+  Vec3 orientation;
+  for (int32_t k = first; k < first + faces; ++k) {
+    const Vec3 &a = pos[topo.ring[k]], &b = pos[topo.ring[next(k)]];
+    orientation += rim ? Cross(a - pos[v], b - pos[v]) : Cross(a, b);
+  }
+  for (int32_t k = first; k < first + faces; ++k) {
+    if (Dot(Cross(pos[topo.ring[k]] - pos[v], pos[topo.ring[next(k)]] - pos[v]), orientation) < 0.0) return true;
+  }
+  return false;
+}
+
 }  // namespace
 
 NoiseEstimate EstimateNoise(const Mesh& mesh, const Topology& topo, double h, int threads, const StopToken& stop) {
@@ -275,23 +292,6 @@ NoiseEstimate EstimateNoise(const Mesh& mesh, const Topology& topo, double h, in
   for (double r : residual) outliers += r > outlier;
   estimate.outlier_share = static_cast<double>(outliers) / static_cast<double>(residual.size());
   return estimate;
-}
-
-// True when a face of v's fan turns against the fan's orientation (UnfoldFans, noise.h).
-static bool FanFolds(const Vec3* pos, const Topology& topo, int32_t v) {
-  const int32_t first = topo.ring_offsets[v], end = topo.ring_offsets[v + 1];
-  const bool rim = topo.kind[v] == VertexKind::kBoundary;
-  const int32_t faces = rim ? end - first - 1 : end - first;
-  auto next = [&](int32_t k) { return k + 1 < end ? k + 1 : first; };
-  Vec3 orientation;
-  for (int32_t k = first; k < first + faces; ++k) {
-    const Vec3 &a = pos[topo.ring[k]], &b = pos[topo.ring[next(k)]];
-    orientation += rim ? Cross(a - pos[v], b - pos[v]) : Cross(a, b);
-  }
-  for (int32_t k = first; k < first + faces; ++k) {
-    if (Dot(Cross(pos[topo.ring[k]] - pos[v], pos[topo.ring[next(k)]] - pos[v]), orientation) < 0.0) return true;
-  }
-  return false;
 }
 
 void RemoveOutliers(Mesh& mesh, const Topology& topo, double h, double threshold_h, int rounds,
@@ -371,13 +371,16 @@ int64_t UnfoldFans(Mesh& mesh, const Topology& topo, int rounds, std::vector<uin
   if (threads <= 0) threads = omp_get_max_threads();
   std::vector<Vec3> target(n);
   std::vector<uint8_t> moves(n, 0);
+  // The vertices to look at in a round: all in the first, then the last round's moves and their
+  // rings (a fan depends on its vertex and its ring only).
+  std::vector<uint8_t> check(n, 1);
   int64_t count = 0;
   for (int round = 0; round < rounds && !stop.Fired(); ++round) {
 #pragma omp parallel for num_threads(threads) if (threads > 1 && n >= kMinParallelFits) schedule(static, 512)
     for (int32_t v = 0; v < n; ++v) {
       moves[v] = 0;
       const bool rim = topo.kind[v] == VertexKind::kBoundary;
-      if ((topo.kind[v] != VertexKind::kInterior && !rim) || (keep != nullptr && keep[v] != 0)) continue;
+      if (!check[v] || (topo.kind[v] != VertexKind::kInterior && !rim) || (keep != nullptr && keep[v] != 0)) continue;
       if (topo.valence(v) < 3 || !FanFolds(mesh.positions.data(), topo, v)) continue;
       const int32_t first = topo.ring_offsets[v], end = topo.ring_offsets[v + 1];
       Vec3 centre;
@@ -391,12 +394,15 @@ int64_t UnfoldFans(Mesh& mesh, const Topology& topo, int rounds, std::vector<uin
       moves[v] = 1;
     }
     bool any = false;
+    std::fill(check.begin(), check.end(), 0);
     for (int32_t v = 0; v < n; ++v) {
       if (!moves[v]) continue;
       mesh.positions[v] = target[v];
       count += !moved[v];
       moved[v] = 1;
       any = true;
+      check[v] = 1;
+      for (int32_t k = topo.ring_offsets[v]; k < topo.ring_offsets[v + 1]; ++k) check[topo.ring[k]] = 1;
     }
     if (!any) break;
   }
