@@ -2,7 +2,6 @@
 
 #include <omp.h>
 
-#include <Eigen/Cholesky>
 #include <Eigen/Core>
 #include <Eigen/Eigenvalues>
 #include <algorithm>
@@ -17,8 +16,6 @@ namespace meshsmooth {
 namespace {
 
 constexpr int kTerms = 10;
-using Mat = Eigen::Matrix<double, kTerms, kTerms>;
-using Col = Eigen::Matrix<double, kTerms, 1>;
 
 // A fit needs more points than its 6 unknowns to say anything about the noise.
 constexpr int kMinFitPoints = 14;
@@ -39,9 +36,9 @@ constexpr int kUnfoldRounds = 6;
 // of n residuals has a relative standard error of ~1.17 / sqrt(n), 0.8% at 20,000. Against
 // 50,000 fits, the deviation of the benchmark's noisy bunny, nefertiti and dragon moves by
 // 0.1-1.0% and every default row of docs/quality.md on the meshes above 20,000 vertices stays
-// within 1.005x; the estimate takes 20-27 ms instead of 39-62 ms on them (docs/decisions.md).
+// within 1.005x, at less than half the cost (docs/decisions.md).
 constexpr int32_t kMaxFits = 20000;
-// Fewer fits than this run on one thread: a fit costs ~2 us, so below it waking a second
+// Fewer fits than this run on one thread: a fit costs ~1 us, so below it waking a second
 // thread is not worth it.
 constexpr int32_t kMinParallelFits = 2000;
 // The least number of well-posed fits, absolute and as a share of the vertices tried, for the
@@ -58,9 +55,17 @@ struct Fit {
   Vec3 n;
 };
 
+// Per-thread buffers of FitAt: the second ring, and per vertex the stamp of the last fit that
+// gathered it (duplicates are dropped as they come, without sorting).
+struct FitScratch {
+  std::vector<int32_t> ring2;
+  std::vector<uint32_t> seen;
+  uint32_t stamp = 0;
+};
+
 // The fit at vertex v, or none when it is not well posed (or v's second ring is too large to
 // gather: a fan's rim around a centre of huge valence, skipped in bounded time).
-std::optional<Fit> FitAt(const Mesh& mesh, const Topology& topo, int32_t v, double inv_h, std::vector<int32_t>& ring2) {
+std::optional<Fit> FitAt(const Mesh& mesh, const Topology& topo, int32_t v, double inv_h, FitScratch& s) {
   const Vec3* pos = mesh.positions.data();
   const Vec3 normal = RingNormal(topo, pos, v);
   const double len = Norm(normal);
@@ -71,72 +76,101 @@ std::optional<Fit> FitAt(const Mesh& mesh, const Topology& topo, int32_t v, doub
   const Vec3 t1 = Normalized(Cross(n, helper));
   const Vec3 t2 = Cross(n, t1);
 
-  // The first and second rings, v left out; duplicates removed after a bounded gather.
+  // The first and second rings, v left out, each vertex once, in the order they come; a gather
+  // of more than kMaxGather ring entries gives up.
+  const auto n_vertices = static_cast<size_t>(topo.num_vertices());
+  if (s.seen.size() != n_vertices || ++s.stamp == 0) {
+    s.seen.assign(n_vertices, 0);
+    s.stamp = 1;
+  }
+  const uint32_t stamp = s.stamp;
+  uint32_t* const seen = s.seen.data();
+  std::vector<int32_t>& ring2 = s.ring2;
   ring2.clear();
+  seen[v] = stamp;
+  size_t gathered = 0;
   for (int32_t k = topo.ring_offsets[v]; k < topo.ring_offsets[v + 1]; ++k) {
     const int32_t u = topo.ring[k];
     const int32_t first = topo.ring_offsets[u], last = topo.ring_offsets[u + 1];
-    if (ring2.size() + 1 + static_cast<size_t>(last - first) > kMaxGather) {
-      return std::nullopt;
+    gathered += 1 + static_cast<size_t>(last - first);
+    if (gathered > kMaxGather) return std::nullopt;
+    if (seen[u] != stamp) seen[u] = stamp, ring2.push_back(u);
+    for (int32_t j = first; j < last; ++j) {
+      const int32_t w = topo.ring[j];
+      if (seen[w] != stamp) seen[w] = stamp, ring2.push_back(w);
     }
-    ring2.push_back(u);
-    ring2.insert(ring2.end(), topo.ring.begin() + first, topo.ring.begin() + last);
   }
-  std::sort(ring2.begin(), ring2.end());
-  ring2.erase(std::unique(ring2.begin(), ring2.end()), ring2.end());
-  ring2.erase(std::remove(ring2.begin(), ring2.end(), v), ring2.end());
   if (static_cast<int>(ring2.size()) < kMinFitPoints) return std::nullopt;
 
-  // The ring in the tangent plane, whitened: along the principal axes of its second moment
-  // about v, each scaled to unit spread. A cubic in (x, y) is a cubic in any linear map of them,
-  // so the prediction at v and its variance do not change, but the normal equations of a
-  // needle-shaped ring (CAD tessellations) stay well conditioned. Heights in units of h.
+  // The ring in the tangent plane, whitened: mapped linearly so that its second moment about v
+  // is the identity (by the Cholesky factor of that moment). A cubic in (x, y) is a cubic in any
+  // linear map of them, so the prediction at v and its variance do not change, but the normal
+  // equations of a needle-shaped ring (CAD tessellations) stay well conditioned. Heights in
+  // units of h.
   const Vec3 p = pos[v];
-  Eigen::Matrix2d moment = Eigen::Matrix2d::Zero();
+  double mxx = 0.0, mxy = 0.0, myy = 0.0;
   for (int32_t u : ring2) {
     const Vec3 q = (pos[u] - p) * inv_h;
-    const Eigen::Vector2d xy(Dot(q, t1), Dot(q, t2));
-    moment += xy * xy.transpose();
+    const double x = Dot(q, t1), y = Dot(q, t2);
+    mxx += x * x, mxy += x * y, myy += y * y;
   }
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> axes(moment);
-  const Eigen::Vector2d spread = axes.eigenvalues();
-  if (axes.info() != Eigen::Success || !(spread(0) > kMinRelativePivot * spread(1))) {
-    return std::nullopt;
-  }
-  Eigen::Matrix2d whiten = axes.eigenvectors().transpose();
-  whiten.row(0) /= std::sqrt(spread(0) / static_cast<double>(ring2.size()));
-  whiten.row(1) /= std::sqrt(spread(1) / static_cast<double>(ring2.size()));
+  // The moment's eigenvalues: the ring spans a line (or its points coincide) when the smaller
+  // is below kMinRelativePivot times the larger.
+  const double half_trace = 0.5 * (mxx + myy), det = mxx * myy - mxy * mxy;
+  const double larger = half_trace + std::sqrt(0.25 * (mxx - myy) * (mxx - myy) + mxy * mxy);
+  if (!(larger > 0.0) || !(det > kMinRelativePivot * larger * larger)) return std::nullopt;
+  const double count = static_cast<double>(ring2.size());
+  const double l11 = std::sqrt(mxx / count), l21 = mxy / count / l11, l22 = std::sqrt(myy / count - l21 * l21);
+  if (!(l22 > 0.0)) return std::nullopt;
 
-  Mat ata = Mat::Zero();
-  Col atz = Col::Zero();
+  // The normal equations of the least-squares cubic, its terms ordered x^3, x^2 y, x y^2, y^3,
+  // x^2, x y, y^2, x, y, 1 (the constant last), lower triangle only.
+  double ata[kTerms][kTerms] = {}, atz[kTerms] = {};
   for (int32_t u : ring2) {
     const Vec3 q = (pos[u] - p) * inv_h;
-    const Eigen::Vector2d xy = whiten * Eigen::Vector2d(Dot(q, t1), Dot(q, t2));
-    const double x = xy(0), y = xy(1), z = Dot(q, n);
-    Col row;
-    row << 1.0, x, y, x * x, x * y, y * y, x * x * x, x * x * y, x * y * y, y * y * y;
-    ata.selfadjointView<Eigen::Lower>().rankUpdate(row);
-    atz += row * z;
+    const double x = Dot(q, t1) / l11;
+    const double y = (Dot(q, t2) - l21 * x) / l22;
+    const double z = Dot(q, n);
+    const double row[kTerms] = {x * x * x, x * x * y, x * y * y, y * y * y, x * x, x * y, y * y, x, y, 1.0};
+#pragma GCC unroll 10
+    for (int i = 0; i < kTerms; ++i) {
+#pragma GCC unroll 10
+      for (int j = 0; j <= i; ++j) ata[i][j] += row[i] * row[j];
+      atz[i] += row[i] * z;
+    }
   }
-  ata = ata.selfadjointView<Eigen::Lower>();
-  const Eigen::LDLT<Mat> ldlt(ata);
-  if (ldlt.info() != Eigen::Success) return std::nullopt;
-  const auto d = ldlt.vectorD();
-  const double largest = d.cwiseAbs().maxCoeff();
-  if (!(largest > 0.0) || !(d.minCoeff() > kMinRelativePivot * largest)) return std::nullopt;
-  const Col coef = ldlt.solve(atz);
-  Col unit_f = Col::Zero();
-  unit_f(0) = 1.0;
-  const double g = ldlt.solve(unit_f)(0);
-  const double r = -coef(0);
+  // Cholesky, A^T A = L L^T, in place; with the constant last, the fit's constant is
+  // (L^-1 A^T z)_last / L_last,last and its variance [(A^T A)^-1]_last,last = 1 / L_last,last^2,
+  // so one forward substitution gives both. A pivot below kMinRelativePivot times the largest
+  // diagonal entry: not well posed.
+  double largest = 0.0;
+  for (int i = 0; i < kTerms; ++i) largest = std::max(largest, ata[i][i]);
+  double w[kTerms];
+  for (int j = 0; j < kTerms; ++j) {
+    double pivot = ata[j][j];
+    for (int k = 0; k < j; ++k) pivot -= ata[j][k] * ata[j][k];
+    if (!(pivot > kMinRelativePivot * largest)) return std::nullopt;
+    const double ljj = std::sqrt(pivot);
+    ata[j][j] = ljj;
+    for (int i = j + 1; i < kTerms; ++i) {
+      double sum = ata[i][j];
+      for (int k = 0; k < j; ++k) sum -= ata[i][k] * ata[j][k];
+      ata[i][j] = sum / ljj;
+    }
+    double rhs = atz[j];
+    for (int k = 0; k < j; ++k) rhs -= ata[j][k] * w[k];
+    w[j] = rhs / ljj;
+  }
+  const double last = ata[kTerms - 1][kTerms - 1];
+  const double g = 1.0 / (last * last);
+  const double r = -w[kTerms - 1] / last;
   if (!std::isfinite(r) || !(g >= 0.0)) return std::nullopt;
   return Fit{r, g, n};
 }
 
 // The normalised residual r / sqrt(1 + g) of vertex v, or NaN when its fit is not well posed.
-double NormalisedResidual(const Mesh& mesh, const Topology& topo, int32_t v, double inv_h,
-                          std::vector<int32_t>& ring2) {
-  const std::optional<Fit> fit = FitAt(mesh, topo, v, inv_h, ring2);
+double NormalisedResidual(const Mesh& mesh, const Topology& topo, int32_t v, double inv_h, FitScratch& scratch) {
+  const std::optional<Fit> fit = FitAt(mesh, topo, v, inv_h, scratch);
   return fit ? fit->r / std::sqrt(1.0 + fit->g) : std::numeric_limits<double>::quiet_NaN();
 }
 
@@ -249,7 +283,7 @@ NoiseEstimate EstimateNoise(const Mesh& mesh, const Topology& topo, double h, in
   const auto tried = static_cast<int32_t>(residual.size());
 #pragma omp parallel num_threads(threads) if (threads > 1 && tried >= kMinParallelFits)
   {
-    std::vector<int32_t> ring2;
+    FitScratch fit_scratch;
 #pragma omp for schedule(static, 128)
     for (int32_t i = 0; i < tried; ++i) {
       if (i % 256 == 0 && stop.Fired()) {
@@ -261,7 +295,7 @@ NoiseEstimate EstimateNoise(const Mesh& mesh, const Topology& topo, double h, in
       give_up = stopped;
       const int32_t v = i * stride;
       if (give_up || topo.kind[v] != VertexKind::kInterior) continue;
-      residual[i] = std::abs(NormalisedResidual(mesh, topo, v, inv_h, ring2));
+      residual[i] = std::abs(NormalisedResidual(mesh, topo, v, inv_h, fit_scratch));
       if (std::isnan(residual[i])) residual[i] = kUnusable;
     }
   }
@@ -312,7 +346,7 @@ void RemoveOutliers(Mesh& mesh, const Topology& topo, double h, double threshold
     // leave the vertex beside its place, with faces turned over.
 #pragma omp parallel num_threads(threads) if (threads > 1 && n >= kMinParallelFits)
     {
-      std::vector<int32_t> ring2;
+      FitScratch fit_scratch;
       RingScratch scratch;
 #pragma omp for schedule(static, 128)
       for (int32_t v = 0; v < n; ++v) {
@@ -321,7 +355,7 @@ void RemoveOutliers(Mesh& mesh, const Topology& topo, double h, double threshold
         if (!check[v] || (topo.kind[v] != VertexKind::kInterior && !rim) || (keep != nullptr && keep[v] != 0)) continue;
         // A vertex without a fit (a boundary vertex's half ring, a ring too small) is judged by
         // its ring's median height.
-        const std::optional<Fit> fit = rim ? std::nullopt : FitAt(mesh, topo, v, inv_h, ring2);
+        const std::optional<Fit> fit = rim ? std::nullopt : FitAt(mesh, topo, v, inv_h, fit_scratch);
         if (fit) {
           moves[v] = std::abs(fit->r) / std::sqrt(1.0 + fit->g) > threshold_h;
         } else {
