@@ -60,13 +60,24 @@ void ProgressPrinter::operator()(const v1::Progress& p) {
   }
   const double frac = p.total() > 0 ? static_cast<double>(p.iteration()) / p.total() : 1.0;
   const double eta = frac > 0 ? p.elapsed_seconds() * (1.0 - frac) / frac : 0.0;
+  // No move measured: iterations run at once, as one polynomial (the proto's Progress), or none
+  // moved.
+  const bool no_move = p.moved_share() == 0.0 && p.max_displacement() == 0.0;
   if (tty_) {
     constexpr int kWidth = 30;
     const int filled = static_cast<int>(frac * kWidth);
+    if (no_move) {
+      std::fprintf(stderr, "\r[%s%s] %u/%u  ETA %.1fs                         ", std::string(filled, '#').c_str(),
+                   std::string(kWidth - filled, '.').c_str(), p.iteration(), p.total(), eta);
+      bar_shown_ = true;
+      return;
+    }
     std::fprintf(stderr, "\r[%s%s] %u/%u  max move %.3g  mean %.3g  ETA %.1fs ", std::string(filled, '#').c_str(),
                  std::string(kWidth - filled, '.').c_str(), p.iteration(), p.total(), p.max_displacement(),
                  p.mean_displacement(), eta);
     bar_shown_ = true;
+  } else if (no_move) {
+    std::fprintf(stderr, "iteration %u/%u elapsed %.2fs\n", p.iteration(), p.total(), p.elapsed_seconds());
   } else {
     std::fprintf(stderr, "iteration %u/%u max move %.6g mean %.6g moved %.1f%% elapsed %.2fs\n", p.iteration(),
                  p.total(), p.max_displacement(), p.mean_displacement(), 100.0 * p.moved_share(), p.elapsed_seconds());

@@ -30,6 +30,12 @@ class Bilaplacian final : public FlowKernel {
     });
   }
 
+  // U0 = D^-1 A - I (A the ring's adjacency, D the valences) is similar to a symmetric matrix
+  // with eigenvalues in [-2, 0], so U0^2's are in [0, 4]; zeroing the fixed vertices' rows keeps
+  // them real and in [0, 4] (its free block is a principal block of a matrix similar to a
+  // symmetric one). The step I - lambda U0^2 then has its eigenvalues in [1 - 4 lambda, 1].
+  std::optional<double> LinearStepFloor(double lambda) const override { return 1.0 - 4.0 * lambda; }
+
  private:
   std::vector<Vec3> u_;
 };

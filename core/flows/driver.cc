@@ -15,6 +15,7 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "core/flows/auto_stop.h"
+#include "core/flows/chebyshev.h"
 #include "core/flows/flow_kernel.h"
 #include "core/flows/flow_table.h"
 #include "core/flows/lane_batches.h"
@@ -34,6 +35,12 @@ namespace {
 constexpr double kCappedShareAtOnce = 0.5;
 constexpr double kCappedSharePersistent = 0.05;
 constexpr int kCappedPersistentIterations = 3;
+// A count chosen on a sample, of a linear flow (FlowKernel::LinearStepFloor), runs its first
+// N - 1 iterations as one polynomial in the step (chebyshev.h), cut where the coefficients left
+// sum to kChebyshevTail (relative to the positions' size: far below a float's precision), when
+// its kChebyshevTermCost-times-an-iteration terms cost less than the iterations.
+constexpr double kChebyshevTail = 1e-15;
+constexpr double kChebyshevTermCost = 1.25;
 
 BlockStats Reduce(const std::vector<BlockStats>& blocks) {
   BlockStats total;
@@ -116,6 +123,39 @@ class FlowRun {
     std::vector<double>().swap(threshold_);
   }
   int threads() const { return threads_; }
+
+  // The floor of the step's eigenvalues when it is linear (FlowKernel::LinearStepFloor): one
+  // pass, no threshold, no boundary curve (its umbrella is not covered by the floor).
+  std::optional<double> LinearStepFloor() const {
+    if (kernel_->passes() != 1 || p_.adaptive != AdaptiveMode::kNone) return std::nullopt;
+    if (std::any_of(role_.begin(), role_.end(), [](uint8_t r) { return r == kCurve; })) return std::nullopt;
+    return kernel_->LinearStepFloor(lambda_);
+  }
+
+  // One term of the Chebyshev recurrence (chebyshev.h) with M = (S - a) / b, S the step: with
+  // `first`, w = M v (w's old values unused), else w = 2 M v - w; then y += c w (with `first`,
+  // y = c0 v + c w). S v is written over w a block at a time, the block's old w kept aside.
+  void ChebyshevTerm(const Vec3* v, Vec3* w, Vec3* y, const ChebyshevSeries& series, int k) {
+    ctx_.lambda = lambda_;
+    ctx_.curve_lambda = curve_step_;
+    ctx_.threshold = nullptr;
+    kernel_->Prepare(ctx_, v, n_, threads_);
+    const FlowKernel& kernel = *kernel_;
+    const bool first = k == 1;
+    const double a = series.a, scale = (first ? 1.0 : 2.0) / series.b, c = series.c[k];
+    const double c0 = series.c[0];
+    ForBlocks(n_, threads_, [&](int32_t, int32_t begin, int32_t end) {
+      thread_local std::vector<Vec3> kept;
+      if (!first) kept.assign(w + begin, w + end);
+      kernel.Step(ctx_, v, w, begin, end);
+      for (int32_t i = begin; i < end; ++i) {
+        Vec3 term = (w[i] - v[i] * a) * scale;
+        if (!first) term -= kept[i - begin];
+        w[i] = term;
+        y[i] = first ? v[i] * c0 + term * c : y[i] + term * c;
+      }
+    });
+  }
 
   // Iteration `it` from `cur` into `*out` (one of next / mid): its displacement statistics.
   BlockStats Iterate(int it, const std::vector<Vec3>& cur, std::vector<Vec3>& next, std::vector<Vec3>& mid,
@@ -337,7 +377,44 @@ absl::StatusOr<FlowResult> RunIterations(Mesh& mesh, const Topology& topo, const
     probe_next.resize(n);
     if (probe->passes() > 1) probe_mid.resize(n);
   }
-  for (int it = 1; it <= last_iteration; ++it) {
+  int first_iteration = 1;
+  // MESHSMOOTH_CHEBYSHEV=0 runs them one by one (for tests and measurements).
+  const char* want_chebyshev = std::getenv("MESHSMOOTH_CHEBYSHEV");
+  const bool chebyshev = want_chebyshev == nullptr || std::string_view(want_chebyshev) != "0";
+  if (chebyshev && plan.fixed_iterations > 0 && !estimate_risk && last_iteration > 2) {
+    if (const std::optional<double> floor = run.LinearStepFloor()) {
+      const ChebyshevSeries series = ChebyshevOfPower(last_iteration - 1, *floor, kChebyshevTail);
+      const int terms = static_cast<int>(series.c.size()) - 1;
+      if (terms >= 1 && terms * kChebyshevTermCost < last_iteration - 1) {
+        // The first N - 1 iterations at once, into `cur`; the last one then runs as any other,
+        // with its statistics and checks. Progress counts the terms as shares of the N - 1.
+        std::vector<Vec3> sum(n);
+        // v: the newest term (the input before the first), w: the one before it.
+        Vec3* v = cur.data();
+        Vec3* w = next.data();
+        for (int k = 1; k <= terms; ++k) {
+          if (control.stop.Cancelled()) {
+            mesh.positions = std::move(cur);
+            return absl::CancelledError(
+                absl::StrCat("cancelled while iterations 1 to ", last_iteration - 1, " ran as one polynomial"));
+          }
+          run.ChebyshevTerm(v, w, sum.data(), series, k);
+          std::swap(v, w);
+          if (control.on_progress) {
+            Progress progress;
+            progress.flow = *p.flow;
+            progress.iteration = static_cast<int>(static_cast<int64_t>(last_iteration - 1) * k / terms);
+            progress.total = last_iteration;
+            if (progress.iteration > 0) control.on_progress(progress);
+          }
+        }
+        cur.swap(sum);
+        result.iterations_run = last_iteration - 1;
+        first_iteration = last_iteration;
+      }
+    }
+  }
+  for (int it = first_iteration; it <= last_iteration; ++it) {
     if (control.stop.Cancelled()) {
       mesh.positions = std::move(cur);
       return absl::CancelledError(absl::StrCat("cancelled after ", it - 1, " iterations"));

@@ -157,7 +157,9 @@ struct RunControl {
   // run until Smooth() returns: do not read the mesh from here.
   std::function<void(const Progress&)> on_progress;
   // Checked every iteration: once cancelled the run ends with Cancelled; past its deadline the
-  // run stops with StopReason::kTimeBudget and returns the last iteration.
+  // run stops with StopReason::kTimeBudget and returns the last iteration. (Iterations run as
+  // one polynomial, core/flows/chebyshev.h, check cancellation at every term and the deadline
+  // once they are done.)
   StopToken stop;
 };
 
@@ -207,7 +209,9 @@ absl::Status ValidateFlowParams(const FlowParams& p, int32_t num_vertices);
 
 // Runs the flow on `mesh` (positions change in place; connectivity never does).
 // Errors: InvalidArgument for bad parameters or non-finite input coordinates; Cancelled when
-// the cancel flag is set (the mesh holds the last completed iteration); FailedPrecondition,
+// the cancel flag is set (the mesh holds the last completed iteration, except while a count
+// chosen on a sample runs as one polynomial, core/flows/chebyshev.h: its positions are then
+// no iteration's); FailedPrecondition,
 // naming the iteration and suggesting a smaller step, when the flow diverges (the mesh holds
 // the last iteration before it).
 absl::StatusOr<FlowResult> Smooth(Mesh& mesh, const Topology& topo, const FlowParams& p,

@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include "absl/status/status.h"
@@ -99,6 +100,11 @@ class FlowKernel {
   // Work over all vertices before a pass's blocks (bilaplacian: U at every vertex).
   virtual void Prepare(const StepContext& /*c*/, const Vec3* /*cur*/, int32_t /*n*/, int /*threads*/) {}
   virtual BlockStats Step(const StepContext& c, const Vec3* cur, Vec3* next, int32_t begin, int32_t end) const = 0;
+  // For a flow whose step at `lambda` is one fixed matrix S (linear in the positions, nothing
+  // capped, on free and fixed vertices alone) with real eigenvalues: a floor of them (they lie in
+  // [floor, 1]). N iterations may then run as one polynomial in S (chebyshev.h). Empty for the
+  // others.
+  virtual std::optional<double> LinearStepFloor(double /*lambda*/) const { return std::nullopt; }
 };
 
 // Eq. (14)'s T(P): mean |H| over the first ring (rings = 1) or the first and second rings
