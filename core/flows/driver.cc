@@ -125,9 +125,11 @@ class FlowRun {
   int threads() const { return threads_; }
 
   // The floor of the step's eigenvalues when it is linear (FlowKernel::LinearStepFloor): one
-  // pass, no threshold, no boundary curve (its umbrella is not covered by the floor).
+  // pass, no threshold, no cap on a vertex's move, no boundary curve (its umbrella is not
+  // covered by the floor).
   std::optional<double> LinearStepFloor() const {
     if (kernel_->passes() != 1 || p_.adaptive != AdaptiveMode::kNone) return std::nullopt;
+    if (!std::isinf(ctx_.max_step_sq)) return std::nullopt;
     if (std::any_of(role_.begin(), role_.end(), [](uint8_t r) { return r == kCurve; })) return std::nullopt;
     return kernel_->LinearStepFloor(lambda_);
   }
