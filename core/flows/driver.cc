@@ -37,9 +37,10 @@ constexpr double kCappedSharePersistent = 0.05;
 constexpr int kCappedPersistentIterations = 3;
 // A count chosen on a sample, of a linear flow (FlowKernel::LinearStepFloor), runs its first
 // N - 1 iterations as one polynomial in the step (chebyshev.h), cut where the coefficients left
-// sum to kChebyshevTail (relative to the positions' size: far below a float's precision), when
+// sum to kChebyshevTail (the positions move by at most twice that times their size: 30,000
+// times below a float's rounding, which the result is written with), when
 // its kChebyshevTermCost-times-an-iteration terms cost less than the iterations.
-constexpr double kChebyshevTail = 1e-15;
+constexpr double kChebyshevTail = 1e-12;
 constexpr double kChebyshevTermCost = 1.25;
 
 BlockStats Reduce(const std::vector<BlockStats>& blocks) {
