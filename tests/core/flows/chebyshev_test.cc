@@ -105,5 +105,32 @@ TEST(ChebyshevTest, CountChosenOnASampleRunsAsItsIterations) {
   }
 }
 
+// The polynomial's terms are sums per vertex over fixed blocks: the same bits on one thread and
+// on two (a mesh above the size that runs on one).
+TEST(ChebyshevTest, SameBitsForAnyThreadCount) {
+  Mesh noisy = Icosphere(6);
+  AddNormalNoise(noisy, 0.2, 5);
+  const Topology topo = BuildTopology(noisy);
+  const double h = MeanEdgeLength(noisy, topo);
+  const NoiseEstimate noise = EstimateNoise(noisy, topo, h);
+  std::vector<Mesh> results;
+  for (const int threads : {1, 2}) {
+    FlowParams p;
+    p.flow = FlowId::kBilaplacian;
+    p.threads = threads;
+    Mesh m = noisy;
+    int terms = 0;
+    RunControl control;
+    control.on_progress = [&](const Progress& progress) { terms += progress.max_displacement == 0.0; };
+    const absl::StatusOr<FlowResult> r =
+        flows::RunIterations(m, topo, p, control, h, flows::AutoPlan{200, &noise, nullptr, std::nullopt, false});
+    ASSERT_TRUE(r.ok()) << r.status();
+    EXPECT_EQ(r->iterations_run, 200);
+    EXPECT_GT(terms, 0);  // it ran as a polynomial
+    results.push_back(std::move(m));
+  }
+  EXPECT_EQ(results[0].positions, results[1].positions);
+}
+
 }  // namespace
 }  // namespace meshsmooth
