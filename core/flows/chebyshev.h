@@ -9,7 +9,7 @@
 // [-1, 1], cutting the sum where the coefficients left sum to `tail` changes the result by at
 // most `tail` times its size (on a non-symmetric S, times the condition of its eigenvectors).
 // The sum is then evaluated with the three-term recurrence v_{k+1} = 2 M v_k - v_{k-1},
-// M = (S - a) / b: one application of S per term (driver.cc, "RunChebyshev").
+// M = (S - a) / b: one application of S per term (driver.cc, FlowRun::ChebyshevTerm).
 // docs/decisions.md ("A long bilaplacian run as one polynomial") has the figures.
 #pragma once
 
@@ -23,9 +23,10 @@ struct ChebyshevSeries {
 };
 
 // The series of s^n on [s_min, 1] (-1 <= s_min < 1, n >= 0), cut where the coefficients left
-// sum to at most `tail`, c_0 then set so that they sum to 1 (the sum is 1 at s = 1, as s^n is). Computed by n
-// multiplications by s = a + b t in the Chebyshev basis (t T_k = (T_{k+1} + T_{|k-1|}) / 2): additions and products of
-// non-negative numbers only, so the same bits on every machine.
+// sum to at most `tail`, c_0 then set so that they sum to 1 (the sum is 1 at s = 1, as s^n is).
+// Computed by n multiplications by s = a + b t in the Chebyshev basis
+// (t T_k = (T_{k+1} + T_{|k-1|}) / 2): additions and products of non-negative numbers only, so
+// the same bits on every machine.
 ChebyshevSeries ChebyshevOfPower(int n, double s_min, double tail);
 
 }  // namespace meshsmooth::flows

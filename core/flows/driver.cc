@@ -140,7 +140,6 @@ class FlowRun {
   // y = c0 v + c w). S v is written over w a block at a time, the block's old w kept aside.
   void ChebyshevTerm(const Vec3* v, Vec3* w, Vec3* y, const ChebyshevSeries& series, int k) {
     ctx_.lambda = lambda_;
-    ctx_.curve_lambda = curve_step_;
     ctx_.threshold = nullptr;
     kernel_->Prepare(ctx_, v, n_, threads_);
     const FlowKernel& kernel = *kernel_;
@@ -403,13 +402,9 @@ absl::StatusOr<FlowResult> RunIterations(Mesh& mesh, const Topology& topo, const
           }
           run.ChebyshevTerm(v, w, sum.data(), series, k);
           std::swap(v, w);
-          if (control.on_progress) {
-            Progress progress;
-            progress.flow = *p.flow;
-            progress.iteration = static_cast<int>(static_cast<int64_t>(last_iteration - 1) * k / terms);
-            progress.total = last_iteration;
-            if (progress.iteration > 0) control.on_progress(progress);
-          }
+          // No move: the terms are no iterations (the proto's Progress).
+          const int done = static_cast<int>(static_cast<int64_t>(last_iteration - 1) * k / terms);
+          if (control.on_progress && done > 0) control.on_progress(run.ToProgress(done, BlockStats{}, last_iteration));
         }
         cur.swap(sum);
         result.iterations_run = last_iteration - 1;
