@@ -8,6 +8,7 @@
 
 #include "absl/strings/str_format.h"
 #include "bench/bench_common.h"
+#include "bench/decimate.h"
 #include "core/io/mesh_io.h"
 #include "core/shapes/added_noise.h"
 #include "core/shapes/marching_tetrahedra.h"
@@ -72,6 +73,15 @@ absl::StatusOr<Subject> LoadSubject(const std::string& name, const std::filesyst
     // An open scan's worth of rims: 431 holes, 40% of the vertices on one.
     clean = HoleySphere(5, 700, 0.03, 7);
     s.what = "icosphere level 5, 431 small holes (40% of vertices on a rim)";
+  } else if (name == "sliver-shaft") {
+    clean = SliverShaft(128);
+    s.what = "stepped shaft as CAD tessellates it: slivers (0.8-1.4 deg) and cap fans, 128 around";
+  } else if (name == "dragon-8k") {
+    // A detailed clean scan: the dragon's scales at the scale of an edge.
+    absl::StatusOr<Mesh> read = ReadMesh((meshes / "stanford-dragon.ply").string());
+    if (!read.ok()) return read.status();
+    clean = Decimate(*read, 8000);
+    s.what = "stanford-dragon.ply decimated to 8,000 vertices (OpenMesh quadrics)";
   } else {
     std::filesystem::path path = meshes / (name + ".obj");
     if (!std::filesystem::exists(path)) path = meshes / (name + ".ply");

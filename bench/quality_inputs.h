@@ -16,11 +16,12 @@ namespace meshsmooth::bench {
 
 // The real meshes that serve as ground truth (docs/quality-method.md says why these and not the
 // beetle), then the synthetic shapes: the paper's, iso-surface output and two spheres with
-// holes, the second an open scan's share of rims (LoadSubject).
+// holes, the second an open scan's share of rims, a CAD part made of slivers and needle fans, and
+// a detailed clean scan (the dragon decimated: its detail at the scale of an edge) (LoadSubject).
 inline const std::vector<std::string> kDefaultMeshes = {
-    "fandisk",   "bunny-small",    "max-planck",      "camelhead",        "turbine",
-    "nefertiti", "stanford-bunny", "stanford-dragon", "sphere",           "two-rate-torus",
-    "mt-torus",  "mt-cylinder",    "holey-sphere",    "perforated-sphere"};
+    "fandisk",        "bunny-small",       "max-planck",   "camelhead",      "turbine",  "nefertiti",
+    "stanford-bunny", "stanford-dragon",   "sphere",       "two-rate-torus", "mt-torus", "mt-cylinder",
+    "holey-sphere",   "perforated-sphere", "sliver-shaft", "dragon-8k"};
 
 // Meshes from this many vertices get `large_seeds` seeds (unless it is 0).
 inline constexpr int32_t kLargeMesh = 200000;
@@ -52,7 +53,8 @@ struct Subject {
 };
 
 // The input `name`: a synthetic shape (`sphere`, `two-rate-torus`, `mt-torus`, `mt-cylinder`,
-// `holey-sphere`) or NAME.obj, else NAME.ply, in `meshes`.
+// `holey-sphere`, `perforated-sphere`, `sliver-shaft`), `dragon-8k` (stanford-dragon.ply in
+// `meshes`, decimated), or NAME.obj, else NAME.ply, in `meshes`.
 absl::StatusOr<Subject> LoadSubject(const std::string& name, const std::filesystem::path& meshes);
 
 // The seconds one evaluation of `mesh` against `truth` takes on one thread; NaN if it fails.

@@ -175,6 +175,31 @@ Mesh Cylinder(double radius, double height, int around, int along) {
   return m;
 }
 
+Mesh SliverShaft(int around) {
+  around = std::max(8, around);
+  Mesh m;
+  // Rings 0..3: (radius, z) = (0.5, 0), (0.5, 1), (0.3, 1), (0.3, 2); then the caps' centres.
+  const double radius[4] = {0.5, 0.5, 0.3, 0.3}, height[4] = {0.0, 1.0, 1.0, 2.0};
+  const double step = 2.0 * std::numbers::pi / around;
+  for (int k = 0; k < 4; ++k) {
+    for (int j = 0; j < around; ++j) {
+      m.positions.push_back({radius[k] * std::cos(step * j), radius[k] * std::sin(step * j), height[k]});
+    }
+  }
+  const auto bottom = static_cast<int32_t>(m.positions.size());
+  m.positions.push_back({0.0, 0.0, 0.0});
+  m.positions.push_back({0.0, 0.0, 2.0});
+  auto at = [&](int k, int j) { return static_cast<int32_t>(k * around + (j % around)); };
+  for (int j = 0; j < around; ++j) {
+    // Outward: the sides face away from the axis, the annulus and the top cap up, the bottom
+    // cap down.
+    for (int k = 0; k < 3; ++k) AddQuad(m, at(k, j), at(k, j + 1), at(k + 1, j + 1), at(k + 1, j));
+    m.triangles.push_back({bottom, at(0, j + 1), at(0, j)});
+    m.triangles.push_back({bottom + 1, at(3, j), at(3, j + 1)});
+  }
+  return m;
+}
+
 int CylinderRings(double radius, double height, int around) {
   // Ring spacing sqrt(3)/2 of the chord between neighbours on a ring.
   const double chord = 2.0 * radius * std::sin(std::numbers::pi / std::max(3, around));

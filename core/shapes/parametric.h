@@ -45,6 +45,14 @@ int CylinderRings(double radius, double height, int around);
 // Open: one boundary loop. Normals point to +z.
 Mesh CosineHeightField(double amplitude, int periods, int rows_per_period, int columns);
 
+// A stepped shaft as a CAD exporter tessellates it: a cylinder of radius 0.5 (z in [0, 1])
+// under one of radius 0.3 (z in [1, 2]), joined by a flat annulus at z = 1 and closed by flat
+// caps; each ring carries `around` (>= 8) vertices. Each side and the annulus are one strip of
+// quads cut into two triangles, each cap a fan from its centre: every face is a sliver or a
+// needle that touches a crease (at around = 128, the sides' smallest angles are 0.8-1.4 degrees,
+// the fans' 2.8). 4 * around + 2 vertices, 8 * around faces; closed, faces outward.
+Mesh SliverShaft(int around);
+
 // Icosphere(level) with `holes` round holes cut out, as a scan with many gaps: hole centres
 // drawn uniformly on the sphere (seeded), apart by more than three times the largest radius,
 // radii between 0.5 and 1.5 times `radius`, each hole the faces with a corner closer than its

@@ -199,6 +199,24 @@ TEST(ShapesTest, HoleySphereHasOneLoopPerHole) {
   EXPECT_EQ(HoleySphere(5, 60, 0.07, 7).positions, m.positions);            // seeded
 }
 
+TEST(ShapesTest, SliverShaftIsAClosedPartOfSlivers) {
+  const int around = 128;
+  const Mesh m = SliverShaft(around);
+  ASSERT_EQ(m.positions.size(), 4u * around + 2);
+  ASSERT_EQ(m.triangles.size(), 8u * around);
+  ValidationReport rep;
+  BuildTopology(m, &rep);
+  EXPECT_TRUE(IsClosedManifold(rep, 2));
+  const MeshMetrics metrics = ComputeMetrics(m, BuildTopology(m));
+  // Two prisms on regular 128-gons (area n/2 r^2 sin(2 pi / n)), one unit high each: positive,
+  // so every face faces outward.
+  const double polygon = 0.5 * around * std::sin(2.0 * std::numbers::pi / around);
+  EXPECT_NEAR(metrics.signed_volume, polygon * (0.25 + 0.09), 1e-12);
+  // Slivers: a side's right triangles, legs the chord (0.0147 at radius 0.3) and 1: 0.84 degrees.
+  EXPECT_LT(metrics.min_angle_deg, 1.0);
+  EXPECT_GT(metrics.min_angle_deg, 0.5);
+}
+
 TEST(Vec3Test, RoundToFloatRoundsEveryComponent) {
   std::vector<Vec3> v(8, Vec3{0.1, 0.2, 0.3});
   for (Vec3& p : v) p = RoundToFloat(p);

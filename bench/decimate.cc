@@ -1,0 +1,55 @@
+#include "bench/decimate.h"
+
+#include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
+#include <OpenMesh/Tools/Decimater/DecimaterT.hh>
+#include <OpenMesh/Tools/Decimater/ModNormalFlippingT.hh>
+#include <OpenMesh/Tools/Decimater/ModQuadricT.hh>
+#include <vector>
+
+namespace meshsmooth::bench {
+namespace {
+
+struct DoubleTraits : OpenMesh::DefaultTraits {
+  typedef OpenMesh::Vec3d Point;
+  typedef OpenMesh::Vec3d Normal;
+};
+using OMesh = OpenMesh::TriMesh_ArrayKernelT<DoubleTraits>;
+
+}  // namespace
+
+Mesh Decimate(const Mesh& mesh, int32_t vertices) {
+  OMesh om;
+  std::vector<OMesh::VertexHandle> vh;
+  vh.reserve(mesh.positions.size());
+  for (const Vec3& p : mesh.positions) vh.push_back(om.add_vertex({p.x, p.y, p.z}));
+  for (const Triangle& t : mesh.triangles) {
+    if (IsUsableTriangle(t, mesh.num_vertices())) om.add_face(vh[t[0]], vh[t[1]], vh[t[2]]);
+  }
+  // The normal-flipping module reads face normals.
+  om.request_face_normals();
+  om.update_face_normals();
+  OpenMesh::Decimater::DecimaterT<OMesh> decimater(om);
+  OpenMesh::Decimater::ModQuadricT<OMesh>::Handle quadric;
+  OpenMesh::Decimater::ModNormalFlippingT<OMesh>::Handle flipping;
+  decimater.add(quadric);
+  decimater.add(flipping);
+  decimater.initialize();
+  decimater.decimate_to(static_cast<size_t>(vertices));
+  om.garbage_collection();
+  Mesh out;
+  out.positions.reserve(om.n_vertices());
+  for (const OMesh::VertexHandle v : om.vertices()) {
+    const OMesh::Point& p = om.point(v);
+    out.positions.push_back({p[0], p[1], p[2]});
+  }
+  out.triangles.reserve(om.n_faces());
+  for (const OMesh::FaceHandle f : om.faces()) {
+    Triangle t{};
+    int k = 0;
+    for (const OMesh::VertexHandle v : om.fv_range(f)) t[k++] = v.idx();
+    out.triangles.push_back(t);
+  }
+  return out;
+}
+
+}  // namespace meshsmooth::bench
