@@ -6,7 +6,9 @@
 // the estimator's own misfit on clean, coarse meshes (up to ~0.04 h on the benchmark's clean
 // scans): it is removed in quadrature. Below kNoNoiseH there is nothing to remove and the run
 // does no iteration: a clean mesh comes back as it went in; so does a mesh on which too few
-// vertices allow an estimate (a fan whose rim sees one circle, a strip one triangle wide).
+// vertices allow an estimate (a fan whose rim sees one circle, a strip one triangle wide), and
+// a mesh whose vertices lie almost all on creases (a CAD tessellation of slivers, whose fits span
+// its creases: noise.h).
 //
 // Otherwise the error of every iteration is estimated with Stein's unbiased risk estimate
 // (SURE; Stein 1981), in its Monte-Carlo form for any denoiser (Ramani, Blu, Unser 2008). With y

@@ -170,7 +170,7 @@ enum class StopReason {
   kNoiseRemoved,  // automatic: the vertices moved as far as the estimated noise
   kNoNoise,       // automatic: the input's noise is below what the estimate can tell from its shape
   kConverged,     // automatic: the flow stopped moving before it removed the estimated noise
-  kNoEstimate,    // automatic: too few vertices allow a noise estimate; nothing was done
+  kNoEstimate,    // automatic: no noise estimate (too few fits, or a mesh all creases); nothing was done
 };
 
 // "iterations", "tolerance", "time_budget", "noise_removed", "no_noise", "converged",

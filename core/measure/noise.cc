@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <optional>
 #include <vector>
 
@@ -268,6 +269,35 @@ bool FanFolds(const Vec3* pos, const Topology& topo, int32_t v) {
   return false;
 }
 
+// True when interior vertex v lies on a crease between smooth parts: around its fan (v and
+// consecutive ring entries), two or more pairs of consecutive faces meet at a sharp edge (their
+// normals more than kCreaseSharpDeg apart) and every other pair meets flat (less than
+// kCreaseFlatDeg). A fan with a face of no area is not counted.
+bool OnCrease(const Vec3* pos, const Topology& topo, int32_t v) {
+  static const double kCosSharp = std::cos(kCreaseSharpDeg * std::numbers::pi / 180.0);
+  static const double kCosFlat = std::cos(kCreaseFlatDeg * std::numbers::pi / 180.0);
+  const int32_t begin = topo.ring_offsets[v], end = topo.ring_offsets[v + 1];
+  const Vec3& p = pos[v];
+  auto face = [&](int32_t k) {  // the cross product of the fan's face k, and its length
+    const Vec3 c = Cross(pos[topo.ring[k]] - p, pos[topo.ring[k + 1 < end ? k + 1 : begin]] - p);
+    return std::make_pair(c, Norm(c));
+  };
+  auto [before, before_len] = face(end - 1);
+  int sharp = 0;
+  for (int32_t k = begin; k < end; ++k) {
+    const auto [cur, cur_len] = face(k);
+    if (!(before_len > 0.0) || !(cur_len > 0.0)) return false;
+    const double cosine = Dot(before, cur) / (before_len * cur_len);
+    if (cosine < kCosSharp) {
+      ++sharp;
+    } else if (!(cosine > kCosFlat)) {
+      return false;
+    }
+    before = cur, before_len = cur_len;
+  }
+  return sharp >= 2;
+}
+
 }  // namespace
 
 NoiseEstimate EstimateNoise(const Mesh& mesh, const Topology& topo, double h, int threads, const StopToken& stop) {
@@ -281,7 +311,8 @@ NoiseEstimate EstimateNoise(const Mesh& mesh, const Topology& topo, double h, in
   std::vector<double> residual((n + stride - 1) / stride, std::numeric_limits<double>::quiet_NaN());
   bool stopped = false;
   const auto tried = static_cast<int32_t>(residual.size());
-#pragma omp parallel num_threads(threads) if (threads > 1 && tried >= kMinParallelFits)
+  int64_t creases = 0;  // tried vertices on a crease (OnCrease; an integer sum: any order)
+#pragma omp parallel num_threads(threads) if (threads > 1 && tried >= kMinParallelFits) reduction(+ : creases)
   {
     FitScratch fit_scratch;
 #pragma omp for schedule(static, 128)
@@ -295,6 +326,7 @@ NoiseEstimate EstimateNoise(const Mesh& mesh, const Topology& topo, double h, in
       give_up = stopped;
       const int32_t v = i * stride;
       if (give_up || topo.kind[v] != VertexKind::kInterior) continue;
+      creases += OnCrease(mesh.positions.data(), topo, v);
       residual[i] = std::abs(NormalisedResidual(mesh, topo, v, inv_h, fit_scratch));
       if (std::isnan(residual[i])) residual[i] = kUnusable;
     }
@@ -302,11 +334,15 @@ NoiseEstimate EstimateNoise(const Mesh& mesh, const Topology& topo, double h, in
   if (stopped) return estimate;
   // NaN: not tried; kUnusable: tried, the fit not well posed. The median of the rest.
   for (double r : residual) estimate.vertices_tried += !std::isnan(r);
+  if (estimate.vertices_tried > 0) {
+    estimate.crease_share = static_cast<double>(creases) / static_cast<double>(estimate.vertices_tried);
+  }
   residual.erase(std::remove_if(residual.begin(), residual.end(), [](double r) { return !(r >= 0.0); }),
                  residual.end());
   estimate.vertices_used = static_cast<int64_t>(residual.size());
   if (estimate.vertices_used < kMinWellPosed ||
-      estimate.vertices_used * kMinWellPosedPerTried < estimate.vertices_tried) {
+      estimate.vertices_used * kMinWellPosedPerTried < estimate.vertices_tried ||
+      estimate.crease_share > kMaxCreaseShare) {
     return estimate;
   }
   const size_t mid = residual.size() / 2;
