@@ -274,26 +274,31 @@ bool FanFolds(const Vec3* pos, const Topology& topo, int32_t v) {
 // normals more than kCreaseSharpDeg apart) and every other pair meets flat (less than
 // kCreaseFlatDeg). A fan with a face of no area is not counted.
 bool OnCrease(const Vec3* pos, const Topology& topo, int32_t v) {
+  // Compared squared, without a root or a division: a . b < c |a| |b| with c > 0 holds when
+  // a . b < 0 or (a . b)^2 < c^2 |a|^2 |b|^2, and a . b > c |a| |b| when a . b > 0 and
+  // (a . b)^2 > c^2 |a|^2 |b|^2.
   static const double kCosSharp = std::cos(kCreaseSharpDeg * std::numbers::pi / 180.0);
   static const double kCosFlat = std::cos(kCreaseFlatDeg * std::numbers::pi / 180.0);
+  static const double kSharp2 = kCosSharp * kCosSharp, kFlat2 = kCosFlat * kCosFlat;
   const int32_t begin = topo.ring_offsets[v], end = topo.ring_offsets[v + 1];
   const Vec3& p = pos[v];
-  auto face = [&](int32_t k) {  // the cross product of the fan's face k, and its length
-    const Vec3 c = Cross(pos[topo.ring[k]] - p, pos[topo.ring[k + 1 < end ? k + 1 : begin]] - p);
-    return std::make_pair(c, Norm(c));
+  auto face = [&](int32_t k) {  // the cross product of the fan's face k
+    return Cross(pos[topo.ring[k]] - p, pos[topo.ring[k + 1 < end ? k + 1 : begin]] - p);
   };
-  auto [before, before_len] = face(end - 1);
+  Vec3 before = face(end - 1);
+  double before2 = SquaredNorm(before);
   int sharp = 0;
   for (int32_t k = begin; k < end; ++k) {
-    const auto [cur, cur_len] = face(k);
-    if (!(before_len > 0.0) || !(cur_len > 0.0)) return false;
-    const double cosine = Dot(before, cur) / (before_len * cur_len);
-    if (cosine < kCosSharp) {
+    const Vec3 cur = face(k);
+    const double cur2 = SquaredNorm(cur);
+    if (!(before2 > 0.0) || !(cur2 > 0.0)) return false;
+    const double dot = Dot(before, cur), lengths2 = before2 * cur2;
+    if (dot < 0.0 || dot * dot < kSharp2 * lengths2) {
       ++sharp;
-    } else if (!(cosine > kCosFlat)) {
+    } else if (!(dot * dot > kFlat2 * lengths2)) {
       return false;
     }
-    before = cur, before_len = cur_len;
+    before = cur, before2 = cur2;
   }
   return sharp >= 2;
 }
