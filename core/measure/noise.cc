@@ -272,7 +272,7 @@ bool FanFolds(const Vec3* pos, const Topology& topo, int32_t v) {
 // True when interior vertex v lies on a crease between smooth parts: around its fan (v and
 // consecutive ring entries), two or more pairs of consecutive faces meet at a sharp edge (their
 // normals more than kCreaseSharpDeg apart) and every other pair meets flat (less than
-// kCreaseFlatDeg). A fan with a face of no area is not counted.
+// kCreaseFlatDeg). A fan of fewer than three faces, or with a face of no area, is not counted.
 bool OnCrease(const Vec3* pos, const Topology& topo, int32_t v) {
   // Compared squared, without a root or a division: a . b < c |a| |b| with c > 0 holds when
   // a . b < 0 or (a . b)^2 < c^2 |a|^2 |b|^2, and a . b > c |a| |b| when a . b > 0 and
@@ -281,6 +281,7 @@ bool OnCrease(const Vec3* pos, const Topology& topo, int32_t v) {
   static const double kCosFlat = std::cos(kCreaseFlatDeg * std::numbers::pi / 180.0);
   static const double kSharp2 = kCosSharp * kCosSharp, kFlat2 = kCosFlat * kCosFlat;
   const int32_t begin = topo.ring_offsets[v], end = topo.ring_offsets[v + 1];
+  if (end - begin < 3) return false;
   const Vec3& p = pos[v];
   auto face = [&](int32_t k) {  // the cross product of the fan's face k
     return Cross(pos[topo.ring[k]] - p, pos[topo.ring[k + 1 < end ? k + 1 : begin]] - p);
