@@ -1,30 +1,15 @@
 #include "bench/decimate.h"
 
-#include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
 #include <OpenMesh/Tools/Decimater/DecimaterT.hh>
 #include <OpenMesh/Tools/Decimater/ModNormalFlippingT.hh>
 #include <OpenMesh/Tools/Decimater/ModQuadricT.hh>
-#include <vector>
+
+#include "bench/openmesh_mesh.h"
 
 namespace meshsmooth::bench {
-namespace {
-
-struct DoubleTraits : OpenMesh::DefaultTraits {
-  typedef OpenMesh::Vec3d Point;
-  typedef OpenMesh::Vec3d Normal;
-};
-using OMesh = OpenMesh::TriMesh_ArrayKernelT<DoubleTraits>;
-
-}  // namespace
 
 Mesh Decimate(const Mesh& mesh, int32_t vertices) {
-  OMesh om;
-  std::vector<OMesh::VertexHandle> vh;
-  vh.reserve(mesh.positions.size());
-  for (const Vec3& p : mesh.positions) vh.push_back(om.add_vertex({p.x, p.y, p.z}));
-  for (const Triangle& t : mesh.triangles) {
-    if (IsUsableTriangle(t, mesh.num_vertices())) om.add_face(vh[t[0]], vh[t[1]], vh[t[2]]);
-  }
+  OMesh om = ToOpenMesh(mesh);
   // The normal-flipping module reads face normals.
   om.request_face_normals();
   om.update_face_normals();

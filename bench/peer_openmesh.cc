@@ -2,30 +2,20 @@
 // Tangential_and_Normal, C0 (one umbrella step of 0.5) and C1 (a step along the umbrella of
 // the umbrellas, OpenMesh's bi-Laplacian); cotangent weights (computed once, in initialize)
 // with Normal, C0. Boundary vertices stay fixed (OpenMesh's active set).
-#include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
 #include <OpenMesh/Tools/Smoother/JacobiLaplaceSmootherT.hh>
 #include <chrono>
 
+#include "bench/openmesh_mesh.h"
 #include "bench/peers.h"
 
 namespace meshsmooth::bench {
 namespace {
 
-struct DoubleTraits : OpenMesh::DefaultTraits {
-  typedef OpenMesh::Vec3d Point;
-  typedef OpenMesh::Vec3d Normal;
-};
-using OMesh = OpenMesh::TriMesh_ArrayKernelT<DoubleTraits>;
 using Smoother = OpenMesh::Smoother::JacobiLaplaceSmootherT<OMesh>;
 
 PeerRun Run(const Mesh& mesh, int iterations, Smoother::Component component, Smoother::Continuity continuity) {
-  OMesh om;
   std::vector<OMesh::VertexHandle> vh;
-  vh.reserve(mesh.positions.size());
-  for (const Vec3& p : mesh.positions) vh.push_back(om.add_vertex({p.x, p.y, p.z}));
-  for (const Triangle& t : mesh.triangles) {
-    if (IsUsableTriangle(t, mesh.num_vertices())) om.add_face(vh[t[0]], vh[t[1]], vh[t[2]]);
-  }
+  OMesh om = ToOpenMesh(mesh, &vh);
   om.request_vertex_normals();
   om.request_face_normals();
   om.update_normals();
