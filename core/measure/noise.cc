@@ -64,11 +64,63 @@ struct FitScratch {
   uint32_t stamp = 0;
 };
 
-// The fit at vertex v, or none when it is not well posed (or v's second ring is too large to
-// gather: a fan's rim around a centre of huge valence, skipped in bounded time).
-std::optional<Fit> FitAt(const Mesh& mesh, const Topology& topo, int32_t v, double inv_h, FitScratch& s) {
+// An interior vertex's fan (v and consecutive ring entries), from one walk around it: the sum
+// of its faces' cross products (RingNormal's, the same bits), and whether v lies on a crease
+// between smooth parts: two or more pairs of consecutive faces meet at a sharp edge (their
+// normals more than kCreaseSharpDeg apart) and every other pair meets flat (less than
+// kCreaseFlatDeg). A fan of fewer than three faces, or with a face of no area, is not on a
+// crease.
+struct Fan {
+  Vec3 normal;
+  bool on_crease = false;
+};
+
+Fan FanAt(const Vec3* pos, const Topology& topo, int32_t v) {
+  // Compared squared, without a root or a division: a . b < c |a| |b| with c > 0 holds when
+  // a . b < 0 or (a . b)^2 < c^2 |a|^2 |b|^2, and a . b > c |a| |b| when a . b > 0 and
+  // (a . b)^2 > c^2 |a|^2 |b|^2.
+  static const double kCosSharp = std::cos(kCreaseSharpDeg * std::numbers::pi / 180.0);
+  static const double kCosFlat = std::cos(kCreaseFlatDeg * std::numbers::pi / 180.0);
+  static const double kSharp2 = kCosSharp * kCosSharp, kFlat2 = kCosFlat * kCosFlat;
+  const int32_t begin = topo.ring_offsets[v], end = topo.ring_offsets[v + 1];
+  Fan fan;
+  if (end == begin) return fan;
+  const Vec3& p = pos[v];
+  auto face = [&](int32_t k) {  // the cross product of the fan's face k
+    return Cross(pos[topo.ring[k]] - p, pos[topo.ring[k + 1 < end ? k + 1 : begin]] - p);
+  };
+  // RingNormal's order: the face that closes the fan first, then the others from the first.
+  const Vec3 last = face(end - 1);
+  fan.normal += last;
+  Vec3 before = last;
+  double before2 = SquaredNorm(last);
+  bool flat_or_sharp = end - begin >= 3;
+  int sharp = 0;
+  for (int32_t k = begin; k < end; ++k) {
+    const Vec3 cur = k + 1 < end ? face(k) : last;
+    if (k + 1 < end) fan.normal += cur;
+    if (!flat_or_sharp) continue;
+    const double cur2 = SquaredNorm(cur);
+    const double dot = Dot(before, cur), lengths2 = before2 * cur2;
+    if (!(before2 > 0.0) || !(cur2 > 0.0)) {
+      flat_or_sharp = false;
+    } else if (dot < 0.0 || dot * dot < kSharp2 * lengths2) {
+      ++sharp;
+    } else if (!(dot * dot > kFlat2 * lengths2)) {
+      flat_or_sharp = false;
+    }
+    before = cur, before2 = cur2;
+  }
+  fan.on_crease = flat_or_sharp && sharp >= 2;
+  return fan;
+}
+
+// The fit at vertex v, whose ring normal (RingNormal) is `normal`, or none when it is not well
+// posed (or v's second ring is too large to gather: a fan's rim around a centre of huge
+// valence, skipped in bounded time).
+std::optional<Fit> FitAt(const Mesh& mesh, const Topology& topo, int32_t v, const Vec3& normal, double inv_h,
+                         FitScratch& s) {
   const Vec3* pos = mesh.positions.data();
-  const Vec3 normal = RingNormal(topo, pos, v);
   const double len = Norm(normal);
   if (!(len > 0.0) || !std::isfinite(len)) return std::nullopt;
   const Vec3 n = normal * (1.0 / len);
@@ -170,8 +222,9 @@ std::optional<Fit> FitAt(const Mesh& mesh, const Topology& topo, int32_t v, doub
 }
 
 // The normalised residual r / sqrt(1 + g) of vertex v, or NaN when its fit is not well posed.
-double NormalisedResidual(const Mesh& mesh, const Topology& topo, int32_t v, double inv_h, FitScratch& scratch) {
-  const std::optional<Fit> fit = FitAt(mesh, topo, v, inv_h, scratch);
+double NormalisedResidual(const Mesh& mesh, const Topology& topo, int32_t v, const Vec3& normal, double inv_h,
+                          FitScratch& scratch) {
+  const std::optional<Fit> fit = FitAt(mesh, topo, v, normal, inv_h, scratch);
   return fit ? fit->r / std::sqrt(1.0 + fit->g) : std::numeric_limits<double>::quiet_NaN();
 }
 
@@ -269,41 +322,6 @@ bool FanFolds(const Vec3* pos, const Topology& topo, int32_t v) {
   return false;
 }
 
-// True when interior vertex v lies on a crease between smooth parts: around its fan (v and
-// consecutive ring entries), two or more pairs of consecutive faces meet at a sharp edge (their
-// normals more than kCreaseSharpDeg apart) and every other pair meets flat (less than
-// kCreaseFlatDeg). A fan of fewer than three faces, or with a face of no area, is not counted.
-bool OnCrease(const Vec3* pos, const Topology& topo, int32_t v) {
-  // Compared squared, without a root or a division: a . b < c |a| |b| with c > 0 holds when
-  // a . b < 0 or (a . b)^2 < c^2 |a|^2 |b|^2, and a . b > c |a| |b| when a . b > 0 and
-  // (a . b)^2 > c^2 |a|^2 |b|^2.
-  static const double kCosSharp = std::cos(kCreaseSharpDeg * std::numbers::pi / 180.0);
-  static const double kCosFlat = std::cos(kCreaseFlatDeg * std::numbers::pi / 180.0);
-  static const double kSharp2 = kCosSharp * kCosSharp, kFlat2 = kCosFlat * kCosFlat;
-  const int32_t begin = topo.ring_offsets[v], end = topo.ring_offsets[v + 1];
-  if (end - begin < 3) return false;
-  const Vec3& p = pos[v];
-  auto face = [&](int32_t k) {  // the cross product of the fan's face k
-    return Cross(pos[topo.ring[k]] - p, pos[topo.ring[k + 1 < end ? k + 1 : begin]] - p);
-  };
-  Vec3 before = face(end - 1);
-  double before2 = SquaredNorm(before);
-  int sharp = 0;
-  for (int32_t k = begin; k < end; ++k) {
-    const Vec3 cur = face(k);
-    const double cur2 = SquaredNorm(cur);
-    if (!(before2 > 0.0) || !(cur2 > 0.0)) return false;
-    const double dot = Dot(before, cur), lengths2 = before2 * cur2;
-    if (dot < 0.0 || dot * dot < kSharp2 * lengths2) {
-      ++sharp;
-    } else if (!(dot * dot > kFlat2 * lengths2)) {
-      return false;
-    }
-    before = cur, before2 = cur2;
-  }
-  return sharp >= 2;
-}
-
 }  // namespace
 
 NoiseEstimate EstimateNoise(const Mesh& mesh, const Topology& topo, double h, int threads, const StopToken& stop) {
@@ -317,7 +335,7 @@ NoiseEstimate EstimateNoise(const Mesh& mesh, const Topology& topo, double h, in
   std::vector<double> residual((n + stride - 1) / stride, std::numeric_limits<double>::quiet_NaN());
   bool stopped = false;
   const auto tried = static_cast<int32_t>(residual.size());
-  int64_t creases = 0;  // tried vertices on a crease (OnCrease; an integer sum: any order)
+  int64_t creases = 0;  // tried vertices on a crease (FanAt; an integer sum: any order)
 #pragma omp parallel num_threads(threads) if (threads > 1 && tried >= kMinParallelFits) reduction(+ : creases)
   {
     FitScratch fit_scratch;
@@ -332,8 +350,9 @@ NoiseEstimate EstimateNoise(const Mesh& mesh, const Topology& topo, double h, in
       give_up = stopped;
       const int32_t v = i * stride;
       if (give_up || topo.kind[v] != VertexKind::kInterior) continue;
-      creases += OnCrease(mesh.positions.data(), topo, v);
-      residual[i] = std::abs(NormalisedResidual(mesh, topo, v, inv_h, fit_scratch));
+      const Fan fan = FanAt(mesh.positions.data(), topo, v);
+      creases += fan.on_crease;
+      residual[i] = std::abs(NormalisedResidual(mesh, topo, v, fan.normal, inv_h, fit_scratch));
       if (std::isnan(residual[i])) residual[i] = kUnusable;
     }
   }
@@ -397,7 +416,8 @@ void RemoveOutliers(Mesh& mesh, const Topology& topo, double h, double threshold
         if (!check[v] || (topo.kind[v] != VertexKind::kInterior && !rim) || (keep != nullptr && keep[v] != 0)) continue;
         // A vertex without a fit (a boundary vertex's half ring, a ring too small) is judged by
         // its ring's median height.
-        const std::optional<Fit> fit = rim ? std::nullopt : FitAt(mesh, topo, v, inv_h, fit_scratch);
+        const std::optional<Fit> fit =
+            rim ? std::nullopt : FitAt(mesh, topo, v, RingNormal(topo, mesh.positions.data(), v), inv_h, fit_scratch);
         if (fit) {
           moves[v] = std::abs(fit->r) / std::sqrt(1.0 + fit->g) > threshold_h;
         } else {

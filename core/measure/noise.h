@@ -14,14 +14,14 @@
 // A mesh of more than 20,000 vertices is sampled: every k-th vertex is fitted.
 //
 // A mesh whose vertices lie almost all on creases has no estimate: when more than
-// kMaxCreaseShare of the vertices tried sit on a crease between smooth parts (OnCrease in
+// kMaxCreaseShare of the vertices tried sit on a crease between smooth parts (FanAt in
 // noise.cc: a fan of flat runs of faces meeting at sharp edges), the estimate is not reliable.
 // Such a mesh (a CAD exporter's strips of slivers from one feature line to the next, fans of
 // needles on flat caps) samples its surface along its creases only: every fit spans a crease,
 // and the median of the residuals measures the creases, not noise (a clean stepped shaft of
 // slivers read 0.38 h). The clean shaft has 99.6% of its vertices on creases; noise of 0.1-0.7 h
-// along the normals leaves 30-52% that look so, a smooth tube of slivers with noise 44-55%, and
-// every other input of the quality benchmark, clean or noisy, at most 14%.
+// along the normals leaves 30-52% that look so, a smooth tube of slivers with noise 44-55%; the
+// other inputs of the quality benchmark counted, clean and noisy, at most 14%.
 //
 // The same fits find outliers, vertices thrown far off the surface (a scanner's impulsive
 // noise): their share tells that kind of noise (NoiseEstimate::outlier_share), and
