@@ -1,7 +1,9 @@
 #include "core/flows/choice.h"
 
 #include <algorithm>
+#include <cmath>
 #include <iterator>
+#include <numbers>
 #include <optional>
 #include <utility>
 #include <vector>
@@ -38,6 +40,49 @@ BoundaryMode BoundaryFor(FlowId flow, BoundaryMode requested) {
   return KindOf(flow) == FlowKind::kNormalFilter ? BoundaryMode::kCurve : BoundaryMode::kFixed;
 }
 
+// How rough a surface is, for telling a run that made its input worse: the area of its usable
+// faces and its folded edges (the two faces of an edge at an interior vertex facing more than
+// kFoldAngleDeg apart). Noise adds area and folds; a run that removes noise takes both away.
+struct Roughness {
+  double area = 0.0;
+  int64_t folds = 0;
+};
+
+Roughness RoughnessOf(const std::vector<Vec3>& pos, const Mesh& mesh, const Topology& topo) {
+  Roughness r;
+  for (int32_t f : topo.faces) {
+    const Triangle& t = mesh.triangles[f];
+    r.area += 0.5 * Norm(Cross(pos[t[1]] - pos[t[0]], pos[t[2]] - pos[t[0]]));
+  }
+  const double cos_fold = std::cos(kFoldAngleDeg * std::numbers::pi / 180.0);
+  for (int32_t v = 0; v < topo.num_vertices(); ++v) {
+    if (topo.kind[v] != VertexKind::kInterior) continue;
+    const int32_t first = topo.ring_offsets[v], last = topo.ring_offsets[v + 1];
+    const Vec3 p = pos[v];
+    Vec3 prev = pos[topo.ring[last - 1]] - p;
+    Vec3 before = Cross(pos[topo.ring[last - 2]] - p, prev);  // the face before edge (v, ring[last - 1])
+    for (int32_t k = first; k < last; ++k) {
+      const Vec3 cur = pos[topo.ring[k]] - p;
+      const Vec3 after = Cross(prev, cur);
+      // Edge (v, ring[k - 1]) between faces `before` and `after`, counted once: from its
+      // lower interior end.
+      const int32_t w = topo.ring[k == first ? last - 1 : k - 1];
+      const bool counts = topo.kind[w] != VertexKind::kInterior || v < w;
+      if (counts && Dot(before, after) < cos_fold * Norm(before) * Norm(after)) ++r.folds;
+      before = after;
+      prev = cur;
+    }
+  }
+  return r;
+}
+
+// True when `after` is rougher than `before` (same mesh): more area, or more folded edges than
+// kNoGainFoldShare of the faces allows.
+bool Rougher(const Roughness& after, const Roughness& before, size_t faces) {
+  return after.area > before.area ||
+         static_cast<double>(after.folds - before.folds) > kNoGainFoldShare * static_cast<double>(faces);
+}
+
 void Report(const RunControl& control, Phase phase, FlowId flow) {
   if (!control.on_progress) return;
   Progress progress;
@@ -59,6 +104,8 @@ absl::StatusOr<FlowResult> Choose(Mesh& mesh, const Topology& topo, const FlowPa
   quiet.on_progress = nullptr;
   std::optional<FlowResult> best;
   std::vector<Vec3> best_positions;
+  std::optional<Roughness> input_roughness;
+  std::optional<FlowResult> rejected;  // the first candidate that left the input rougher
   for (FlowId flow : candidates) {
     Report(control, Phase::kChoosing, flow);
     Mesh copy = mesh;
@@ -75,11 +122,29 @@ absl::StatusOr<FlowResult> Choose(Mesh& mesh, const Topology& topo, const FlowPa
       return r.status();
     }
     const bool idle = r->iterations_run == 0;
+    if (!idle) {
+      // A run that left its input rougher did not remove noise, whatever its estimate says
+      // (slivers: the estimate reads offsets along the normals, and a sliver's normal turns
+      // under an offset far below h): it is not chosen.
+      if (!input_roughness) input_roughness = RoughnessOf(mesh.positions, mesh, topo);
+      if (Rougher(RoughnessOf(copy.positions, mesh, topo), *input_roughness, topo.faces.size())) {
+        if (!rejected) rejected = *std::move(r);
+        continue;
+      }
+    }
     if (!best || (r->auto_stop && best->auto_stop && r->auto_stop->risk_h2 < best->auto_stop->risk_h2 - margin_h2)) {
       best = *std::move(r);
       best_positions = std::move(copy.positions);
     }
     if (idle) break;  // no noise to remove, or no estimate: the same for every candidate
+  }
+  if (!best && rejected) {
+    // Every candidate left the input rougher: the input comes back, as it came.
+    FlowResult& none = *rejected;
+    none.iterations_run = 0;
+    none.stop_reason = StopReason::kNoGain;
+    if (none.auto_stop) none.auto_stop->displacement_h = 0.0;
+    return *std::move(rejected);
   }
   if (!best) return absl::FailedPreconditionError("every candidate flow diverged");
   mesh.positions = std::move(best_positions);
@@ -181,6 +246,8 @@ absl::StatusOr<FlowResult> SmoothWithEstimate(Mesh& mesh, const Topology& topo, 
   FlowParams whole = q;
   whole.flow = chosen->flow;
   whole.boundary = BoundaryFor(chosen->flow, q.boundary);
+  // Every candidate left the sample rougher: the whole mesh comes back as it came.
+  if (chosen->stop_reason == StopReason::kNoGain) return chosen;
   if (chosen->iterations_run == 0) {
     // An idle sample (no noise, or no estimate on it) leaves the decision to the whole mesh's
     // own estimate and stopping (nothing to do on a clean mesh: as cheap as the sample).

@@ -171,10 +171,11 @@ enum class StopReason {
   kNoNoise,       // automatic: the input's noise is below what the estimate can tell from its shape
   kConverged,     // automatic: the flow stopped moving before it removed the estimated noise
   kNoEstimate,    // automatic: no noise estimate (too few fits, or a mesh all creases); nothing was done
+  kNoGain,        // automatic: every candidate's run left the input rougher; the input came back
 };
 
 // "iterations", "tolerance", "time_budget", "noise_removed", "no_noise", "converged",
-// "no_estimate".
+// "no_estimate", "no_gain".
 std::string_view StopReasonName(StopReason reason);
 
 // What automatic stopping measured (FlowParams::iterations == kAutoIterations).

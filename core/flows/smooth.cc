@@ -43,6 +43,8 @@ std::string_view StopReasonName(StopReason reason) {
       return "converged";
     case StopReason::kNoEstimate:
       return "no_estimate";
+    case StopReason::kNoGain:
+      return "no_gain";
   }
   return "iterations";
 }
