@@ -94,8 +94,10 @@ void PrintSummary(const v1::Summary& s) {
   if (p.iterations_requested() == 0) {
     std::printf("job %s: %s, %u iterations (automatic: stopped by %s), step %g (effective %g)\n", s.job_id().c_str(),
                 p.flow().c_str(), p.iterations_run(), p.stop_reason().c_str(), p.step(), p.effective_step());
-    std::printf("noise estimate %.4f mean edges; vertices moved %.4f mean edges (RMS along their normals)\n",
-                p.noise_estimate(), p.noise_removed());
+    std::printf(
+        "noise estimate %.4f mean edges (%.4f with fine detail taken out); vertices moved %.4f mean edges (RMS along "
+        "their normals)\n",
+        p.noise_estimate(), p.noise_estimate_detail_free(), p.noise_removed());
   } else {
     std::printf("job %s: %s, %u of %u iterations (stopped by %s), step %g (effective %g)\n", s.job_id().c_str(),
                 p.flow().c_str(), p.iterations_run(), p.iterations_requested(), p.stop_reason().c_str(), p.step(),

@@ -202,6 +202,7 @@ void ToProto(const JobParams& params, const FlowResult& result, v1::EffectivePar
   if (result.auto_stop) {
     out->set_noise_estimate(result.auto_stop->noise_sigma_h);
     out->set_noise_removed(result.auto_stop->displacement_h);
+    out->set_noise_estimate_detail_free(result.auto_stop->detail_free_h);
   }
   out->set_outliers_moved(result.outliers_moved);
   out->set_weights(p.weights == UmbrellaWeights::kInverseDistance ? v1::UMBRELLA_WEIGHTS_INVERSE_DISTANCE

@@ -52,6 +52,13 @@ namespace meshsmooth::flows {
 inline constexpr double kEstimatorFloorH = 0.04;
 // Below this much noise (in h, after the floor) the run does nothing.
 inline constexpr double kNoNoiseH = 0.02;
+// Nor when the noise estimate with the fits' misfit of detail taken out
+// (NoiseEstimate::detail_free_h) is below this (in h). On the quality benchmark's inputs the
+// clean meshes read 0.000-0.020 h there (nefertiti 0.020; `dragon-8k`, whose detail one or two
+// edges wide reads 0.074 h of noise, 0.000), the noisy ones (0.1 h and more, along the normals or
+// in random directions) 0.042 h and more (`dragon-8k` at random 0.1 h; the smooth meshes there
+// 0.046-0.055); docs/quality-method.md.
+inline constexpr double kDetailOnlyH = 0.03;
 // The run stops when the estimated error has not improved for this many iterations, and for
 // half as many as the best iteration took.
 inline constexpr int kPatience = 8;

@@ -40,49 +40,6 @@ BoundaryMode BoundaryFor(FlowId flow, BoundaryMode requested) {
   return KindOf(flow) == FlowKind::kNormalFilter ? BoundaryMode::kCurve : BoundaryMode::kFixed;
 }
 
-// How rough a surface is, for telling a run that made its input worse: the area of its usable
-// faces and its folded edges (the two faces of an edge at an interior vertex facing more than
-// kFoldAngleDeg apart). Noise adds area and folds; a run that removes noise takes both away.
-struct Roughness {
-  double area = 0.0;
-  int64_t folds = 0;
-};
-
-Roughness RoughnessOf(const std::vector<Vec3>& pos, const Mesh& mesh, const Topology& topo) {
-  Roughness r;
-  for (int32_t f : topo.faces) {
-    const Triangle& t = mesh.triangles[f];
-    r.area += 0.5 * Norm(Cross(pos[t[1]] - pos[t[0]], pos[t[2]] - pos[t[0]]));
-  }
-  const double cos_fold = std::cos(kFoldAngleDeg * std::numbers::pi / 180.0);
-  for (int32_t v = 0; v < topo.num_vertices(); ++v) {
-    if (topo.kind[v] != VertexKind::kInterior) continue;
-    const int32_t first = topo.ring_offsets[v], last = topo.ring_offsets[v + 1];
-    const Vec3 p = pos[v];
-    Vec3 prev = pos[topo.ring[last - 1]] - p;
-    Vec3 before = Cross(pos[topo.ring[last - 2]] - p, prev);  // the face before edge (v, ring[last - 1])
-    for (int32_t k = first; k < last; ++k) {
-      const Vec3 cur = pos[topo.ring[k]] - p;
-      const Vec3 after = Cross(prev, cur);
-      // Edge (v, ring[k - 1]) between faces `before` and `after`, counted once: from its
-      // lower interior end.
-      const int32_t w = topo.ring[k == first ? last - 1 : k - 1];
-      const bool counts = topo.kind[w] != VertexKind::kInterior || v < w;
-      if (counts && Dot(before, after) < cos_fold * Norm(before) * Norm(after)) ++r.folds;
-      before = after;
-      prev = cur;
-    }
-  }
-  return r;
-}
-
-// True when `after` is rougher than `before` (same mesh): more area, or more folded edges than
-// kNoGainFoldShare of the faces allows.
-bool Rougher(const Roughness& after, const Roughness& before, size_t faces) {
-  return after.area > before.area ||
-         static_cast<double>(after.folds - before.folds) > kNoGainFoldShare * static_cast<double>(faces);
-}
-
 void Report(const RunControl& control, Phase phase, FlowId flow) {
   if (!control.on_progress) return;
   Progress progress;
@@ -204,6 +161,39 @@ Sample SamplePatches(const Mesh& mesh, const Topology& topo, int32_t size) {
 }
 
 }  // namespace
+
+Roughness RoughnessOf(const std::vector<Vec3>& pos, const Mesh& mesh, const Topology& topo) {
+  Roughness r;
+  for (int32_t f : topo.faces) {
+    const Triangle& t = mesh.triangles[f];
+    r.area += 0.5 * Norm(Cross(pos[t[1]] - pos[t[0]], pos[t[2]] - pos[t[0]]));
+  }
+  const double cos_fold = std::cos(kFoldAngleDeg * std::numbers::pi / 180.0);
+  for (int32_t v = 0; v < topo.num_vertices(); ++v) {
+    if (topo.kind[v] != VertexKind::kInterior) continue;
+    const int32_t first = topo.ring_offsets[v], last = topo.ring_offsets[v + 1];
+    const Vec3 p = pos[v];
+    Vec3 prev = pos[topo.ring[last - 1]] - p;
+    Vec3 before = Cross(pos[topo.ring[last - 2]] - p, prev);  // the face before edge (v, ring[last - 1])
+    for (int32_t k = first; k < last; ++k) {
+      const Vec3 cur = pos[topo.ring[k]] - p;
+      const Vec3 after = Cross(prev, cur);
+      // Edge (v, ring[k - 1]) between faces `before` and `after`, counted once: from its
+      // lower interior end.
+      const int32_t w = topo.ring[k == first ? last - 1 : k - 1];
+      const bool counts = topo.kind[w] != VertexKind::kInterior || v < w;
+      if (counts && Dot(before, after) < cos_fold * Norm(before) * Norm(after)) ++r.folds;
+      before = after;
+      prev = cur;
+    }
+  }
+  return r;
+}
+
+bool Rougher(const Roughness& after, const Roughness& before, size_t faces) {
+  return after.area > before.area ||
+         static_cast<double>(after.folds - before.folds) > kNoGainFoldShare * static_cast<double>(faces);
+}
 
 int32_t SampleSize(int32_t n) {
   if (n <= kMaxChoiceVertices) return n;

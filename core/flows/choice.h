@@ -12,6 +12,7 @@
 #pragma once
 
 #include <cstdint>
+#include <vector>
 
 #include "absl/status/statusor.h"
 #include "core/flows/driver.h"
@@ -25,6 +26,20 @@ int32_t SampleSize(int32_t n);
 // True when `p` leaves the flow to the estimated error: no flow named, automatic iterations, no
 // step.
 bool ChoosesFlow(const FlowParams& p);
+
+// How rough a surface is, for telling a run that made its input worse: the area of its usable
+// faces and its folded edges (the two faces of an edge at an interior vertex facing more than
+// kFoldAngleDeg apart, auto_stop.h). Noise adds area and folds; a run that removes noise takes
+// both away.
+struct Roughness {
+  double area = 0.0;
+  int64_t folds = 0;
+};
+Roughness RoughnessOf(const std::vector<Vec3>& pos, const Mesh& mesh, const Topology& topo);
+
+// True when `after` is rougher than `before` (the same mesh's): more area, or more folded edges
+// than kNoGainFoldShare (auto_stop.h) of the faces allows. The choice does not take such a run.
+bool Rougher(const Roughness& after, const Roughness& before, size_t faces);
 
 // A valid `p` with automatic iterations (flow named or not); h is the input's mean edge length.
 absl::StatusOr<FlowResult> SmoothAutomatic(Mesh& mesh, const Topology& topo, const FlowParams& p,

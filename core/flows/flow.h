@@ -182,6 +182,7 @@ std::string_view StopReasonName(StopReason reason);
 struct AutoStopReport {
   double noise_sigma_h = 0.0;      // EstimateNoise() of the input, in h
   double noise_to_remove_h = 0.0;  // the part of it taken for noise (see driver.cc), in h
+  double detail_free_h = 0.0;      // NoiseEstimate::detail_free_h of the input, in h
   double displacement_h = 0.0;     // RMS normal displacement from the input when it stopped, in h
   // The run's estimated mean squared error to the noise-free surface, a vertex, less the
   // noise's variance (auto_stop.h): comparable between flows run on the same input, in h^2.
