@@ -57,7 +57,7 @@ inline constexpr double kNoNoiseH = 0.02;
 // clean meshes read 0.000-0.020 h there (nefertiti 0.020; `dragon-8k`, whose detail one or two
 // edges wide reads 0.074 h of noise, 0.000), the noisy ones (0.1 h and more, along the normals or
 // in random directions) 0.042 h and more (`dragon-8k` at random 0.1 h; the smooth meshes there
-// 0.046-0.055); docs/quality-method.md.
+// 0.046-0.052); docs/quality-method.md.
 inline constexpr double kDetailOnlyH = 0.03;
 // The run stops when the estimated error has not improved for this many iterations, and for
 // half as many as the best iteration took.
