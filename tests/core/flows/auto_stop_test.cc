@@ -76,7 +76,7 @@ TEST(NoiseEstimateTest, SameForAnyThreadCount) {
   }
 }
 
-// Fine detail (a cosine wave of 8 rows a period and 0.6 h high) is not followed by a cubic over
+// Fine detail (a cosine wave of 8 rows a period and 1 h high) is not followed by a cubic over
 // two rings and reads as noise to the fits; the detail-free estimate, from the wider fits'
 // misfit, reads none on the clean wave and the noise on a noisy one (noise.h).
 TEST(NoiseEstimateTest, DetailIsNotReadAsNoise) {
