@@ -109,18 +109,7 @@ double AutoStop::Volume(const Vec3* pos) const {
 
 bool AutoStop::Folded(const Vec3* pos, int32_t v) const {
   if (role_[v] != kFree || topo_.kind[v] != VertexKind::kInterior) return false;
-  const int32_t first = topo_.ring_offsets[v], last = topo_.ring_offsets[v + 1];
-  const Vec3 p = pos[v];
-  Vec3 prev = pos[topo_.ring[last - 1]] - p;
-  Vec3 before = Cross(pos[topo_.ring[last - 2]] - p, prev);
-  for (int32_t k = first; k < last; ++k) {
-    const Vec3 cur = pos[topo_.ring[k]] - p;
-    const Vec3 after = Cross(prev, cur);
-    if (Dot(before, after) < cos_fold_ * Norm(before) * Norm(after)) return true;
-    before = after;
-    prev = cur;
-  }
-  return false;
+  return ForFoldedEdges(pos, topo_, v, cos_fold_, [](int32_t) { return true; });
 }
 
 int64_t AutoStop::RepairFolds(Vec3* pos) const {

@@ -80,6 +80,29 @@ inline double RiskSigmaH(const NoiseEstimate& noise) { return kRiskSigmaMargin *
 inline constexpr double kProbeStep = 0.05;
 // Two faces across an edge whose normals are further apart than this are folded.
 inline constexpr double kFoldAngleDeg = 120.0;
+
+// Walks the fan of interior vertex v (positions `pos`) and calls on_fold(w) for each ring entry
+// w whose edge (v, w) is folded: its two faces' normals more than kFoldAngleDeg apart
+// (`cos_fold` = FoldCosine()). Stops, returning true, as soon as on_fold returns true.
+inline double FoldCosine() { return std::cos(kFoldAngleDeg * std::numbers::pi / 180.0); }
+template <typename OnFold>
+bool ForFoldedEdges(const Vec3* pos, const Topology& topo, int32_t v, double cos_fold, OnFold on_fold) {
+  const int32_t first = topo.ring_offsets[v], last = topo.ring_offsets[v + 1];
+  const Vec3 p = pos[v];
+  Vec3 prev = pos[topo.ring[last - 1]] - p;
+  Vec3 before = Cross(pos[topo.ring[last - 2]] - p, prev);  // the face before edge (v, ring[last - 1])
+  for (int32_t k = first; k < last; ++k) {
+    const Vec3 cur = pos[topo.ring[k]] - p;
+    const Vec3 after = Cross(prev, cur);  // `before` and `after` share edge (v, ring[k - 1])
+    if (Dot(before, after) < cos_fold * Norm(before) * Norm(after) &&
+        on_fold(topo.ring[k == first ? last - 1 : k - 1])) {
+      return true;
+    }
+    before = after;
+    prev = cur;
+  }
+  return false;
+}
 // The estimated error is summed over at most about this many vertices (every k-th of a larger
 // mesh): over 50,000 of them it is within ~0.5% of the whole mesh's, at a fraction of the cost
 // of an iteration.
@@ -190,7 +213,7 @@ class AutoStop {
   bool estimated_ = false;   // the noise estimate is reliable (core/measure/noise.h)
   int32_t stride_ = 1;       // every stride_-th vertex is measured
   int64_t counted_ = 0;      // free interior vertices measured
-  double cos_fold_ = std::cos(kFoldAngleDeg * std::numbers::pi / 180.0);
+  double cos_fold_ = FoldCosine();
   bool closed_ = true;  // every vertex in use is interior
   double start_volume_ = 0.0;
   double sigma_ = 0.0;  // the noise's deviation, in mesh units

@@ -1,9 +1,7 @@
 #include "core/flows/choice.h"
 
 #include <algorithm>
-#include <cmath>
 #include <iterator>
-#include <numbers>
 #include <optional>
 #include <utility>
 #include <vector>
@@ -168,24 +166,14 @@ Roughness RoughnessOf(const std::vector<Vec3>& pos, const Mesh& mesh, const Topo
     const Triangle& t = mesh.triangles[f];
     r.area += 0.5 * Norm(Cross(pos[t[1]] - pos[t[0]], pos[t[2]] - pos[t[0]]));
   }
-  const double cos_fold = std::cos(kFoldAngleDeg * std::numbers::pi / 180.0);
+  const double cos_fold = FoldCosine();
   for (int32_t v = 0; v < topo.num_vertices(); ++v) {
     if (topo.kind[v] != VertexKind::kInterior) continue;
-    const int32_t first = topo.ring_offsets[v], last = topo.ring_offsets[v + 1];
-    const Vec3 p = pos[v];
-    Vec3 prev = pos[topo.ring[last - 1]] - p;
-    Vec3 before = Cross(pos[topo.ring[last - 2]] - p, prev);  // the face before edge (v, ring[last - 1])
-    for (int32_t k = first; k < last; ++k) {
-      const Vec3 cur = pos[topo.ring[k]] - p;
-      const Vec3 after = Cross(prev, cur);
-      // Edge (v, ring[k - 1]) between faces `before` and `after`, counted once: from its
-      // lower interior end.
-      const int32_t w = topo.ring[k == first ? last - 1 : k - 1];
-      const bool counts = topo.kind[w] != VertexKind::kInterior || v < w;
-      if (counts && Dot(before, after) < cos_fold * Norm(before) * Norm(after)) ++r.folds;
-      before = after;
-      prev = cur;
-    }
+    // Each folded edge once: from its lower interior end.
+    ForFoldedEdges(pos.data(), topo, v, cos_fold, [&](int32_t w) {
+      r.folds += topo.kind[w] != VertexKind::kInterior || v < w;
+      return false;
+    });
   }
   return r;
 }
@@ -233,11 +221,11 @@ absl::StatusOr<FlowResult> SmoothWithEstimate(Mesh& mesh, const Topology& topo, 
   absl::StatusOr<FlowResult> chosen =
       Choose(sample.mesh, sample_topo, on_sample, control, h, noise, &sample.core, kSampleBias * sigma_h * sigma_h);
   if (!chosen.ok()) return chosen.status();
+  // Every candidate left the sample rougher: the whole mesh comes back as it came.
+  if (chosen->stop_reason == StopReason::kNoGain) return chosen;
   FlowParams whole = q;
   whole.flow = chosen->flow;
   whole.boundary = BoundaryFor(chosen->flow, q.boundary);
-  // Every candidate left the sample rougher: the whole mesh comes back as it came.
-  if (chosen->stop_reason == StopReason::kNoGain) return chosen;
   if (chosen->iterations_run == 0) {
     // An idle sample (no noise, or no estimate on it) leaves the decision to the whole mesh's
     // own estimate and stopping (nothing to do on a clean mesh: as cheap as the sample).
