@@ -175,10 +175,14 @@ void AddSmoothOptions(CLI::App* smooth, SmoothOptions& so) {
   smooth->add_option("--recompute-every", so.recompute_every, "T(P) recomputed every K iterations")
       ->capture_default_str();
   smooth
-      ->add_option("--boundary", so.boundary,
-                   "auto | fixed | curve (smooth boundary loops as curves); auto: the default job moves the rims "
-                   "of an open mesh when it chooses bilateral_normal (along their faces' normals, so holes keep "
-                   "their size) and keeps them with bilaplacian; with --flow, fixed")
+      ->add_option(
+          "--boundary", so.boundary,
+          absl::StrCat("auto | fixed | curve (smooth boundary loops as curves); auto: the default job moves "
+                       "the rims of an open mesh when it chooses bilateral_normal (along their faces' normals, "
+                       "so holes keep their size) and keeps them with bilaplacian, but for holes at most ",
+                       kSmallHoleEdges,
+                       " edges around (gaps in the sampling), whose vertices move as interior ones; with "
+                       "--flow, fixed"))
       ->capture_default_str()
       ->check(CLI::IsMember({"auto", "fixed", "curve"}));
   smooth->add_option("--tolerance", so.tolerance, "stop when the largest move < tolerance x mean edge; 0 = off")

@@ -372,6 +372,33 @@ int64_t SquaredValenceSum(const Topology& topo) {
   return sum;
 }
 
+std::vector<uint8_t> SmallHoleVertices(const Topology& topo, int32_t max_edges) {
+  const int32_t n = topo.num_vertices();
+  std::vector<uint8_t> small(n, 0), walked(n, 0);
+  // A boundary vertex's neighbours along its loop are the first and last entries of its ring.
+  auto along = [&](int32_t v, int32_t from) {
+    const int32_t first = topo.ring[topo.ring_offsets[v]], last = topo.ring[topo.ring_offsets[v + 1] - 1];
+    return first == from ? last : first;
+  };
+  std::vector<int32_t> loop;
+  for (int32_t v = 0; v < n; ++v) {
+    if (topo.kind[v] != VertexKind::kBoundary || walked[v]) continue;
+    loop.assign(1, v);
+    walked[v] = 1;
+    int32_t prev = v, cur = topo.ring[topo.ring_offsets[v + 1] - 1];
+    while (cur != v && static_cast<int32_t>(loop.size()) <= max_edges && topo.kind[cur] == VertexKind::kBoundary) {
+      loop.push_back(cur);
+      walked[cur] = 1;
+      const int32_t next = along(cur, prev);
+      prev = cur;
+      cur = next;
+    }
+    if (cur != v || static_cast<int32_t>(loop.size()) > max_edges) continue;
+    for (int32_t w : loop) small[w] = 1;
+  }
+  return small;
+}
+
 ValidationReport Validate(const Mesh& mesh) {
   ValidationReport r;
   BuildTopology(mesh, &r);

@@ -78,6 +78,11 @@ Topology BuildTopology(const Mesh& mesh, ValidationReport* report = nullptr, con
 // valence k makes k^2.
 int64_t SquaredValenceSum(const Topology& topo);
 
+// One byte per vertex, 1 for the vertices of boundary loops of at most `max_edges` edges
+// whose every vertex is a (manifold) boundary vertex: holes in the sampling a few edges around
+// rather than rims of the shape. Linear in the number of boundary vertices times `max_edges`.
+std::vector<uint8_t> SmallHoleVertices(const Topology& topo, int32_t max_edges);
+
 // Convenience: the report alone.
 ValidationReport Validate(const Mesh& mesh);
 

@@ -110,8 +110,10 @@ std::vector<ParameterInfo> CommonParameters(int max_iterations) {
        true,
        {}},
       {"boundary",
-       "boundary vertices: fixed, or smoothed as polygonal curves; unset: the default job moves them with "
-       "bilateral_normal (towards their faces' planes) and keeps them with bilaplacian, any other job keeps them",
+       absl::StrCat("boundary vertices: fixed, or smoothed as polygonal curves; unset: the default job moves them "
+                    "with bilateral_normal (towards their faces' planes) and keeps them with bilaplacian (but for "
+                    "holes at most ",
+                    kSmallHoleEdges, " edges around, whose vertices move as interior ones), any other job keeps them"),
        0,
        0,
        0,

@@ -55,6 +55,14 @@ inline constexpr FlowId kDefaultFlow = FlowId::kBilaplacian;
 // The candidates of a job that chooses, by their estimated error: bilaplacian is the best on
 // scans, bilateral_normal on CAD parts and smooth shapes (docs/quality-method.md).
 inline constexpr FlowId kChoiceFlows[] = {FlowId::kBilaplacian, FlowId::kBilateralNormal};
+// The default job's umbrella runs keep their rims fixed but move the vertices of holes at most
+// this many edges around as interior ones (FlowParams::small_hole_edges): such a hole is a gap
+// in the sampling (a decimated scan's missing triangles), and its fixed noisy vertices fold the
+// faces around them. On `dragon-8k` (407 holes, 403 of them 3-8 edges) at sigma = 0.2 h: 312 ->
+// 156 flipped faces, RMS 0.102 -> 0.088 h. Larger holes are rims of the shape: freeing them
+// too (16 edges, or every hole) made the error estimate prefer bilaplacian on the holey and
+// perforated spheres and their results worse (RMS up to 2.3x); docs/decisions.md.
+inline constexpr int32_t kSmallHoleEdges = 8;
 // Above this many vertices automatic iterations choose the flow and the count on patches of the
 // mesh and run the whole mesh once, at that count: the candidates and their probes on the whole
 // mesh would cost several times the run itself.

@@ -29,13 +29,17 @@ constexpr int32_t kCorePercent = 60;
 // high (docs/decisions.md, "The default job chooses on a sample", has the figures).
 constexpr double kSampleBias = 0.025;
 
-// The boundary mode a run of `flow` takes under the job's `requested` one: BoundaryMode::kAuto
-// moves the rims with the normal filters' vertex update (the planes of their faces: a rim does
-// not shrink) and keeps them fixed with the umbrella flows, whose boundary curve umbrella would
-// shrink small holes.
-BoundaryMode BoundaryFor(FlowId flow, BoundaryMode requested) {
-  if (requested != BoundaryMode::kAuto) return requested;
-  return KindOf(flow) == FlowKind::kNormalFilter ? BoundaryMode::kCurve : BoundaryMode::kFixed;
+// The boundary a run of `flow` takes under the job's `requested` mode (q.boundary and
+// q.small_hole_edges): BoundaryMode::kAuto moves the rims with the normal filters' vertex update
+// (the planes of their faces: a rim does not shrink) and keeps them fixed with the umbrella
+// flows, whose boundary curve umbrella would shrink small holes; there the vertices of holes at
+// most kSmallHoleEdges edges around move as interior ones.
+void SetBoundary(FlowParams& q, FlowId flow, BoundaryMode requested) {
+  q.boundary = requested;
+  if (requested != BoundaryMode::kAuto) return;
+  const FlowKind kind = KindOf(flow);
+  q.boundary = kind == FlowKind::kNormalFilter ? BoundaryMode::kCurve : BoundaryMode::kFixed;
+  if (kind == FlowKind::kUmbrella) q.small_hole_edges = kSmallHoleEdges;
 }
 
 void Report(const RunControl& control, Phase phase, FlowId flow) {
@@ -66,7 +70,7 @@ absl::StatusOr<FlowResult> Choose(Mesh& mesh, const Topology& topo, const FlowPa
     Mesh copy = mesh;
     FlowParams q = p;
     q.flow = flow;
-    q.boundary = BoundaryFor(flow, p.boundary);
+    SetBoundary(q, flow, p.boundary);
     AutoPlan plan{0, &noise, measured, std::nullopt, p.boundary != BoundaryMode::kFixed};
     if (best && best->auto_stop && best->iterations_run > 0) plan.rival_risk_h2 = best->auto_stop->risk_h2 - margin_h2;
     absl::StatusOr<FlowResult> r = SmoothOneFlow(copy, topo, q, quiet, h, plan);
@@ -225,7 +229,7 @@ absl::StatusOr<FlowResult> SmoothWithEstimate(Mesh& mesh, const Topology& topo, 
   if (chosen->stop_reason == StopReason::kNoGain) return chosen;
   FlowParams whole = q;
   whole.flow = chosen->flow;
-  whole.boundary = BoundaryFor(chosen->flow, q.boundary);
+  SetBoundary(whole, chosen->flow, q.boundary);
   if (chosen->iterations_run == 0) {
     // An idle sample (no noise, or no estimate on it) leaves the decision to the whole mesh's
     // own estimate and stopping (nothing to do on a clean mesh: as cheap as the sample).

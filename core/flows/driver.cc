@@ -215,9 +215,13 @@ class FlowRun {
   // all free.
   void AssignRoles() {
     role_.assign(n_, kFixed);
+    std::vector<uint8_t> small_hole;
+    if (p_.boundary == BoundaryMode::kFixed && p_.small_hole_edges > 0) {
+      small_hole = SmallHoleVertices(topo_, p_.small_hole_edges);
+    }
     for (int32_t v = 0; v < n_; ++v) {
       if (!p_.locked.empty() && p_.locked[v] != 0) continue;
-      if (topo_.kind[v] == VertexKind::kInterior) {
+      if (topo_.kind[v] == VertexKind::kInterior || (!small_hole.empty() && small_hole[v] != 0)) {
         role_[v] = kFree;
       } else if (topo_.kind[v] == VertexKind::kBoundary && p_.boundary == BoundaryMode::kCurve) {
         role_[v] = kCurve;

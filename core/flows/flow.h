@@ -43,8 +43,9 @@ enum class BoundaryMode {
   // The default job (ChoosesFlow()): its boundary vertices take the normal filter's vertex
   // update when it tries or chooses bilateral_normal (kCurve for that flow: the planes of their
   // faces, so a rim loses its noise without its hole shrinking) and stay fixed with
-  // bilaplacian, and the error estimate counts them, so the choice sees the noise a fixed rim
-  // keeps. Any other job: kFixed. The default.
+  // bilaplacian (but for small holes' vertices: FlowParams::small_hole_edges), and the error
+  // estimate counts them, so the choice sees the noise a fixed rim keeps. Any other job:
+  // kFixed. The default.
   kAuto,
 };
 
@@ -115,6 +116,10 @@ struct FlowParams {
   int adaptive_recompute_every = 10;  // K: T(P) is recomputed every K iterations
 
   BoundaryMode boundary = BoundaryMode::kAuto;
+  // Under BoundaryMode::kFixed: the vertices of boundary loops of at most this many edges
+  // (SmallHoleVertices) move as interior ones do, with their open fans; 0: none. The default
+  // job sets it (kSmallHoleEdges) for the runs that keep their rims fixed.
+  int32_t small_hole_edges = 0;
   // Optional per-vertex lock mask (non-zero = keep fixed); empty = none. Vertices on
   // non-manifold edges or vertices and isolated vertices are always fixed.
   std::vector<uint8_t> locked;

@@ -75,6 +75,56 @@ TEST(TopologyTest, IcosphereIsClosedManifoldGenusZero) {
   }
 }
 
+// An icosphere with three holes apart: one missing face (3 edges), the fan of one vertex (5 or
+// 6 edges; the vertex is left without a face) and a polar cap (many edges).
+TEST(TopologyTest, SmallHoleVerticesAreThoseOfLoopsOfFewEdges) {
+  Mesh m = Icosphere(3);
+  auto nearest = [&](const Vec3& to) {
+    int32_t best = 0;
+    for (int32_t v = 1; v < static_cast<int32_t>(m.positions.size()); ++v) {
+      if (Norm(m.positions[v] - to) < Norm(m.positions[best] - to)) best = v;
+    }
+    return best;
+  };
+  const int32_t corner = nearest({1, 0, 0}), centre = nearest({-1, 0, 0});
+  std::vector<Triangle> kept;
+  bool dropped_one = false;
+  for (const Triangle& t : m.triangles) {
+    const bool at_corner = t[0] == corner || t[1] == corner || t[2] == corner;
+    const bool in_fan = t[0] == centre || t[1] == centre || t[2] == centre;
+    const bool in_cap = m.positions[t[0]].z > 0.7 || m.positions[t[1]].z > 0.7 || m.positions[t[2]].z > 0.7;
+    if (in_fan || in_cap || (at_corner && !dropped_one)) {
+      dropped_one |= at_corner;
+      continue;
+    }
+    kept.push_back(t);
+  }
+  m.triangles = kept;
+  ValidationReport r;
+  const Topology topo = BuildTopology(m, &r);
+  ASSERT_EQ(r.boundary_loops, 3);
+  ASSERT_EQ(r.nonmanifold_vertices, 0);
+  std::vector<int32_t> on_loop(m.positions.size(), 0);  // which hole a boundary vertex rims
+  for (int32_t v = 0; v < topo.num_vertices(); ++v) {
+    if (topo.kind[v] != VertexKind::kBoundary) continue;
+    on_loop[v] = m.positions[v].z > 0.5 ? 3 : Norm(m.positions[v] - m.positions[centre]) < 0.5 ? 2 : 1;
+  }
+  for (int32_t max_edges : {2, 3, 6, 8}) {
+    const std::vector<uint8_t> small = SmallHoleVertices(topo, max_edges);
+    int counts[4] = {0, 0, 0, 0};
+    for (int32_t v = 0; v < topo.num_vertices(); ++v) {
+      if (small[v]) {
+        ASSERT_NE(on_loop[v], 0) << "vertex " << v << " is not on a boundary";
+        ++counts[on_loop[v]];
+      }
+    }
+    SCOPED_TRACE(max_edges);
+    EXPECT_EQ(counts[1], max_edges >= 3 ? 3 : 0);
+    EXPECT_EQ(counts[2] > 0, max_edges >= 6);  // the fan of a valence 5 or 6 vertex
+    EXPECT_EQ(counts[3], 0);                   // the cap's loop has more than 8 edges
+  }
+}
+
 TEST(TopologyTest, RepeatedIndexFaceIsDroppedAndCounted) {
   Mesh m = Square();
   m.triangles.push_back({1, 1, 2});

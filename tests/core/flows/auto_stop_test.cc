@@ -358,6 +358,78 @@ TEST(AutoStopTest, CleanFineDetailComesBackUnchanged) {
   EXPECT_LT(after->normal_error_deg, 0.8 * before->normal_error_deg);
 }
 
+// A sphere with small holes (single missing faces, as a decimated scan has) and a large one (a
+// polar cap). A run that keeps its rims fixed moves the small holes' vertices with the surface
+// when told to (FlowParams::small_hole_edges), and the default job tells its umbrella runs to:
+// their noise goes, while the cap's rim stays where it is.
+TEST(AutoStopTest, SmallHolesLoseTheirNoiseWithTheSurface) {
+  Mesh clean = Icosphere(4);
+  std::vector<uint8_t> used(clean.positions.size(), 0);
+  std::vector<Triangle> kept;
+  int holes = 0;
+  for (size_t f = 0; f < clean.triangles.size(); ++f) {
+    const Triangle& t = clean.triangles[f];
+    bool cap = false, near_cap = false, touches = false;
+    for (int32_t v : t) {
+      cap |= clean.positions[v].z > 0.9;
+      near_cap |= clean.positions[v].z > 0.7;
+      touches |= used[v] != 0;
+    }
+    if (cap) continue;
+    if (f % 97 == 0 && !touches && !near_cap) {  // a hole; its vertices and their rings are kept apart
+      for (int32_t v : t) used[v] = 1;
+      ++holes;
+      continue;
+    }
+    kept.push_back(t);
+  }
+  clean.triangles = kept;
+  ValidationReport report;
+  const Topology topo = BuildTopology(clean, &report);
+  ASSERT_EQ(report.boundary_loops, holes + 1);
+  ASSERT_EQ(report.nonmanifold_vertices, 0);
+  ASSERT_GE(holes, 30);
+  std::vector<int32_t> small_hole, cap_rim;
+  for (int32_t v = 0; v < topo.num_vertices(); ++v) {
+    if (topo.kind[v] == VertexKind::kBoundary) (used[v] ? small_hole : cap_rim).push_back(v);
+  }
+  Mesh noisy = clean;
+  AddNormalNoise(noisy, 0.2, 5);
+  auto radius_error = [](const Mesh& m, const std::vector<int32_t>& vertices) {
+    double sum = 0.0;
+    for (int32_t v : vertices) sum += std::pow(Norm(m.positions[v]) - 1.0, 2);
+    return std::sqrt(sum / static_cast<double>(vertices.size()));
+  };
+  auto rim_kept = [&](const Mesh& m) {
+    for (int32_t v : cap_rim) {
+      if (!(m.positions[v] == noisy.positions[v])) return false;
+    }
+    return true;
+  };
+  const double before = radius_error(noisy, small_hole);
+  for (int32_t edges : {0, kSmallHoleEdges}) {
+    FlowParams p = testing::Params("bilaplacian", 10);
+    p.boundary = BoundaryMode::kFixed;
+    p.small_hole_edges = edges;
+    const Mesh m = testing::Smoothed(noisy, p);
+    const double after = radius_error(m, small_hole);
+    std::printf("%d single-face holes; holes of at most %d edges move: radius error at their vertices %.5f -> %.5f\n",
+                holes, edges, before, after);
+    if (edges == 0) EXPECT_EQ(after, before);
+    if (edges > 0) EXPECT_LT(after, 0.6 * before);
+    EXPECT_TRUE(rim_kept(m));
+  }
+  Mesh m = noisy;
+  const absl::StatusOr<FlowResult> r = Smooth(m, FlowParams{});
+  ASSERT_TRUE(r.ok()) << r.status();
+  std::printf("default job: %s, %d iterations; radius error at the small holes %.5f -> %.5f\n",
+              std::string(FlowName(r->flow)).c_str(), r->iterations_run, before, radius_error(m, small_hole));
+  // With the small holes kept fixed it chose bilateral_normal (which moves every rim).
+  EXPECT_EQ(r->flow, FlowId::kBilaplacian);
+  EXPECT_LT(radius_error(m, small_hole), 0.6 * before);
+  EXPECT_TRUE(rim_kept(m));
+}
+
 // A clean CAD part of slivers comes back as it went in from the default job (no estimate: every
 // vertex on a crease), where the fits once read 0.38 h of noise and the job moved it.
 TEST(AutoStopTest, CleanCadPartOfSliversComesBackUnchanged) {
