@@ -56,13 +56,14 @@ inline constexpr FlowId kDefaultFlow = FlowId::kBilaplacian;
 // scans, bilateral_normal on CAD parts and smooth shapes (docs/quality-method.md).
 inline constexpr FlowId kChoiceFlows[] = {FlowId::kBilaplacian, FlowId::kBilateralNormal};
 // The default job's umbrella runs keep their rims fixed but move the vertices of holes at most
-// this many edges around as interior ones (FlowParams::small_hole_edges): such a hole is a gap
-// in the sampling (a decimated scan's missing triangles), and its fixed noisy vertices fold the
-// faces around them. On `dragon-8k` (407 holes, 403 of them 3-8 edges) at sigma = 0.2 h: 312 ->
-// 156 flipped faces, RMS 0.102 -> 0.088 h. Larger holes are rims of the shape: freeing them
-// too (16 edges, or every hole) made the error estimate prefer bilaplacian on the holey and
-// perforated spheres and their results worse (RMS up to 2.3x); docs/decisions.md.
-inline constexpr int32_t kSmallHoleEdges = 8;
+// this many edges around as interior ones (FlowParams::small_hole_edges): such a hole (one to
+// three missing triangles: a decimated scan has hundreds) is a gap in the sampling, and its
+// fixed noisy vertices fold the faces around them. On `dragon-8k` (407 holes, 383 of them 3-5
+// edges) at sigma = 0.2 h: 312 -> 183 flipped faces, RMS 0.102 -> 0.090 h. A hole of 6 edges or
+// more may be a rim of the shape (a coarse round hole): freeing the perforated sphere's 6- and
+// 8-edge holes made the error estimate prefer bilaplacian at sigma = 0.7 h and its result 2.4
+// times as far from the surface; docs/decisions.md.
+inline constexpr int32_t kSmallHoleEdges = 5;
 // Above this many vertices automatic iterations choose the flow and the count on patches of the
 // mesh and run the whole mesh once, at that count: the candidates and their probes on the whole
 // mesh would cost several times the run itself.
