@@ -108,8 +108,23 @@ double AutoStop::Volume(const Vec3* pos) const {
 }
 
 bool AutoStop::Folded(const Vec3* pos, int32_t v) const {
+  if (role_[v] == kCurve) return RimFolded(pos, v);
   if (role_[v] != kFree || topo_.kind[v] != VertexKind::kInterior) return false;
   return ForFoldedEdges(pos, topo_, v, cos_fold_, [](int32_t) { return true; });
+}
+
+bool AutoStop::RimFolded(const Vec3* pos, int32_t v) const {
+  const int32_t first = topo_.ring_offsets[v], last = topo_.ring_offsets[v + 1];
+  if (last - first < 2) return false;
+  const Vec3 p = pos[v];
+  const Vec3 fan = RingNormal(topo_, pos, v);
+  Vec3 prev = pos[topo_.ring[first]] - p;
+  for (int32_t k = first + 1; k < last; ++k) {
+    const Vec3 cur = pos[topo_.ring[k]] - p;
+    if (Dot(Cross(prev, cur), fan) < 0.0 || Dot(prev, cur) < cos_rim_needle_ * Norm(prev) * Norm(cur)) return true;
+    prev = cur;
+  }
+  return false;
 }
 
 int64_t AutoStop::RepairFolds(Vec3* pos) const {
@@ -135,8 +150,12 @@ int64_t AutoStop::RepairFolds(Vec3* pos) const {
       const int32_t v = list[i];
       const int32_t first = topo_.ring_offsets[v], last = topo_.ring_offsets[v + 1];
       Vec3 centroid;
-      for (int32_t k = first; k < last; ++k) centroid += pos[topo_.ring[k]];
-      centroid *= 1.0 / static_cast<double>(last - first);
+      if (role_[v] == kCurve) {  // its neighbours along the loop: the first and last of its ring
+        centroid = (pos[topo_.ring[first]] + pos[topo_.ring[last - 1]]) * 0.5;
+      } else {
+        for (int32_t k = first; k < last; ++k) centroid += pos[topo_.ring[k]];
+        centroid *= 1.0 / static_cast<double>(last - first);
+      }
       moved[i] = pos[v] + (centroid - pos[v]) * 0.5;
       const Vec3 total = moved[i] - origin[i];
       const double length = Norm(total);

@@ -31,8 +31,9 @@
 //
 // Noise folds thin triangles over, and a run can leave some folded: RepairFolds() then moves
 // the free vertices of edges whose two faces face nearly opposite ways (normals more than
-// kFoldAngleDeg apart: a fold, not a crease) half-way to their ring's centroid, a few rounds at
-// most, and no vertex further than kFoldRepairReachH h in all. Last, every flow with a step loses some volume: on a
+// kFoldAngleDeg apart: a fold, not a crease) half-way to their ring's centroid, and moved rim
+// vertices that slid across a face of theirs along their loop (kRimNeedleAngleDeg), a few rounds
+// at most, and no vertex further than kFoldRepairReachH h in all. Last, every flow with a step loses some volume: on a
 // closed mesh the run gives the input's enclosed volume back by moving its free vertices along their normals by a
 // common distance (KeepVolume): the shrinkage is a bias of the flow, not noise.
 #pragma once
@@ -133,6 +134,13 @@ inline constexpr int kOutlierRounds = 3;
 // ("no_gain"). On the benchmark's other inputs every result has at most 0.994 times its input's
 // area and fewer folded edges (docs/decisions.md, "A run that leaves its input rougher").
 inline constexpr double kNoGainFoldShare = 2e-4;
+// A rim vertex the run moved (a bilateral_normal run's) is folded when one of its faces points
+// against its open fan's normal or has an angle above this at it: the vertex has slid onto or
+// across the face's far edge. The repair moves it half-way to the midpoint of its neighbours
+// along the loop. On the perforated sphere (431 holes) at sigma = 0.7 h the default job's run
+// left 36 such faces, all needles of a rim vertex, flipped against the clean surface; the
+// repair leaves none (docs/decisions.md, "Fold repair, within 0.2 h").
+inline constexpr double kRimNeedleAngleDeg = 160.0;
 // At most this many rounds of fold repair.
 inline constexpr int kFoldRepairRounds = 20;
 // The fold repair moves no vertex further than this (in h) from where the run left it. A fold
@@ -179,8 +187,9 @@ class AutoStop {
   }
   int best_iteration() const { return best_it_; }
 
-  // Moves the free interior vertices of folded edges of `pos` half-way to their ring's centroid
-  // until none is folded (at most kFoldRepairRounds rounds, and no vertex further than
+  // Moves the free interior vertices of folded edges of `pos` half-way to their ring's centroid,
+  // and the folded rim vertices the run moved (RimFolded) half-way to the midpoint of their loop
+  // neighbours, until none is folded (at most kFoldRepairRounds rounds, and no vertex further than
   // kFoldRepairReachH h in all). Returns the folded vertices left.
   int64_t RepairFolds(Vec3* pos) const;
 
@@ -200,8 +209,12 @@ class AutoStop {
   double Risk(const Vec3* pos, const Vec3* probe) const;
   // The probe's sign at vertex v: +1 or -1, from a hash of v (the same for any thread count).
   static double Sign(int32_t v);
-  // True when a free interior vertex `v` has two consecutive faces of its ring folded.
+  // True when a free interior vertex `v` has two consecutive faces of its ring folded, or a
+  // boundary vertex the run moved (kCurve) is folded (RimFolded).
   bool Folded(const Vec3* pos, int32_t v) const;
+  // True when a face of rim vertex v's open fan points against the fan's normal, or has an
+  // angle above kRimNeedleAngleDeg at v (v lies on the far edge of a needle).
+  bool RimFolded(const Vec3* pos, int32_t v) const;
   // Enclosed volume of a closed mesh from the vertices' rings.
   double Volume(const Vec3* pos) const;
 
@@ -214,6 +227,7 @@ class AutoStop {
   int32_t stride_ = 1;       // every stride_-th vertex is measured
   int64_t counted_ = 0;      // free interior vertices measured
   double cos_fold_ = FoldCosine();
+  double cos_rim_needle_ = std::cos(kRimNeedleAngleDeg * std::numbers::pi / 180.0);
   bool closed_ = true;  // every vertex in use is interior
   double start_volume_ = 0.0;
   double sigma_ = 0.0;  // the noise's deviation, in mesh units
