@@ -116,12 +116,12 @@ bool AutoStop::Folded(const Vec3* pos, int32_t v) const {
 bool AutoStop::RimFolded(const Vec3* pos, int32_t v) const {
   const int32_t first = topo_.ring_offsets[v], last = topo_.ring_offsets[v + 1];
   if (last - first < 2) return false;
+  if (FanFolds(pos, topo_, v)) return true;
   const Vec3 p = pos[v];
-  const Vec3 fan = RingNormal(topo_, pos, v);
   Vec3 prev = pos[topo_.ring[first]] - p;
   for (int32_t k = first + 1; k < last; ++k) {
     const Vec3 cur = pos[topo_.ring[k]] - p;
-    if (Dot(Cross(prev, cur), fan) < 0.0 || Dot(prev, cur) < cos_rim_needle_ * Norm(prev) * Norm(cur)) return true;
+    if (Dot(prev, cur) < cos_rim_needle_ * Norm(prev) * Norm(cur)) return true;
     prev = cur;
   }
   return false;

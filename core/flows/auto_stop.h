@@ -212,8 +212,9 @@ class AutoStop {
   // True when a free interior vertex `v` has two consecutive faces of its ring folded, or a
   // boundary vertex the run moved (kCurve) is folded (RimFolded).
   bool Folded(const Vec3* pos, int32_t v) const;
-  // True when a face of rim vertex v's open fan points against the fan's normal, or has an
-  // angle above kRimNeedleAngleDeg at v (v lies on the far edge of a needle).
+  // True when a face of rim vertex v's open fan points against the fan's normal (FanFolds, as
+  // the outlier removal's unfolding reads it), or has an angle above kRimNeedleAngleDeg at v (v
+  // lies on the far edge of a needle).
   bool RimFolded(const Vec3* pos, int32_t v) const;
   // Enclosed volume of a closed mesh from the vertices' rings.
   double Volume(const Vec3* pos) const;

@@ -331,23 +331,6 @@ std::optional<double> RingMedianHeight(const Vec3* pos, const Topology& topo, in
   return Median(s.heights);
 }
 
-// True when a face of v's fan turns against the fan's orientation (UnfoldFans, noise.h).
-bool FanFolds(const Vec3* pos, const Topology& topo, int32_t v) {
-  const int32_t first = topo.ring_offsets[v], end = topo.ring_offsets[v + 1];
-  const bool rim = topo.kind[v] == VertexKind::kBoundary;
-  const int32_t faces = rim ? end - first - 1 : end - first;
-  auto next = [&](int32_t k) { return k + 1 < end ? k + 1 : first; };
-  Vec3 orientation;
-  for (int32_t k = first; k < first + faces; ++k) {
-    const Vec3 &a = pos[topo.ring[k]], &b = pos[topo.ring[next(k)]];
-    orientation += rim ? Cross(a - pos[v], b - pos[v]) : Cross(a, b);
-  }
-  for (int32_t k = first; k < first + faces; ++k) {
-    if (Dot(Cross(pos[topo.ring[k]] - pos[v], pos[topo.ring[next(k)]] - pos[v]), orientation) < 0.0) return true;
-  }
-  return false;
-}
-
 }  // namespace
 
 NoiseEstimate EstimateNoise(const Mesh& mesh, const Topology& topo, double h, int threads, const StopToken& stop) {
@@ -503,6 +486,22 @@ void RemoveOutliers(Mesh& mesh, const Topology& topo, double h, double threshold
     if (!any) break;
   }
   UnfoldFans(mesh, topo, kUnfoldRounds, moved, threads, stop, keep);
+}
+
+bool FanFolds(const Vec3* pos, const Topology& topo, int32_t v) {
+  const int32_t first = topo.ring_offsets[v], end = topo.ring_offsets[v + 1];
+  const bool rim = topo.kind[v] == VertexKind::kBoundary;
+  const int32_t faces = rim ? end - first - 1 : end - first;
+  auto next = [&](int32_t k) { return k + 1 < end ? k + 1 : first; };
+  Vec3 orientation;
+  for (int32_t k = first; k < first + faces; ++k) {
+    const Vec3 &a = pos[topo.ring[k]], &b = pos[topo.ring[next(k)]];
+    orientation += rim ? Cross(a - pos[v], b - pos[v]) : Cross(a, b);
+  }
+  for (int32_t k = first; k < first + faces; ++k) {
+    if (Dot(Cross(pos[topo.ring[k]] - pos[v], pos[topo.ring[next(k)]] - pos[v]), orientation) < 0.0) return true;
+  }
+  return false;
 }
 
 int64_t UnfoldFans(Mesh& mesh, const Topology& topo, int rounds, std::vector<uint8_t>& moved, int threads,

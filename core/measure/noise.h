@@ -103,6 +103,9 @@ inline double OutlierThresholdH(const NoiseEstimate& estimate) {
 // rounds, at most `rounds`, until no fan folds. Vertices where `keep` is non-zero stay;
 // `moved` is set where a vertex moved. Returns how many vertices moved that `moved` did not
 // hold yet. Deterministic for any thread count; stops early once `stop` fires.
+// True when a face of v's fan turns against the fan's orientation, as UnfoldFans reads it.
+bool FanFolds(const Vec3* pos, const Topology& topo, int32_t v);
+
 int64_t UnfoldFans(Mesh& mesh, const Topology& topo, int rounds, std::vector<uint8_t>& moved, int threads = 0,
                    const StopToken& stop = {}, const uint8_t* keep = nullptr);
 
