@@ -110,7 +110,31 @@ double AutoStop::Volume(const Vec3* pos) const {
 bool AutoStop::Folded(const Vec3* pos, int32_t v) const {
   if (role_[v] == kCurve) return RimFolded(pos, v);
   if (role_[v] != kFree || topo_.kind[v] != VertexKind::kInterior) return false;
-  return ForFoldedEdges(pos, topo_, v, cos_fold_, [](int32_t) { return true; });
+  return FanFolds(pos, topo_, v) || ForFoldedEdges(pos, topo_, v, cos_fold_, [](int32_t) { return true; });
+}
+
+bool AutoStop::SlideToUnfold(const Vec3* pos, int32_t v, const Vec3& normal, Vec3& to) const {
+  const int32_t first = topo_.ring_offsets[v], last = topo_.ring_offsets[v + 1];
+  to = pos[v];
+  for (int sweep = 0; sweep < kUnfoldSweeps; ++sweep) {
+    bool unfolded = true;
+    for (int32_t k = first; k < last; ++k) {
+      const Vec3 a = pos[topo_.ring[k]], b = pos[topo_.ring[k + 1 < last ? k + 1 : first]];
+      // Twice the projected area of face (to, a, b), Dot(Cross(a - to, b - to), normal), is
+      // linear in `to` and grows along `rise` = normal x (b - a), whose squared length is that
+      // of the far edge: a height of kUnfoldHeight |b - a| is twice the area kUnfoldHeight |rise|^2.
+      const Vec3 rise = Cross(normal, b - a);
+      const double edge2 = Dot(rise, rise);
+      if (!(edge2 > 0.0)) continue;
+      const double twice_area = Dot(Cross(a - to, b - to), normal);
+      const double wanted = kUnfoldHeight * edge2;
+      if (twice_area >= 0.5 * wanted) continue;
+      unfolded = false;
+      to += rise * ((wanted - twice_area) / edge2);
+    }
+    if (unfolded) return true;
+  }
+  return false;
 }
 
 bool AutoStop::RimFolded(const Vec3* pos, int32_t v) const {
@@ -144,11 +168,26 @@ int64_t AutoStop::RepairFolds(Vec3* pos) const {
   // kFoldRepairReachH h from there.
   std::vector<Vec3> origin(list.size()), moved(list.size());
   for (size_t i = 0; i < list.size(); ++i) origin[i] = pos[list[i]];
-  const double reach = kFoldRepairReachH * h_;
+  const double reach = kFoldRepairReachH * h_, slide_reach = kUnfoldSlideH * h_;
   for (int round = 0; round < kFoldRepairRounds && !list.empty(); ++round) {
     for (size_t i = 0; i < list.size(); ++i) {  // Jacobi: every move reads the round's start
       const int32_t v = list[i];
       const int32_t first = topo_.ring_offsets[v], last = topo_.ring_offsets[v + 1];
+      if (role_[v] == kFree) {  // interior (Folded): its ring's normal does not depend on pos[v]
+        const Vec3 ring_normal = RingNormal(topo_, pos, v);
+        const double length = Norm(ring_normal);
+        const Vec3 normal = ring_normal * (length > 0.0 ? 1.0 / length : 0.0);
+        Vec3 to;
+        if (length > 0.0 && std::isfinite(length) && SlideToUnfold(pos, v, normal, to)) {
+          const Vec3 total = to - origin[i];
+          const double along = Dot(total, normal);
+          Vec3 across = total - normal * along;
+          const double slid = Norm(across);
+          if (slid > slide_reach) across *= slide_reach / slid;
+          moved[i] = origin[i] + across + normal * std::clamp(along, -reach, reach);
+          continue;
+        }
+      }
       Vec3 centroid;
       if (role_[v] == kCurve) {  // its neighbours along the loop: the first and last of its ring
         centroid = (pos[topo_.ring[first]] + pos[topo_.ring[last - 1]]) * 0.5;

@@ -96,16 +96,16 @@ inline double OutlierThresholdH(const NoiseEstimate& estimate) {
   return std::max(kOutlierScales * estimate.sigma_h, kOutlierFloorH);
 }
 
-// A vertex whose fan has a face turned against the fan's orientation (an interior vertex's:
-// the vector area of its ring polygon, which does not depend on where the vertex is; a boundary
-// vertex's: the sum of its open fan's faces) goes to its ring's centroid (a boundary vertex to
-// the midpoint of its two neighbours along the rim, so that a hole keeps its size); Jacobi
-// rounds, at most `rounds`, until no fan folds. Vertices where `keep` is non-zero stay;
-// `moved` is set where a vertex moved. Returns how many vertices moved that `moved` did not
-// hold yet. Deterministic for any thread count; stops early once `stop` fires.
-// True when a face of v's fan turns against the fan's orientation, as UnfoldFans reads it.
+// True when a face of v's fan turns against the fan's orientation (an interior vertex's: the
+// vector area of its ring polygon, which does not depend on where the vertex is; a boundary
+// vertex's: the sum of its open fan's faces).
 bool FanFolds(const Vec3* pos, const Topology& topo, int32_t v);
 
+// A vertex whose fan folds (FanFolds) goes to its ring's centroid (a boundary vertex to the
+// midpoint of its two neighbours along the rim, so that a hole keeps its size); Jacobi rounds,
+// at most `rounds`, until no fan folds. Vertices where `keep` is non-zero stay; `moved` is set
+// where a vertex moved. Returns how many vertices moved that `moved` did not hold yet.
+// Deterministic for any thread count; stops early once `stop` fires.
 int64_t UnfoldFans(Mesh& mesh, const Topology& topo, int rounds, std::vector<uint8_t>& moved, int threads = 0,
                    const StopToken& stop = {}, const uint8_t* keep = nullptr);
 

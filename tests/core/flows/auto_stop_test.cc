@@ -774,8 +774,9 @@ TEST(AutoStopTest, FoldRepairUnfoldsNeedlesWithinItsReach) {
 
 // A rim vertex that a run moved (BoundaryMode::kCurve) and left just across the far edge of one
 // of its faces: the fold repair pulls it back along its loop within kFoldRepairReachH h, and
-// leaves a fixed rim alone. An icosphere without its polar cap; every other rim vertex is slid
-// a tenth of the face's height across the edge (its face turns over).
+// leaves a fixed rim alone (its interior neighbours slide instead). An icosphere without its
+// polar cap; every other rim vertex is slid a tenth of the face's height across the edge (its
+// face turns over).
 TEST(AutoStopTest, FoldRepairPullsSlidRimVerticesBack) {
   Mesh clean = Icosphere(3);
   std::vector<Triangle> kept;
@@ -821,14 +822,64 @@ TEST(AutoStopTest, FoldRepairPullsSlidRimVerticesBack) {
     std::printf("%d rim vertices slid, rims %s: %lld flipped faces, after the repair %lld; longest rim move %.3f h\n",
                 moved, rim_role == flows::kCurve ? "moved by the run" : "fixed", static_cast<long long>(before),
                 static_cast<long long>(after), longest / h);
-    if (rim_role == flows::kCurve) {
-      EXPECT_EQ(after, 0);
+    EXPECT_EQ(after, 0);
+    if (rim_role == flows::kCurve) {  // the rim vertices themselves went back (0.200 h)
+      EXPECT_GT(longest, 0.1 * h);
       EXPECT_LE(longest, flows::kFoldRepairReachH * h * (1.0 + 1e-12));
-    } else {  // the interior vertices' repair alone leaves some (2 of 13)
-      EXPECT_GT(after, 0);
+    } else {
       EXPECT_EQ(longest, 0.0);
     }
   }
+}
+
+// Interior vertices pushed across their rings within the surface, further than the centroid
+// step may take them back (kFoldRepairReachH): the repair slides each back across its fan
+// (SlideToUnfold), within the plane of its ring, no further from the surface. An icosphere of level 4; every vertex of
+// a spread-out set is moved along the tangent plane 0.6 of the way past one of its neighbours. With the centroid step
+// alone (the repair before the slide) all 334 flipped faces stay.
+TEST(AutoStopTest, FoldRepairSlidesVerticesPushedAcrossTheirRings) {
+  const Mesh clean = Icosphere(4);
+  const GroundTruth truth(clean);
+  const Topology& topo = truth.topology();
+  const double h = MeanEdgeLength(clean, topo);
+  std::vector<uint8_t> role(clean.num_vertices(), flows::kFree);
+  const flows::AutoStop stop(clean, topo, role.data(), h, 1, /*noise=*/nullptr, /*measured=*/nullptr);
+  Mesh pushed = clean;
+  std::vector<uint8_t> near(clean.num_vertices(), 0);  // a pushed vertex and its two rings
+  int moved = 0;
+  for (int32_t v = 0; v < topo.num_vertices(); v += 7) {
+    if (near[v]) continue;
+    for (int32_t k = topo.ring_offsets[v]; k < topo.ring_offsets[v + 1]; ++k) {
+      const int32_t u = topo.ring[k];
+      near[u] = 1;
+      for (int32_t j = topo.ring_offsets[u]; j < topo.ring_offsets[u + 1]; ++j) near[topo.ring[j]] = 1;
+    }
+    const Vec3 p = clean.positions[v], n = p * (1.0 / Norm(p));
+    const Vec3 step = (clean.positions[topo.ring[topo.ring_offsets[v]]] - p) * 1.6;
+    pushed.positions[v] = p + step - n * Dot(step, n);
+    ++moved;
+  }
+  const int64_t before = truth.Evaluate(pushed)->flipped_faces;
+  ASSERT_GE(before, moved);
+  Mesh repaired = pushed;
+  const int64_t left = stop.RepairFolds(repaired.positions.data());
+  double longest = 0.0, off_before = 0.0, off_after = 0.0;  // off: from the unit sphere
+  for (int32_t v = 0; v < clean.num_vertices(); ++v) {
+    longest = std::max(longest, Norm(repaired.positions[v] - pushed.positions[v]));
+    off_before = std::max(off_before, std::abs(Norm(pushed.positions[v]) - 1.0));
+    off_after = std::max(off_after, std::abs(Norm(repaired.positions[v]) - 1.0));
+  }
+  const int64_t after = truth.Evaluate(repaired)->flipped_faces;
+  std::printf(
+      "%d vertices pushed across their rings: %lld flipped faces, after the repair %lld (%lld folded "
+      "vertices left); longest move %.3f h; furthest from the sphere %.4f h, before %.4f h\n",
+      moved, static_cast<long long>(before), static_cast<long long>(after), static_cast<long long>(left), longest / h,
+      off_after / h, off_before / h);
+  EXPECT_EQ(after, 0);
+  EXPECT_EQ(left, 0);
+  EXPECT_GT(longest, 2.0 * flows::kFoldRepairReachH * h);  // beyond the centroid step's reach
+  EXPECT_LE(longest, flows::kUnfoldSlideH * h * 1.01);
+  EXPECT_LE(off_after, off_before);  // no vertex leaves the surface further than the push did
 }
 
 // A CAD part with features thinner than the noise: the turbine's narrow strips between
