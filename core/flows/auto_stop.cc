@@ -173,7 +173,9 @@ int64_t AutoStop::RepairFolds(Vec3* pos) const {
     for (size_t i = 0; i < list.size(); ++i) {  // Jacobi: every move reads the round's start
       const int32_t v = list[i];
       const int32_t first = topo_.ring_offsets[v], last = topo_.ring_offsets[v + 1];
-      if (role_[v] == kFree) {  // interior (Folded): its ring's normal does not depend on pos[v]
+      // An interior vertex (Folded) whose fan turns a face against its ring, a fold within the
+      // ring's plane, slides; one whose edges fold out of the plane goes to the centroid.
+      if (role_[v] == kFree && FanFolds(pos, topo_, v)) {  // its ring's normal does not depend on pos[v]
         const Vec3 ring_normal = RingNormal(topo_, pos, v);
         const double length = Norm(ring_normal);
         const Vec3 normal = ring_normal * (length > 0.0 ? 1.0 / length : 0.0);

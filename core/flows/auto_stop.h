@@ -32,9 +32,9 @@
 // Noise folds thin triangles over, and a run can leave some folded: RepairFolds() then takes
 // the free interior vertices of edges whose two faces face nearly opposite ways (normals more
 // than kFoldAngleDeg apart: a fold, not a crease) or of fans with a face turned against their
-// ring, slides each across its fan within its ring's plane to where the fan unfolds
-// (kUnfoldHeight, kUnfoldSlideH) or, where no such place exists, moves it half-way to its
-// ring's centroid, and moves rim vertices that slid across a face of theirs along their loop
+// ring, slides those of the second kind across the fan within the ring's plane to where the
+// fan unfolds (kUnfoldHeight, kUnfoldSlideH), moves the others (and those that cannot unfold
+// so) half-way to their ring's centroid, and moves rim vertices that slid across a face of theirs along their loop
 // (kRimNeedleAngleDeg), a few rounds at most, no vertex further than kFoldRepairReachH h in
 // all (a sliding one: along its ring's normal; kUnfoldSlideH h across it). Last, every flow with a step loses some
 // volume: on a closed mesh the run gives the input's enclosed volume back by moving its free vertices along their
@@ -155,20 +155,21 @@ inline constexpr int kFoldRepairRounds = 20;
 // 0.051 / 0.079 / 0.112 h without the repair; the dragon keeps most of what the repair gains
 // there (docs/decisions.md, "Fold repair, within 0.2 h").
 inline constexpr double kFoldRepairReachH = 0.2;
-// A folded interior vertex whose fan can be unfolded by sliding the vertex across it (within the
-// plane of its ring, which does not depend on where the vertex is) slides instead: to the
-// nearest point where every face of its fan, projected on that plane, has a height of at least
-// kUnfoldHeight times its far edge, found by projecting onto one face's condition after
-// another (kUnfoldSweeps sweeps over the fan). A fold the noise made in a surface that is flat
-// at the scale of a ring is a vertex pushed across its ring; the centroid step undoes it only
-// within its bound, and moves the vertex along the normal too. The slide moves no vertex
-// further than kUnfoldSlideH h within the plane. Where no such point exists (the fan folds out
-// of the plane) the centroid step above is taken. A vertex also counts as folded when a face of
-// its fan turns against its ring (FanFolds) with no edge folded beyond kFoldAngleDeg. Over the
-// benchmark's default rows at sigma 0.1-0.3 h, in random directions and impulsive, the repair
-// leaves 9% fewer flipped faces (marching-tetrahedra cylinder 0.1 h 22 -> 10, turbine 0.2 h
-// 110 -> 97, the Stanford dragon at random 0.3 h 2,034 -> 1,593) with RMS distance and normal
-// error within 0.4% of the centroid step's (docs/decisions.md, "Fold repair, within 0.2 h").
+// A folded interior vertex whose fan turns a face against its ring (FanFolds: folded within the
+// ring's plane, which does not depend on where the vertex is) slides across its fan instead:
+// to the nearest point where every face of the fan, projected on that plane, has a height of
+// at least kUnfoldHeight times its far edge, found by projecting onto one face's condition
+// after another (kUnfoldSweeps sweeps over the fan). A fold the noise made in a surface that is
+// flat at the scale of a ring is a vertex pushed across its ring; the centroid step undoes it
+// only within its bound, and moves the vertex along the normal too. The slide moves no vertex
+// further than kUnfoldSlideH h within the plane. Where no such point exists, and where only
+// edges fold (out of the plane), the centroid step above is taken. A vertex also counts as
+// folded when its fan turns a face against its ring with no edge folded beyond kFoldAngleDeg.
+// Over the benchmark's default rows at sigma 0.1-0.3 h, in random directions and impulsive,
+// the repair leaves 9% fewer flipped faces (marching-tetrahedra cylinder 0.1 h 22 -> 11,
+// turbine 0.2 h 110 -> 93, the Stanford dragon at random 0.3 h 2,034 -> 1,573) with RMS
+// distance and normal error within 0.6% of the centroid step's (docs/decisions.md, "Fold
+// repair, within 0.2 h").
 inline constexpr double kUnfoldHeight = 0.05;
 inline constexpr int kUnfoldSweeps = 30;
 inline constexpr double kUnfoldSlideH = 1.0;
@@ -207,8 +208,9 @@ class AutoStop {
   }
   int best_iteration() const { return best_it_; }
 
-  // Moves the folded free interior vertices of `pos` across their fans where that unfolds them
-  // (SlideToUnfold), otherwise half-way to their ring's centroid, and the folded rim vertices the
+  // Moves the folded free interior vertices of `pos` whose fans turn a face against their ring
+  // across the fan where that unfolds it (SlideToUnfold), the others half-way to their ring's
+  // centroid, and the folded rim vertices the
   // run moved (RimFolded) half-way to the midpoint of their loop neighbours, until none is
   // folded (at most kFoldRepairRounds rounds; no vertex further than kFoldRepairReachH h in all,
   // or kUnfoldSlideH h within its ring's plane when it slid). Returns the folded vertices left.

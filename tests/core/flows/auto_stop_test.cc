@@ -774,7 +774,7 @@ TEST(AutoStopTest, FoldRepairUnfoldsNeedlesWithinItsReach) {
 
 // A rim vertex that a run moved (BoundaryMode::kCurve) and left just across the far edge of one
 // of its faces: the fold repair pulls it back along its loop within kFoldRepairReachH h, and
-// leaves a fixed rim alone (its interior neighbours slide instead). An icosphere without its
+// leaves a fixed rim alone (its interior neighbours' repair unfolds the faces then). An icosphere without its
 // polar cap; every other rim vertex is slid a tenth of the face's height across the edge (its
 // face turns over).
 TEST(AutoStopTest, FoldRepairPullsSlidRimVerticesBack) {
