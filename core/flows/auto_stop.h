@@ -29,16 +29,17 @@
 // SURE needs the variance, and the robust scale reads noise whose distribution is more peaked
 // than a Gaussian's (noise in random directions) low, which makes the run stop far too early.
 //
-// Noise folds thin triangles over, and a run can leave some folded: RepairFolds() then takes
-// the free interior vertices of edges whose two faces face nearly opposite ways (normals more
-// than kFoldAngleDeg apart: a fold, not a crease) or of fans with a face turned against their
-// ring, slides those of the second kind across the fan within the ring's plane to where the
-// fan unfolds (kUnfoldHeight, kUnfoldSlideH), moves the others (and those that cannot unfold
-// so) half-way to their ring's centroid, and moves rim vertices that slid across a face of theirs along their loop
-// (kRimNeedleAngleDeg), a few rounds at most, no vertex further than kFoldRepairReachH h in
-// all (a sliding one: along its ring's normal; kUnfoldSlideH h across it). Last, every flow with a step loses some
-// volume: on a closed mesh the run gives the input's enclosed volume back by moving its free vertices along their
-// normals by a common distance (KeepVolume): the shrinkage is a bias of the flow, not noise.
+// Noise folds thin triangles over, and a run can leave some folded: RepairFolds() then takes the
+// free interior vertices of edges whose two faces face nearly opposite ways (normals more than
+// kFoldAngleDeg apart: a fold, not a crease) or of fans with a face turned against their ring,
+// slides those of the second kind across the fan within the ring's plane to where the fan unfolds
+// (kUnfoldHeight, kUnfoldSlideH), moves the others (and those that cannot unfold so) half-way to
+// their ring's centroid, and moves rim vertices that slid across a face of theirs along their loop
+// (kRimNeedleAngleDeg), a few rounds at most, no vertex further than kFoldRepairReachH h in all (a
+// sliding one: along its ring's normal; kUnfoldSlideH h across it). Last, every flow with a step
+// loses some volume: on a closed mesh the run gives the input's enclosed volume back by moving its
+// free vertices along their normals by a common distance (KeepVolume): the shrinkage is a bias of
+// the flow, not noise.
 #pragma once
 
 #include <cmath>
@@ -210,10 +211,10 @@ class AutoStop {
 
   // Moves the folded free interior vertices of `pos` whose fans turn a face against their ring
   // across the fan where that unfolds it (SlideToUnfold), the others half-way to their ring's
-  // centroid, and the folded rim vertices the
-  // run moved (RimFolded) half-way to the midpoint of their loop neighbours, until none is
-  // folded (at most kFoldRepairRounds rounds; no vertex further than kFoldRepairReachH h in all,
-  // or kUnfoldSlideH h within its ring's plane when it slid). Returns the folded vertices left.
+  // centroid, and the folded rim vertices the run moved (RimFolded) half-way to the midpoint of
+  // their loop neighbours, until none is folded (at most kFoldRepairRounds rounds; no vertex
+  // further than kFoldRepairReachH h in all, or kUnfoldSlideH h within its ring's plane when it
+  // slid). Returns the folded vertices left.
   int64_t RepairFolds(Vec3* pos) const;
 
   // On a closed mesh (every vertex in use interior), moves the free vertices of `pos` along
