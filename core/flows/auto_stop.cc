@@ -176,18 +176,19 @@ int64_t AutoStop::RepairFolds(Vec3* pos) const {
       // An interior vertex (Folded) whose fan turns a face against its ring, a fold within the
       // ring's plane, slides; one whose edges fold out of the plane goes to the centroid.
       if (role_[v] == kFree && FanFolds(pos, topo_, v)) {  // its ring's normal does not depend on pos[v]
-        const Vec3 ring_normal = RingNormal(topo_, pos, v);
-        const double length = Norm(ring_normal);
-        const Vec3 normal = ring_normal * (length > 0.0 ? 1.0 / length : 0.0);
-        Vec3 to;
-        if (length > 0.0 && std::isfinite(length) && SlideToUnfold(pos, v, normal, to)) {
-          const Vec3 total = to - origin[i];
-          const double along = Dot(total, normal);
-          Vec3 across = total - normal * along;
-          const double slid = Norm(across);
-          if (slid > slide_reach) across *= slide_reach / slid;
-          moved[i] = origin[i] + across + normal * std::clamp(along, -reach, reach);
-          continue;
+        Vec3 normal = RingNormal(topo_, pos, v), to;
+        const double length = Norm(normal);
+        if (length > 0.0 && std::isfinite(length)) {
+          normal *= 1.0 / length;
+          if (SlideToUnfold(pos, v, normal, to)) {
+            const Vec3 total = to - origin[i];
+            const double along = Dot(total, normal);
+            Vec3 across = total - normal * along;
+            const double slid = Norm(across);
+            if (slid > slide_reach) across *= slide_reach / slid;
+            moved[i] = origin[i] + across + normal * std::clamp(along, -reach, reach);
+            continue;
+          }
         }
       }
       Vec3 centroid;

@@ -772,10 +772,10 @@ TEST(AutoStopTest, FoldRepairUnfoldsNeedlesWithinItsReach) {
   EXPECT_LE(longest, flows::kFoldRepairReachH * h * (1.0 + 1e-12));
 }
 
-// A rim vertex that a run moved (BoundaryMode::kCurve) and left just across the far edge of one
-// of its faces: the fold repair pulls it back along its loop within kFoldRepairReachH h, and
-// leaves a fixed rim alone (its interior neighbours' repair unfolds the faces then). An icosphere without its
-// polar cap; every other rim vertex is slid a tenth of the face's height across the edge (its
+// A rim vertex that a run moved (BoundaryMode::kCurve) and left just across the far edge of one of
+// its faces: the fold repair pulls it back along its loop within kFoldRepairReachH h, and leaves a
+// fixed rim alone (its interior neighbours' repair unfolds the faces then). An icosphere without
+// its polar cap; every other rim vertex is slid a tenth of the face's height across the edge (its
 // face turns over).
 TEST(AutoStopTest, FoldRepairPullsSlidRimVerticesBack) {
   Mesh clean = Icosphere(3);
@@ -832,11 +832,12 @@ TEST(AutoStopTest, FoldRepairPullsSlidRimVerticesBack) {
   }
 }
 
-// Interior vertices pushed across their rings within the surface, further than the centroid
-// step may take them back (kFoldRepairReachH): the repair slides each back across its fan
-// (SlideToUnfold), within the plane of its ring, no further from the surface. An icosphere of level 4; every vertex of
-// a spread-out set is moved along the tangent plane 0.6 of the way past one of its neighbours. With the centroid step
-// alone (the repair before the slide) all 334 flipped faces stay.
+// Interior vertices pushed across their rings within the surface, further than the centroid step
+// may take them back (kFoldRepairReachH): the repair slides each back across its fan
+// (SlideToUnfold), within the plane of its ring, no further from the surface. An icosphere of level
+// 4; every vertex of a spread-out set is moved along the tangent plane 0.6 of the way past one of
+// its neighbours. With the centroid step alone (the repair before the slide) all 334 flipped faces
+// stay.
 TEST(AutoStopTest, FoldRepairSlidesVerticesPushedAcrossTheirRings) {
   const Mesh clean = Icosphere(4);
   const GroundTruth truth(clean);
