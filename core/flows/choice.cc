@@ -53,10 +53,10 @@ void Report(const RunControl& control, Phase phase, FlowId flow) {
 // Every candidate (p.flow when set, else kChoiceFlows) on a copy of `mesh` with automatic
 // stopping; the least estimated error gives the result, a later candidate's less `margin_h2`
 // (the first candidate's estimate decides whether there is anything to do). Progress: one
-// kChoosing report per candidate.
+// kChoosing report per candidate. `repair_idle`: AutoPlan's.
 absl::StatusOr<FlowResult> Choose(Mesh& mesh, const Topology& topo, const FlowParams& p, const RunControl& control,
                                   double h, const NoiseEstimate& noise, const std::vector<uint8_t>* measured = nullptr,
-                                  double margin_h2 = 0.0) {
+                                  double margin_h2 = 0.0, bool repair_idle = false) {
   std::vector<FlowId> candidates(std::begin(kChoiceFlows), std::end(kChoiceFlows));
   if (p.flow) candidates.assign(1, *p.flow);
   RunControl quiet = control;
@@ -71,7 +71,7 @@ absl::StatusOr<FlowResult> Choose(Mesh& mesh, const Topology& topo, const FlowPa
     FlowParams q = p;
     q.flow = flow;
     SetBoundary(q, flow, p.boundary);
-    AutoPlan plan{0, &noise, measured, std::nullopt, p.boundary != BoundaryMode::kFixed};
+    AutoPlan plan{0, &noise, measured, std::nullopt, p.boundary != BoundaryMode::kFixed, repair_idle};
     if (best && best->auto_stop && best->iterations_run > 0) plan.rival_risk_h2 = best->auto_stop->risk_h2 - margin_h2;
     absl::StatusOr<FlowResult> r = SmoothOneFlow(copy, topo, q, quiet, h, plan);
     if (!r.ok()) {
@@ -198,12 +198,14 @@ bool ChoosesFlow(const FlowParams& p) {
 
 namespace {
 
-// SmoothAutomatic once the noise is read: `q` has its flow set unless the job chooses it.
+// SmoothAutomatic once the noise is read: `q` has its flow set unless the job chooses it;
+// `repair_idle` when outliers were moved (AutoPlan).
 absl::StatusOr<FlowResult> SmoothWithEstimate(Mesh& mesh, const Topology& topo, const FlowParams& q,
-                                              const RunControl& control, double h, const NoiseEstimate& noise) {
+                                              const RunControl& control, double h, const NoiseEstimate& noise,
+                                              bool repair_idle) {
   const int32_t n = mesh.num_vertices();
   const int32_t size = SampleSize(n);
-  if (size >= n) return Choose(mesh, topo, q, control, h, noise);
+  if (size >= n) return Choose(mesh, topo, q, control, h, noise, nullptr, 0.0, repair_idle);
 
   Sample sample = SamplePatches(mesh, topo, size);
   const Topology sample_topo = BuildTopology(sample.mesh);
@@ -233,7 +235,7 @@ absl::StatusOr<FlowResult> SmoothWithEstimate(Mesh& mesh, const Topology& topo, 
   if (chosen->iterations_run == 0) {
     // An idle sample (no noise, or no estimate on it) leaves the decision to the whole mesh's
     // own estimate and stopping (nothing to do on a clean mesh: as cheap as the sample).
-    return Choose(mesh, topo, whole, control, h, noise);
+    return Choose(mesh, topo, whole, control, h, noise, nullptr, 0.0, repair_idle);
   }
   absl::StatusOr<FlowResult> result = SmoothOneFlow(
       mesh, topo, whole, control, h,
@@ -267,7 +269,7 @@ absl::StatusOr<FlowResult> SmoothAutomatic(Mesh& mesh, const Topology& topo, con
     for (uint8_t m : moved) outliers += m;
   }
   if (absl::Status s = control.stop.Check(); !s.ok()) return s;
-  absl::StatusOr<FlowResult> result = SmoothWithEstimate(mesh, topo, q, control, h, noise);
+  absl::StatusOr<FlowResult> result = SmoothWithEstimate(mesh, topo, q, control, h, noise, outliers > 0);
   if (result.ok()) result->outliers_moved = outliers;
   return result;
 }

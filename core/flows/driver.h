@@ -39,6 +39,9 @@ struct AutoPlan {
   // The estimate also measures the boundary vertices (among `measured`), moved or not: candidates
   // that treat the rims differently are then compared on the same vertices.
   bool measure_rims = false;
+  // The input was changed before the run (outliers moved, noise.h): a run that finds no noise
+  // to remove still repairs the folds the change left (AutoStop::RepairFolds).
+  bool repair_idle = false;
 };
 
 // `h` is the input's mean edge length; `plan` applies with automatic iterations. Errors as
