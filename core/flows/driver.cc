@@ -355,7 +355,10 @@ absl::StatusOr<FlowResult> RunIterations(Mesh& mesh, const Topology& topo, const
     result.auto_stop = auto_stop->report();
     if (auto_stop->nothing_to_do()) {
       result.stop_reason = auto_stop->idle_reason();
-      if (plan.repair_idle) auto_stop->RepairFolds(mesh.positions.data());
+      if (plan.repair_idle) {
+        auto_stop->RepairFolds(mesh.positions.data());
+        result.auto_stop = auto_stop->Measure(mesh.positions.data());  // what the repair moved
+      }
       return result;
     }
     last_iteration = std::min(p.max_auto_iterations, kMaxAutoIterations);

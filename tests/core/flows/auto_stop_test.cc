@@ -923,6 +923,9 @@ TEST(AutoStopTest, FoldsLeftByMovingOutliersBackAreRepairedWithoutARun) {
   ASSERT_GT(r->outliers_moved, 0);
   ASSERT_EQ(r->iterations_run, 0);  // the case this test is for
   EXPECT_LE(4 * after->flipped_faces, before->flipped_faces);
+  // The report counts what the repair moved (the summary's "vertices moved").
+  ASSERT_TRUE(r->auto_stop.has_value());
+  EXPECT_GT(r->auto_stop->displacement_h, 0.0);
   EXPECT_LT(after->normal_error_deg, 0.25 * before->normal_error_deg);
 }
 
