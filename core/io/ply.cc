@@ -255,6 +255,9 @@ absl::StatusOr<Mesh> ParsePly(std::string_view data, ReadInfo& info) {
       }
       if (!TypeFromName(type, p.type)) return error(absl::StrCat("unknown property type '", Sv(type), "'"));
       p.name = NextToken(rest);
+      // A nameless property could not be written back, nor named in a Draco file's metadata,
+      // whose entries cannot be empty.
+      if (p.name.empty()) return error(absl::StrCat("a ", Sv(type), " property without a name"));
       elements.back().props.push_back(p);
     } else if (key == "end_header") {
       have_end = true;

@@ -193,6 +193,20 @@ TEST(IoTest, PlyWithTwoVertexElementsIsRefused) {
   EXPECT_NE(m.status().message().find("more than one vertex element"), std::string::npos) << m.status();
 }
 
+// A property line without a name ("property uint32 "): refused, where it was read as a vertex
+// property named "" that a .drc output then carried as a metadata entry Draco's decoder refuses
+// (a fuzz_ply input).
+TEST(IoTest, PlyPropertyWithoutANameIsRefused) {
+  const std::string ply =
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+      "property uint32 \nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
+      "0 0 0 1\n1 0 0 2\n0 1 0 3\n3 0 1 2\n";
+  absl::StatusOr<Mesh> m = ParseMesh(ply, MeshFormat::kPly);
+  ASSERT_FALSE(m.ok()) << m->properties.size() << " properties";
+  EXPECT_EQ(m.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_NE(m.status().message().find("property without a name"), std::string::npos) << m.status();
+}
+
 TEST(IoTest, PlyColoursRoundTripInAsciiAndBinary) {
   Mesh m = Icosphere(2);
   for (Vec3& p : m.positions) p = RoundToFloat(p);
