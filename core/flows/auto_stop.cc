@@ -107,10 +107,11 @@ double AutoStop::Volume(const Vec3* pos) const {
   return total / 18.0;
 }
 
-bool AutoStop::Folded(const Vec3* pos, int32_t v) const {
-  if (role_[v] == kCurve) return RimFolded(pos, v);
-  if (role_[v] != kFree || topo_.kind[v] != VertexKind::kInterior) return false;
-  return FanFolds(pos, topo_, v) || ForFoldedEdges(pos, topo_, v, cos_fold_, [](int32_t) { return true; });
+AutoStop::Fold AutoStop::Folded(const Vec3* pos, int32_t v) const {
+  if (role_[v] == kCurve) return RimFolded(pos, v) ? kFolded : kNotFolded;
+  if (role_[v] != kFree || topo_.kind[v] != VertexKind::kInterior) return kNotFolded;
+  if (FanFolds(pos, topo_, v)) return kFanFolded;
+  return ForFoldedEdges(pos, topo_, v, cos_fold_, [](int32_t) { return true; }) ? kFolded : kNotFolded;
 }
 
 bool AutoStop::SlideToUnfold(const Vec3* pos, int32_t v, const Vec3& normal, Vec3& to) const {
@@ -161,8 +162,11 @@ int64_t AutoStop::RepairFolds(Vec3* pos) const {
     for (int32_t v = begin; v < end; ++v) folded[v] = Folded(pos, v);
   });
   std::vector<int32_t> list;
+  std::vector<uint8_t> fold;  // Folded()'s answer for each vertex of the list, as it stands
   for (int32_t v = 0; v < n; ++v) {
-    if (folded[v]) list.push_back(v);
+    if (folded[v] == kNotFolded) continue;
+    list.push_back(v);
+    fold.push_back(folded[v]);
   }
   // Each vertex's position before the repair: no round takes it further than
   // kFoldRepairReachH h from there.
@@ -175,7 +179,7 @@ int64_t AutoStop::RepairFolds(Vec3* pos) const {
       const int32_t first = topo_.ring_offsets[v], last = topo_.ring_offsets[v + 1];
       // An interior vertex (Folded) whose fan turns a face against its ring, a fold within the
       // ring's plane, slides; one whose edges fold out of the plane goes to the centroid.
-      if (role_[v] == kFree && FanFolds(pos, topo_, v)) {  // its ring's normal does not depend on pos[v]
+      if (fold[i] == kFanFolded) {  // its ring's normal does not depend on pos[v]
         Vec3 normal = RingNormal(topo_, pos, v), to;
         const double length = Norm(normal);
         if (length > 0.0 && std::isfinite(length)) {
@@ -206,11 +210,14 @@ int64_t AutoStop::RepairFolds(Vec3* pos) const {
     for (size_t i = 0; i < list.size(); ++i) pos[list[i]] = moved[i];
     size_t kept = 0;
     for (size_t i = 0; i < list.size(); ++i) {
-      if (!Folded(pos, list[i])) continue;
+      const Fold f = Folded(pos, list[i]);
+      if (f == kNotFolded) continue;
       list[kept] = list[i];
+      fold[kept] = f;
       origin[kept++] = origin[i];
     }
     list.resize(kept);
+    fold.resize(kept);
     origin.resize(kept);
     moved.resize(kept);
   }

@@ -233,10 +233,12 @@ class AutoStop {
   double Risk(const Vec3* pos, const Vec3* probe) const;
   // The probe's sign at vertex v: +1 or -1, from a hash of v (the same for any thread count).
   static double Sign(int32_t v);
-  // True when a free interior vertex `v` has two consecutive faces of its ring folded or a face
-  // of its fan turned against its ring's orientation (FanFolds), or a boundary vertex the run
-  // moved (kCurve) is folded (RimFolded).
-  bool Folded(const Vec3* pos, int32_t v) const;
+  // Whether vertex `v` is folded, and how: kFanFolded for a free interior vertex with a face of
+  // its fan turned against its ring's orientation (FanFolds: RepairFolds slides it), kFolded for
+  // one with two consecutive faces of its ring folded, or for a boundary vertex the run moved
+  // (kCurve) that is folded (RimFolded).
+  enum Fold : uint8_t { kNotFolded = 0, kFolded, kFanFolded };
+  Fold Folded(const Vec3* pos, int32_t v) const;
   // For a free interior vertex v: into `to`, the point nearest to pos[v] in the plane through
   // it normal to `normal` (its ring's unit normal) where each face of its fan, projected on
   // that plane, has a height of at least kUnfoldHeight times its far edge (within half of it:
