@@ -10,6 +10,7 @@
 #include <filesystem>
 
 #include "absl/strings/str_cat.h"
+#include "core/io/draco_checks.h"
 #include "draco/io/file_reader_factory.h"
 #include "draco/io/file_writer_factory.h"
 #include "draco/io/scene_io.h"
@@ -200,6 +201,10 @@ absl::Status GltfScene::Write(const std::vector<Vec3>& positions, const std::str
   if (positions.size() != impl_->surface.positions.size()) {
     return absl::InvalidArgumentError(
         absl::StrCat("expected ", impl_->surface.positions.size(), " positions, got ", positions.size()));
+  }
+  // The bound every writer keeps (a non-finite value would be written as one no reader takes).
+  for (size_t v = 0; v < positions.size(); ++v) {
+    if (absl::Status s = CheckCoordinates(positions[v], "vertex", static_cast<int64_t>(v)); !s.ok()) return s;
   }
   draco::Scene& scene = *impl_->scene;
   for (int m = 0; m < scene.NumMeshes(); ++m) {

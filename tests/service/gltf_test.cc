@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "client/transfer.h"
+#include "core/io/draco_codec.h"
 #include "core/io/file_bytes.h"
 #include "core/io/gltf.h"
 #include "core/render/image.h"
@@ -340,6 +341,33 @@ TEST(GltfTest, FileThatCrashesDracosReaderIsRefused) {
   ASSERT_FALSE(upload.ok());
   EXPECT_EQ(upload.status().code(), absl::StatusCode::kInvalidArgument);
   EXPECT_NE(upload.status().message().find("crashed"), std::string::npos) << upload.status();
+}
+
+// Positions that no reader would take back (not finite, or beyond kMaxCoordinate, which float32
+// holds exactly) are refused by the writer, as the Draco encoder refuses them, rather than
+// written (fuzz_gltf: a NaN read from a file was written into a GLB that did not read again).
+TEST(GltfTest, WriterRefusesPositionsNoReaderTakes) {
+  const fs::path dir = fs::temp_directory_path() / ("meshsmooth_gltf_nan_" + std::to_string(getpid()));
+  fs::create_directories(dir);
+  Image image;
+  image.width = image.height = 4;
+  image.rgb.assign(3 * 4 * 4, 128);
+  absl::StatusOr<std::string> png = EncodePng(image);
+  ASSERT_TRUE(png.ok());
+  const std::string in = (dir / "in.glb").string(), out = (dir / "out.glb").string();
+  UseDracoFileIo();
+  ASSERT_TRUE(draco::WriteSceneToFile(in, *SphereScene(Icosphere(2), *png)).ok());
+  absl::StatusOr<GltfScene> scene = GltfScene::Read(in);
+  ASSERT_TRUE(scene.ok()) << scene.status();
+  std::vector<Vec3> positions = scene->surface().positions;
+  ASSERT_TRUE(scene->Write(positions, out, false).ok());
+  for (double bad : {std::nan(""), 2 * kMaxCoordinate}) {
+    positions[5].y = bad;
+    const absl::Status s = scene->Write(positions, out, false);
+    EXPECT_EQ(s.code(), absl::StatusCode::kInvalidArgument) << bad;
+    EXPECT_NE(s.message().find("vertex 5 has a coordinate of"), std::string::npos) << s;
+  }
+  fs::remove_all(dir);
 }
 
 // A valid glTF document without a mesh (only its asset), as GLB: refused with a message, not
