@@ -313,16 +313,21 @@ TEST(GltfTest, ScenesComeBackWithTheirNodesMaterialsTexturesAndUvs) {
   fs::remove_all(dir);
 }
 
+// A 4 x 4 grey PNG: the texture of the small scenes below.
+absl::StatusOr<std::string> GreyPng() {
+  Image image;
+  image.width = image.height = 4;
+  image.rgb.assign(3 * 4 * 4, 128);
+  return EncodePng(image);
+}
+
 // A Draco-compressed GLB whose "buffers" key is misspelt (as fuzz_gltf found it): Draco's own glTF
 // reader dereferences a null pointer on it. The CLI reads a glTF file in a child process first,
 // so the upload is refused with a message instead of the CLI crashing.
 TEST(GltfTest, FileThatCrashesDracosReaderIsRefused) {
   const fs::path dir = fs::temp_directory_path() / ("meshsmooth_gltf_crash_" + std::to_string(getpid()));
   fs::create_directories(dir);
-  Image image;
-  image.width = image.height = 4;
-  image.rgb.assign(3 * 4 * 4, 128);
-  absl::StatusOr<std::string> png = EncodePng(image);
+  const absl::StatusOr<std::string> png = GreyPng();
   ASSERT_TRUE(png.ok());
   const std::unique_ptr<draco::Scene> scene = SphereScene(Icosphere(2), *png);
   for (int m = 0; m < scene->NumMeshes(); ++m) scene->GetMesh(draco::MeshIndex(m)).SetCompressionEnabled(true);
@@ -349,10 +354,7 @@ TEST(GltfTest, FileThatCrashesDracosReaderIsRefused) {
 TEST(GltfTest, WriterRefusesPositionsNoReaderTakes) {
   const fs::path dir = fs::temp_directory_path() / ("meshsmooth_gltf_nan_" + std::to_string(getpid()));
   fs::create_directories(dir);
-  Image image;
-  image.width = image.height = 4;
-  image.rgb.assign(3 * 4 * 4, 128);
-  absl::StatusOr<std::string> png = EncodePng(image);
+  const absl::StatusOr<std::string> png = GreyPng();
   ASSERT_TRUE(png.ok());
   const std::string in = (dir / "in.glb").string(), out = (dir / "out.glb").string();
   UseDracoFileIo();
