@@ -87,6 +87,11 @@ int RunSmooth(const SmoothOptions& o, const ConnectionOptions& c) {
   }
   absl::StatusOr<MeshFormat> out_format = gltf_out ? MeshFormat::kDraco : FormatFromPath(o.output);
   if (!out_format.ok()) return Fail("", out_format.status());
+  // Before the upload: a typo in the output's folder must not cost the job.
+  if (absl::Status s = CheckOutputPath(o.output); !s.ok()) {
+    std::cerr << "meshsmooth: " << s.message() << "\n";
+    return kExitUsage;
+  }
   if (o.ridges && (gltf_out || (*out_format != MeshFormat::kPly && *out_format != MeshFormat::kObj &&
                                 *out_format != MeshFormat::kDraco))) {
     std::cerr << "meshsmooth: warning: --ridges labels are kept only in .ply and .obj (vertex colours) and .drc "
@@ -134,7 +139,11 @@ int RunSmooth(const SmoothOptions& o, const ConnectionOptions& c) {
     return Fail(std::string(absl::StatusCodeToString(outcome.status().code())) + ": ", outcome.status());
   }
   std::vector<std::string> dropped = upload->dropped;
-  if (absl::Status s = WriteResult(*upload, outcome->result, o.output, o.ridges, &dropped, o.gltf_draco); !s.ok()) {
+  DracoOptions draco;
+  draco.quantization_bits = o.quantization_bits;
+  draco.method = o.edgebreaker ? DracoMethod::kEdgebreaker : DracoMethod::kSequential;
+  if (absl::Status s = WriteResult(*upload, outcome->result, o.output, o.ridges, &dropped, o.gltf_draco, draco);
+      !s.ok()) {
     return Fail("", s);
   }
   for (const std::string& w : outcome->summary.warnings()) std::cerr << "meshsmooth: warning: " << w << "\n";

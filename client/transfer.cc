@@ -1,5 +1,7 @@
 #include "client/transfer.h"
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <cctype>
 #include <filesystem>
@@ -123,7 +125,47 @@ std::vector<std::string> NotHeldBy(const Mesh& mesh, MeshFormat format) {
   return lost;
 }
 
+// Puts back each vertex of `result` that is where the service got it (the float32 of its sent
+// position: the job did not move it) at its position as sent, in double.
+void KeepUnmoved(const std::vector<Vec3>& sent, std::vector<Vec3>& result) {
+  const size_t n = std::min(sent.size(), result.size());
+  for (size_t v = 0; v < n; ++v) {
+    const Vec3& s = sent[v];
+    const Vec3& r = result[v];
+    if (static_cast<double>(static_cast<float>(s.x)) == r.x && static_cast<double>(static_cast<float>(s.y)) == r.y &&
+        static_cast<double>(static_cast<float>(s.z)) == r.z) {
+      result[v] = s;
+    }
+  }
+}
+
+// The phrase for positions far from the origin written in float32 by `format`.
+std::string Float32Loss(const std::vector<Vec3>& positions, const char* format) {
+  return absl::StrCat("coordinates in double (", format, " holds float32, which steps by ", Float32Spacing(positions),
+                      " at these coordinates; .obj, .off and .ply keep them)");
+}
+
 }  // namespace
+
+absl::Status CheckOutputPath(const std::string& output) {
+  if (!IsGltfPath(output)) {
+    if (absl::StatusOr<MeshFormat> format = FormatFromPath(output); !format.ok()) return format.status();
+  }
+  std::error_code error;
+  if (fs::is_directory(output, error)) {
+    return absl::InvalidArgumentError(absl::StrCat("-o ", output, ": a folder, not a file"));
+  }
+  fs::path folder = fs::path(output).parent_path();
+  if (folder.empty()) folder = ".";
+  if (!fs::is_directory(folder, error)) {
+    return absl::InvalidArgumentError(absl::StrCat("-o ", output, ": no folder ", folder.string()));
+  }
+  if (access(folder.c_str(), W_OK) != 0) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("-o ", output, ": the folder ", folder.string(), " is not writable"));
+  }
+  return absl::OkStatus();
+}
 
 bool IsGltfPath(const std::string& path) {
   std::string ext = fs::path(path).extension().string();
@@ -171,7 +213,11 @@ absl::StatusOr<Upload> PrepareUpload(const std::string& input, bool with_attribu
     DropTriangles(*mesh, out_of_range);  // out of step with the result's faces otherwise
   }
   upload.origin = LocalOrigin(mesh->positions);
-  upload.double_positions = info.double_positions || upload.origin != Vec3{};
+  // PLY output in double when float could not hold the input: a vertex the job leaves where it
+  // is must come back as it went in.
+  upload.double_positions = info.double_positions || upload.origin != Vec3{} ||
+                            std::any_of(mesh->positions.begin(), mesh->positions.end(),
+                                        [](const Vec3& p) { return RoundToFloat(p) != p; });
   if (upload.origin != Vec3{}) Translate(mesh->positions, -upload.origin);
   absl::StatusOr<std::string> bytes;
   if (with_attributes) {
@@ -188,14 +234,11 @@ absl::StatusOr<Upload> PrepareUpload(const std::string& input, bool with_attribu
   upload.draco = std::move(*bytes);
   upload.num_vertices = mesh->num_vertices();
   upload.kept = std::move(*mesh);
-  // Released, not only emptied (`= {}` keeps a vector's capacity): 24 bytes a vertex the CLI
-  // held through the whole job.
-  std::vector<Vec3>().swap(upload.kept.positions);
   return upload;
 }
 
 absl::Status WriteResult(Upload& upload, const std::string& result, const std::string& output, bool ridges,
-                         std::vector<std::string>* dropped, bool gltf_draco) {
+                         std::vector<std::string>* dropped, bool gltf_draco, const DracoOptions& draco) {
   std::vector<std::string> ignored;
   std::vector<std::string>& lost = dropped != nullptr ? *dropped : ignored;
   if ((upload.gltf != nullptr) != IsGltfPath(output)) {
@@ -215,7 +258,16 @@ absl::Status WriteResult(Upload& upload, const std::string& result, const std::s
   if (!format.ok()) return format.status();
   if (*format == MeshFormat::kDraco) {
     for (std::string& s : NotHeldBy(upload.kept, *format)) lost.push_back(std::move(s));
-    return WriteFileBytes(output, result);
+    if (upload.origin == Vec3{}) return WriteFileBytes(output, result);
+    // Moved back by the origin the positions were sent relative to, every attribute along.
+    absl::StatusOr<Mesh> decoded = DecodeDraco(result);
+    if (!decoded.ok())
+      return absl::Status(decoded.status().code(), absl::StrCat("the result: ", decoded.status().message()));
+    Translate(decoded->positions, upload.origin);
+    lost.push_back(Float32Loss(decoded->positions, ".drc"));
+    absl::StatusOr<std::string> bytes = EncodeDraco(*decoded, draco);
+    if (!bytes.ok()) return bytes.status();
+    return WriteFileBytes(output, *bytes);
   }
   auto about_result = [](const absl::Status& s) {
     return absl::Status(s.code(), absl::StrCat("the result: ", s.message()));
@@ -233,6 +285,7 @@ absl::Status WriteResult(Upload& upload, const std::string& result, const std::s
           absl::StrCat("it has ", decoded->num_vertices(), " points for ", upload.num_vertices, " vertices")));
     }
     mesh.positions.assign(decoded->positions.begin(), decoded->positions.begin() + upload.num_vertices);
+    KeepUnmoved(upload.kept.positions, mesh.positions);
     mesh.triangles = std::move(upload.kept.triangles);
     mesh.colors = std::move(upload.kept.colors);
     mesh.uvs = std::move(upload.kept.uvs);
@@ -240,7 +293,10 @@ absl::Status WriteResult(Upload& upload, const std::string& result, const std::s
     mesh.obj_directives = std::move(upload.kept.obj_directives);
     if (!upload.kept.normals.empty()) mesh.normals = FreshNormals(mesh, upload.kept.normals);
   }
-  if (upload.origin != Vec3{}) Translate(mesh.positions, upload.origin);
+  if (upload.origin != Vec3{}) {
+    Translate(mesh.positions, upload.origin);
+    if (*format == MeshFormat::kStl) lost.push_back(Float32Loss(mesh.positions, ".stl"));
+  }
   if (ridges) {
     absl::StatusOr<std::vector<float>> labels = DecodeDracoAttribute(result, kFeatureLabelAttribute);
     if (!labels.ok()) return about_result(labels.status());

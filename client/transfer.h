@@ -10,6 +10,7 @@
 
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
+#include "core/io/draco_codec.h"
 #include "core/io/gltf.h"
 #include "core/mesh.h"
 #include "core/vec3.h"
@@ -20,8 +21,10 @@ struct Upload {
   std::string input;  // the path (or builtin:NAME) it came from
   std::string draco;  // what is sent
   bool draco_input = false;
-  // The input as read, positions left out: its triangles, colours and attributes, written
-  // back around the result's positions (vertex i of the result is vertex i of the input).
+  // The input as read: its triangles, colours and attributes, written back around the result's
+  // positions (vertex i of the result is vertex i of the input), and its positions as sent
+  // (relative to `origin`, in double): a vertex the job did not move comes back with these, not
+  // with the float32 the service holds.
   Mesh kept;
   int32_t num_vertices = 0;
   // Positions were sent relative to this origin (LocalOrigin): zero for a mesh near the
@@ -50,8 +53,17 @@ bool IsGltfPath(const std::string& path);
 // `gltf_draco`, the output the CLI will write): call this before starting threads.
 absl::StatusOr<Upload> PrepareUpload(const std::string& input, bool with_attributes = true, bool gltf_draco = false);
 
+// OK when `output` can be written once the job is done: a format the CLI writes (.obj, .ply,
+// .off, .stl, .drc, and .gltf/.glb for a glTF input) in a folder that exists and is writable,
+// and not a folder itself. InvalidArgument otherwise, naming what is wrong: checked before the
+// upload, so that a typo does not cost the job.
+absl::Status CheckOutputPath(const std::string& output);
+
 // Writes `result` (the service's Draco bytes) to `output` in the format its extension names:
-// Draco bytes as they came, anything else decoded and moved back by the upload's origin, with
+// Draco bytes as they came (decoded, moved back by the upload's origin and encoded again with
+// `draco` when there is one: .drc holds float32, which the warning says), anything else decoded
+// and moved back by the upload's origin, each vertex the job did not move at its position as
+// read (exactly, in the formats that hold double: .obj, .off, double .ply), with
 // the input's attributes, normals recomputed from the smoothed positions, the ridge labels
 // (`ridges`) as vertex colours, PLY coordinates in double when the input had them or was
 // shifted. An OBJ output's `mtllib` lines are rewritten to reach the input's material files
@@ -63,6 +75,7 @@ absl::StatusOr<Upload> PrepareUpload(const std::string& input, bool with_attribu
 // triangles and attributes are moved out of `upload.kept` into the output (not copied): one
 // WriteResult per upload.
 absl::Status WriteResult(Upload& upload, const std::string& result, const std::string& output, bool ridges,
-                         std::vector<std::string>* dropped = nullptr, bool gltf_draco = false);
+                         std::vector<std::string>* dropped = nullptr, bool gltf_draco = false,
+                         const DracoOptions& draco = {});
 
 }  // namespace meshsmooth::client

@@ -12,11 +12,14 @@
 #include "absl/strings/str_cat.h"
 #include "core/io/draco_checks.h"
 #include "draco/io/file_reader_factory.h"
+#include "draco/io/file_utils.h"
 #include "draco/io/file_writer_factory.h"
+#include "draco/io/gltf_encoder.h"
 #include "draco/io/scene_io.h"
 #include "draco/io/stdio_file_reader.h"
 #include "draco/io/stdio_file_writer.h"
 #include "draco/scene/scene.h"
+#include "draco/texture/texture_utils.h"
 
 // A sanitizer's hook (present in sanitized builds only): what runs when a sanitizer stops the
 // process. libFuzzer sets it to save the input as a finding.
@@ -30,7 +33,57 @@ struct GltfScene::Impl {
   // Per scene mesh (primitive): its first vertex in surface and the offset it was moved by.
   std::vector<int32_t> first;
   std::vector<Vec3> offset;
+  // The scene's images and the names they were read under (SceneImages).
+  std::vector<std::pair<draco::Texture*, std::string>> images;
 };
+
+namespace {
+
+// Every image of `scene`, material or not, with the name it is written under: its stem as read
+// ("image<i>" when it had none).
+std::vector<std::pair<draco::Texture*, std::string>> SceneImages(draco::Scene& scene) {
+  std::vector<std::pair<draco::Texture*, std::string>> images;
+  for (draco::TextureLibrary* library :
+       {&scene.GetMaterialLibrary().MutableTextureLibrary(), &scene.GetNonMaterialTextureLibrary()}) {
+    for (size_t t = 0; t < library->NumTextures(); ++t) {
+      draco::Texture* texture = library->GetTexture(static_cast<int>(t));
+      const std::string stem = draco::TextureUtils::GetTargetStem(*texture);
+      images.emplace_back(texture, stem.empty() ? absl::StrCat("image", images.size()) : stem);
+    }
+  }
+  return images;
+}
+
+// Writes `scene` to `path` with every file beside it named after it: a .gltf's buffer as
+// STEM.bin and its images as STEM_IMAGE.EXT, IMAGE the name each image was read under (Draco's
+// own WriteSceneToFile names the buffer buffer0.bin and the images by their bare names, so a
+// scene written to a folder replaced the files of another scene there, the input's own
+// included). A .glb holds everything itself.
+absl::Status WriteNamedAfter(draco::Scene& scene, const std::vector<std::pair<draco::Texture*, std::string>>& images,
+                             const std::string& path) {
+  const std::filesystem::path out(path);
+  std::string dir = out.parent_path().string();
+  if (dir.empty()) dir = ".";
+  const std::string stem = out.stem().string();
+  for (const auto& [texture, name] : images) {
+    draco::SourceImage& image = texture->source_image();
+    // An image not yet read goes from its bytes, not from the file its new name would name.
+    if (image.encoded_data().empty() && !image.filename().empty()) {
+      std::vector<uint8_t> bytes;
+      if (!draco::ReadFileToBuffer(image.filename(), &bytes)) {
+        return absl::NotFoundError(absl::StrCat("the scene's image ", image.filename(), " cannot be read"));
+      }
+      image.MutableEncodedData() = std::move(bytes);
+    }
+    image.set_filename(absl::StrCat(dir, "/", stem, "_", name, ".", draco::TextureUtils::GetTargetExtension(*texture)));
+  }
+  draco::GltfEncoder encoder;
+  const draco::Status s = encoder.EncodeFile(scene, path, absl::StrCat(dir, "/", stem, ".bin"), dir);
+  if (!s.ok()) return absl::InternalError(absl::StrCat("writing ", path, ": ", s.error_msg()));
+  return absl::OkStatus();
+}
+
+}  // namespace
 
 GltfScene::GltfScene(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 GltfScene::GltfScene(GltfScene&&) noexcept = default;
@@ -63,6 +116,7 @@ absl::StatusOr<GltfScene> GltfScene::Read(const std::string& path) {
   auto impl = std::make_unique<Impl>();
   impl->scene = std::move(decoded).value();
   draco::Scene& scene = *impl->scene;
+  impl->images = SceneImages(scene);
   const int n = scene.NumMeshes();
   if (n == 0) return absl::InvalidArgumentError(absl::StrCat(path, ": the glTF scene has no triangles"));
   // Each primitive's glTF mesh (mesh group): the first that names it.
@@ -268,9 +322,7 @@ absl::Status GltfScene::Write(const std::vector<Vec3>& positions, const std::str
     }
   }
   UseDracoFileIo();
-  const draco::Status s = draco::WriteSceneToFile(path, scene);
-  if (!s.ok()) return absl::InternalError(absl::StrCat("writing ", path, ": ", s.error_msg()));
-  return absl::OkStatus();
+  return WriteNamedAfter(scene, impl_->images, path);
 }
 
 }  // namespace meshsmooth

@@ -62,7 +62,8 @@ class GltfScene {
   // Sets the primitives' positions from `positions` (one per vertex of surface(), in its
   // frame: the offsets between glTF meshes are taken back off), recomputes the normals of those
   // that have them (area-weighted over the faces at each position) and writes the scene to
-  // `path` (.glb: one file; .gltf: the JSON with a .bin and the images beside it), each
+  // `path` (.glb: one file; .gltf: the JSON with STEM.bin and STEM_IMAGE.EXT beside it, named
+  // after the output so that no other file is replaced), each
   // primitive Draco-compressed when `draco_compressed` (16-bit positions and texture
   // coordinates, 12-bit normals) or plain. InvalidArgument for a wrong count; Internal when
   // Draco's encoder fails.

@@ -27,8 +27,8 @@ def flow_names(cli, *server):
 
 
 def read_ply_colors(path):
-    """(vertex count, face count, [(r, g, b)] per vertex) of a PLY whose vertices are x y z float
-    followed by red green blue uchar (binary little endian or ASCII)."""
+    """(vertex count, face count, [(r, g, b)] per vertex) of a PLY whose vertices are x y z (float
+    or double) followed by red green blue uchar (binary little endian or ASCII)."""
     with open(path, "rb") as f:
         data = f.read()
     end = data.find(b"end_header\n")
@@ -49,11 +49,13 @@ def read_ply_colors(path):
                 faces = int(parts[2])
         elif parts[:1] == ["property"] and element == "vertex":
             props.append((parts[1], parts[2]))
-    want = [("float", "x"), ("float", "y"), ("float", "z"), ("uchar", "red"), ("uchar", "green"), ("uchar", "blue")]
-    assert props == want, f"{path}: vertex properties {props}, want {want}"
+    # Positions in float, or in double when float could not hold the input's.
+    kind = props[0][0] if props else "float"
+    want = [(kind, "x"), (kind, "y"), (kind, "z"), ("uchar", "red"), ("uchar", "green"), ("uchar", "blue")]
+    assert kind in ("float", "double") and props == want, f"{path}: vertex properties {props}, want {want}"
     assert vertices is not None and faces is not None, header
     if fmt == "binary_little_endian":
-        rec = struct.Struct("<3f3B")
+        rec = struct.Struct("<3d3B" if kind == "double" else "<3f3B")
         assert len(body) >= vertices * rec.size + faces * 13, f"{path}: truncated body"
         colors = [rec.unpack_from(body, i * rec.size)[3:] for i in range(vertices)]
     elif fmt == "ascii":
