@@ -21,7 +21,7 @@ esac
 packages=(
   build-essential cmake ninja-build pkgconf
   libgrpc++-dev libgrpc-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler
-  libdraco-dev libabsl-dev libcli11-dev libeigen3-dev libpng-dev prometheus-cpp-dev
+  libdraco-dev libabsl-dev libcli11-dev libeigen3-dev libpng-dev prometheus-cpp-dev nlohmann-json3-dev
 )
 if [ "$preset" != image ]; then
   packages+=(

@@ -8,9 +8,11 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <optional>
 
 #include "absl/strings/str_cat.h"
 #include "core/io/draco_checks.h"
+#include "core/io/gltf_texcoords.h"
 #include "draco/io/file_reader_factory.h"
 #include "draco/io/file_utils.h"
 #include "draco/io/file_writer_factory.h"
@@ -35,6 +37,9 @@ struct GltfScene::Impl {
   std::vector<Vec3> offset;
   // The scene's images and the names they were read under (SceneImages).
   std::vector<std::pair<draco::Texture*, std::string>> images;
+  // The input file's texture coordinates, written back over Draco's round trip of them; empty
+  // when the file's own JSON could not be followed (stale() says so).
+  std::optional<TexcoordOriginals> texcoords;
 };
 
 namespace {
@@ -117,6 +122,7 @@ absl::StatusOr<GltfScene> GltfScene::Read(const std::string& path) {
   impl->scene = std::move(decoded).value();
   draco::Scene& scene = *impl->scene;
   impl->images = SceneImages(scene);
+  if (absl::StatusOr<TexcoordOriginals> t = ReadTexcoordOriginals(path); t.ok()) impl->texcoords = std::move(*t);
   const int n = scene.NumMeshes();
   if (n == 0) return absl::InvalidArgumentError(absl::StrCat(path, ": the glTF scene has no triangles"));
   // Each primitive's glTF mesh (mesh group): the first that names it.
@@ -247,8 +253,15 @@ std::vector<std::string> GltfScene::stale() const {
     tangents +=
         impl_->scene->GetMesh(draco::MeshIndex(m)).GetNamedAttribute(draco::GeometryAttribute::TANGENT) != nullptr;
   }
-  if (tangents == 0) return {};
-  return {absl::StrCat("the tangents of ", tangents, " glTF primitives (written as they were, not recomputed)")};
+  std::vector<std::string> out;
+  if (tangents > 0) {
+    out.push_back(
+        absl::StrCat("the tangents of ", tangents, " glTF primitives (written as they were, not recomputed)"));
+  }
+  if (!impl_->texcoords.has_value()) {
+    out.push_back("texture coordinates bit for bit (the file's JSON could not be followed: Draco's rounding stays)");
+  }
+  return out;
 }
 
 absl::Status GltfScene::Write(const std::vector<Vec3>& positions, const std::string& path, bool draco_compressed) {
@@ -322,7 +335,13 @@ absl::Status GltfScene::Write(const std::vector<Vec3>& positions, const std::str
     }
   }
   UseDracoFileIo();
-  return WriteNamedAfter(scene, impl_->images, path);
+  if (absl::Status s = WriteNamedAfter(scene, impl_->images, path); !s.ok()) return s;
+  // Plain accessors carry the input's texture coordinates bit for bit; compressed ones are
+  // quantized anyway.
+  if (!draco_compressed && impl_->texcoords.has_value()) {
+    if (absl::StatusOr<int64_t> n = RestoreTexcoords(path, *impl_->texcoords); !n.ok()) return n.status();
+  }
+  return absl::OkStatus();
 }
 
 }  // namespace meshsmooth

@@ -2,7 +2,8 @@
 // primitives (KHR_draco_mesh_compression), read and written by Draco's own transcoder
 // (draco::GltfDecoder, draco::GltfEncoder): the scene's nodes and their transforms, meshes,
 // materials, textures and images come back as they were, only the primitives' positions (and
-// normals, recomputed from them) change.
+// normals, recomputed from them) change; plain output's texture coordinates are the input file's
+// own, bit for bit (Draco's round trip of them is undone: gltf_texcoords.h).
 #pragma once
 
 #include <memory>
