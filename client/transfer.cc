@@ -215,9 +215,9 @@ absl::StatusOr<Upload> PrepareUpload(const std::string& input, bool with_attribu
   upload.origin = LocalOrigin(mesh->positions);
   // PLY output in double when float could not hold the input: a vertex the job leaves where it
   // is must come back as it went in.
-  upload.double_positions = info.double_positions || upload.origin != Vec3{} ||
-                            std::any_of(mesh->positions.begin(), mesh->positions.end(),
-                                        [](const Vec3& p) { return RoundToFloat(p) != p; });
+  upload.double_positions =
+      info.double_positions || upload.origin != Vec3{} ||
+      std::any_of(mesh->positions.begin(), mesh->positions.end(), [](const Vec3& p) { return RoundToFloat(p) != p; });
   if (upload.origin != Vec3{}) Translate(mesh->positions, -upload.origin);
   absl::StatusOr<std::string> bytes;
   if (with_attributes) {
