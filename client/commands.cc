@@ -81,8 +81,9 @@ v1::JobSpec SpecFrom(const SmoothOptions& o) {
 
 int RunSmooth(const SmoothOptions& o, const ConnectionOptions& c) {
   const bool gltf_out = IsGltfPath(o.output);
-  if (gltf_out != IsGltfPath(o.input)) {
-    std::cerr << "meshsmooth: a glTF scene (.glb, .gltf) is smoothed into a glTF scene: give both or neither\n";
+  if (!gltf_out && IsGltfPath(o.input)) {
+    std::cerr
+        << "meshsmooth: a glTF scene (.glb, .gltf) is smoothed into a glTF scene: give -o FILE.glb or FILE.gltf\n";
     return kExitUsage;
   }
   absl::StatusOr<MeshFormat> out_format = gltf_out ? MeshFormat::kDraco : FormatFromPath(o.output);

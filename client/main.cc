@@ -87,7 +87,9 @@ void AddSmoothOptions(CLI::App* smooth, SmoothOptions& so) {
       ->required();
   smooth
       ->add_option("-o,--output", so.output,
-                   "output file; its extension picks the format. Texture coordinates (UV seams kept), colours and "
+                   "output file, its folder and format checked before the upload; its extension picks the format "
+                   "(.obj .ply .off .stl .drc, or .glb .gltf: a scene of one node, translated to a georeferenced "
+                   "mesh's local origin). Texture coordinates (UV seams kept), colours and "
                    "PLY vertex properties come back where the format holds them, normals recomputed from the "
                    "smoothed positions; an .obj keeps its mtllib/usemtl/g/o/s lines, each mtllib rewritten as the "
                    "path from the output's folder to the input's .mtl, so materials and textures (named in the .mtl, "

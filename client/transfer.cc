@@ -241,10 +241,17 @@ absl::Status WriteResult(Upload& upload, const std::string& result, const std::s
                          std::vector<std::string>* dropped, bool gltf_draco, const DracoOptions& draco) {
   std::vector<std::string> ignored;
   std::vector<std::string>& lost = dropped != nullptr ? *dropped : ignored;
-  if ((upload.gltf != nullptr) != IsGltfPath(output)) {
-    return absl::InvalidArgumentError(upload.gltf != nullptr
-                                          ? "a glTF scene is written as a scene: give -o FILE.glb or FILE.gltf"
-                                          : "glTF output needs a glTF input (.glb or .gltf)");
+  if (upload.gltf != nullptr && !IsGltfPath(output)) {
+    return absl::InvalidArgumentError("a glTF scene is written as a scene: give -o FILE.glb or FILE.gltf");
+  }
+  if (upload.gltf == nullptr && IsGltfPath(output)) {
+    // One node, translated by the origin, places the mesh (its float32 positions near zero).
+    if (!upload.kept.obj_directives.empty()) {
+      lost.push_back(absl::StrCat(upload.kept.obj_directives.size(),
+                                  " OBJ material and group lines (glTF output has no place for them)"));
+    }
+    if (ridges) lost.push_back("the ridge labels (a glTF scene has no place for them)");
+    return WriteMeshAsGltf(result, upload.origin, output, gltf_draco, &lost);
   }
   if (upload.gltf != nullptr) {
     absl::StatusOr<Mesh> decoded = DecodeDraco(result, nullptr, false);

@@ -11,8 +11,10 @@
 #include <optional>
 
 #include "absl/strings/str_cat.h"
+#include "absl/strings/str_join.h"
 #include "core/io/draco_checks.h"
 #include "core/io/gltf_texcoords.h"
+#include "draco/compression/decode.h"
 #include "draco/io/file_reader_factory.h"
 #include "draco/io/file_utils.h"
 #include "draco/io/file_writer_factory.h"
@@ -21,6 +23,7 @@
 #include "draco/io/stdio_file_reader.h"
 #include "draco/io/stdio_file_writer.h"
 #include "draco/scene/scene.h"
+#include "draco/scene/scene_utils.h"
 #include "draco/texture/texture_utils.h"
 
 // A sanitizer's hook (present in sanitized builds only): what runs when a sanitizer stops the
@@ -189,6 +192,47 @@ absl::StatusOr<GltfScene> GltfScene::Read(const std::string& path) {
   }
   if (s.triangles.empty()) return absl::InvalidArgumentError(absl::StrCat(path, ": the glTF scene has no triangles"));
   return GltfScene(std::move(impl));
+}
+
+absl::Status WriteMeshAsGltf(std::string_view draco, const Vec3& origin, const std::string& path, bool draco_compressed,
+                             std::vector<std::string>* dropped) {
+  draco::DecoderBuffer buffer;
+  buffer.Init(draco.data(), draco.size());
+  draco::Decoder decoder;
+  draco::StatusOr<std::unique_ptr<draco::Mesh>> mesh = decoder.DecodeMeshFromBuffer(&buffer);
+  if (!mesh.ok()) return absl::InvalidArgumentError(absl::StrCat("the result: ", mesh.status().error_msg()));
+  std::unique_ptr<draco::Mesh> m = std::move(mesh).value();
+  std::vector<std::string> names;
+  for (int a = m->num_attributes() - 1; a >= 0; --a) {
+    if (m->attribute(a)->attribute_type() != draco::GeometryAttribute::GENERIC) continue;
+    const draco::AttributeMetadata* meta = m->GetAttributeMetadataByAttributeId(a);
+    std::string name;
+    if (meta == nullptr || !meta->GetEntryString("name", &name)) name = absl::StrCat("attribute ", a);
+    names.insert(names.begin(), name);
+    m->DeleteAttribute(a);
+  }
+  if (!names.empty() && dropped != nullptr) {
+    dropped->push_back(absl::StrCat("vertex properties ", absl::StrJoin(names, ", "), " (glTF has no place for them)"));
+  }
+  draco::StatusOr<std::unique_ptr<draco::Scene>> made = draco::SceneUtils::MeshToScene(std::move(m));
+  if (!made.ok()) return absl::InternalError(absl::StrCat("writing ", path, ": ", made.status().error_msg()));
+  std::unique_ptr<draco::Scene> scene = std::move(made).value();
+  if (origin != Vec3{}) {
+    for (int n = 0; n < scene->NumRootNodes(); ++n) {
+      draco::TrsMatrix trs;
+      trs.SetTranslation(Eigen::Vector3d(origin.x, origin.y, origin.z));
+      scene->GetNode(scene->GetRootNodeIndex(n))->SetTrsMatrix(trs);
+    }
+  }
+  if (draco_compressed) {
+    draco::DracoCompressionOptions options;
+    options.quantization_position.SetQuantizationBits(16);
+    options.quantization_bits_tex_coord = 16;
+    options.quantization_bits_normal = 12;
+    draco::SceneUtils::SetDracoCompressionOptions(&options, scene.get());
+  }
+  UseDracoFileIo();
+  return WriteNamedAfter(*scene, SceneImages(*scene), path);
 }
 
 absl::StatusOr<GltfScene> GltfScene::ReadInChildFirst(const std::string& path, bool draco_compressed) {
