@@ -140,9 +140,12 @@ absl::Status ForEachV(GltfFile& f, const std::function<void(char* v)>& visit) {
           size = f.buffers[buffer].size();
         }
         if (count == 0) continue;
-        const uint64_t last = static_cast<uint64_t>(start) + static_cast<uint64_t>(count - 1) * stride + 8;
+        // Every product and sum below stays under 2^64: each term is below 2^63.
+        const uint64_t first_end = static_cast<uint64_t>(start) + 8;
         if (static_cast<uint64_t>(offset) + static_cast<uint64_t>(length) > size ||
-            last > static_cast<uint64_t>(length)) {
+            first_end > static_cast<uint64_t>(length) ||
+            static_cast<uint64_t>(count - 1) >
+                (static_cast<uint64_t>(length) - first_end) / static_cast<uint64_t>(stride)) {
           return Bad(f.path, "a texture coordinate accessor past its buffer");
         }
         for (int64_t i = 0; i < count; ++i) visit(data + offset + start + i * stride + 4);
