@@ -176,6 +176,21 @@ def replica_checks(a, check, tmp):
     finally:
         saturated.stop()
 
+    def busy_port_is_refused():
+        with Replica(server, "--workers", "1") as first:
+            # The port is taken: the second server must not start and share it.
+            r = run([server, "--listen", first.address, "--workers", "1"], timeout=30)
+            assert r.returncode != 0, (r.returncode, r.stdout, r.stderr)
+            assert "listening" not in r.stdout, r.stdout
+            assert "address in use" in r.stderr and first.address in r.stderr, r.stderr
+            # The first one serves on.
+            res = smooth(first.address, "--job-id", "after-busy-port")
+            assert res.returncode == 0, res.stderr
+            time.sleep(0.2)
+            assert first.jobs("OK") == ["after-busy-port"], first.jobs()
+    check("a second meshsmoothd on a port another one holds exits non-zero with 'address in use'; the first serves "
+          "on", busy_port_is_refused)
+
     def health_statuses(address, into):
         """Watches grpc.health.v1 (service "") on a thread: (time, status) pairs into `into`;
         1 SERVING, 2 NOT_SERVING. The messages are encoded by hand: one enum field, number 1."""
