@@ -106,6 +106,7 @@ absl::StatusOr<std::shared_ptr<grpc::Channel>> Connect(const ConnectionOptions& 
   if (options.server.empty()) {
     server::ServerOptions o;
     o.log_jobs = false;
+    o.log_refusals = false;  // the call's status tells the user
     o.workers = 1;
     absl::StatusOr<std::unique_ptr<server::Server>> s = server::Server::Start(o, /*listen=*/false);
     if (!s.ok()) return s.status();
