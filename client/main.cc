@@ -226,9 +226,11 @@ void AddConnectionOptions(CLI::App* app, ConnectionOptions& c) {
       ->capture_default_str();
   app->add_option(
          "--retries", c.retries,
-         "retries of a call refused with UNAVAILABLE or RESOURCE_EXHAUSTED before any result arrived, "
-         "after a random wait of up to 0.2 s, 0.4 s, ... 5 s (a job is a pure function of its input, "
-         "so a retry is safe); 0 = none. Without --server (the in-process server) there is no network to retry over")
+         "retries of a call refused with UNAVAILABLE, or with RESOURCE_EXHAUSTED for the server's capacity (a "
+         "full queue or memory budget; never a limit the mesh exceeds, such as --max-vertices), before any "
+         "result arrived, after a random wait of up to 0.2 s, 0.4 s, ... 5 s (a job is a pure function of its "
+         "input, so a retry is safe); 0 = none. Without --server (the in-process server) there is no network to "
+         "retry over")
       ->capture_default_str()
       ->check(CLI::Range(0, 100));
 }

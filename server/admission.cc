@@ -53,9 +53,9 @@ void BudgetHold::Release() {
 std::optional<Refused> UploadBuffer::Append(std::string_view chunk) {
   const size_t size = bytes_.size() + chunk.size();
   if (static_cast<int64_t>(size) > max_bytes_) {
-    return Refused{Refusal::kUploadTooLarge,
-                   grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
-                                absl::StrCat("the upload exceeds this server's limit of ", max_bytes_, " bytes"))};
+    return Refused{Refusal::kUploadTooLarge, grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
+                                                          absl::StrCat("the upload exceeds this server's limit of ",
+                                                                       max_bytes_, " bytes (--max-upload-bytes)"))};
   }
   const size_t capacity = static_cast<size_t>(hold_.bytes());
   if (size > capacity) {
@@ -75,6 +75,18 @@ std::optional<Refused> UploadBuffer::Append(std::string_view chunk) {
   bytes_.append(chunk);
   metrics_.UploadReceived(static_cast<int64_t>(chunk.size()));
   return std::nullopt;
+}
+
+bool IsTransient(Refusal reason) {
+  switch (reason) {
+    case Refusal::kQueueFull:
+    case Refusal::kQueueWait:
+    case Refusal::kMemoryBudget:
+    case Refusal::kTooManyCalls:
+      return true;
+    default:
+      return false;
+  }
 }
 
 int64_t DefaultBufferedBytes(const std::string& meminfo_path) {

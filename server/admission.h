@@ -38,6 +38,18 @@ struct Refused {
   grpc::Status status;
 };
 
+// True for a refusal that is the server's capacity at the moment (a full queue, too many open
+// calls, the memory budget, the queue wait): a retry later or on another replica can succeed.
+// False for every other one, and a RESOURCE_EXHAUSTED of any other origin (a limit the request
+// exceeds: --max-upload-bytes, --max-vertices, the chunk size, quadratic work) fails again.
+bool IsTransient(Refusal reason);
+
+// Trailing metadata of every RESOURCE_EXHAUSTED a Smooth call ends with, which smoothing.proto
+// documents for clients: kExhaustedTransient when IsTransient() holds, else kExhaustedPermanent.
+inline constexpr char kExhaustedKey[] = "meshsmooth-exhausted";
+inline constexpr char kExhaustedTransient[] = "transient";
+inline constexpr char kExhaustedPermanent[] = "permanent";
+
 class MemoryBudget {
  public:
   explicit MemoryBudget(int64_t limit) : limit_(limit) {}

@@ -208,7 +208,7 @@ void SmoothJob::Run() {
     report.decode_seconds = Seconds(start, Clock::now());
     return Fail(report, absl::ResourceExhaustedError(absl::StrCat("the mesh has ", mesh.num_vertices(),
                                                                   " vertices, above this server's limit of ",
-                                                                  options_.max_vertices)));
+                                                                  options_.max_vertices, " (--max-vertices)")));
   }
   // An output the encoder would refuse is refused before the smoothing it would waste.
   if (absl::Status s = draco->CheckEncodable(params_.output); !s.ok()) {

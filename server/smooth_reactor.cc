@@ -29,7 +29,8 @@ class SmoothReactor final : public grpc::ServerBidiReactor<v1::SmoothRequest, v1
   // whose spec brings no id.
   SmoothReactor(const grpc::Status& authenticated, grpc::CallbackServerContext* context, Admission& admission,
                 WorkerPool& pool, const ServerOptions& options, std::function<std::string()> new_job_id)
-      : peer_(context->peer()),
+      : context_(context),
+        peer_(context->peer()),
         admission_(admission),
         pool_(pool),
         options_(options),
@@ -58,7 +59,7 @@ class SmoothReactor final : public grpc::ServerBidiReactor<v1::SmoothRequest, v1
     return job_ != nullptr && job_->started();
   }
   // Ends the call with `status` as soon as no write is in flight (pending events are dropped).
-  void Abort(const grpc::Status& status) override { End(status); }
+  void Abort(const grpc::Status& status) override { End(status, /*transient=*/false); }
 
   void Refuse(const Refused& refused) override {
     admission_.metrics().Refused(refused.reason);
@@ -70,7 +71,7 @@ class SmoothReactor final : public grpc::ServerBidiReactor<v1::SmoothRequest, v1
     if (options_.log_refusals) {
       LogRefusal(options_.log_format, {"Smooth", RefusalName(refused.reason), refused.status, peer_, job_id});
     }
-    End(refused.status);
+    End(refused.status, IsTransient(refused.reason));
   }
 
   void OnReadDone(bool ok) override {
@@ -188,13 +189,17 @@ class SmoothReactor final : public grpc::ServerBidiReactor<v1::SmoothRequest, v1
     return {Refusal::kInvalidRequest, grpc::Status(grpc::StatusCode::INVALID_ARGUMENT, message)};
   }
 
-  // Ends the call with `status` as soon as no write is in flight (pending events are dropped).
-  void End(const grpc::Status& status) {
+  // Ends the call with `status` as soon as no write is in flight (pending events are dropped);
+  // `transient`: a RESOURCE_EXHAUSTED that is the server's capacity (IsTransient).
+  void End(const grpc::Status& status, bool transient) {
     uploading_.store(false);
     std::shared_ptr<SmoothJob> job;
     {
       std::lock_guard<std::mutex> lock(mu_);
-      if (!finish_status_) finish_status_ = status;
+      if (!finish_status_) {
+        finish_status_ = status;
+        transient_ = transient;
+      }
       cancelled_ = true;
       job = job_;
     }
@@ -261,6 +266,10 @@ class SmoothReactor final : public grpc::ServerBidiReactor<v1::SmoothRequest, v1
     }
     if (finish) {
       finished_ = true;
+      // Whether a retry can help (smoothing.proto): only a refusal for the server's capacity.
+      if (finish->error_code() == grpc::StatusCode::RESOURCE_EXHAUSTED) {
+        context_->AddTrailingMetadata(kExhaustedKey, transient_ ? kExhaustedTransient : kExhaustedPermanent);
+      }
       lock.unlock();
       Finish(*finish);
       return;
@@ -270,6 +279,7 @@ class SmoothReactor final : public grpc::ServerBidiReactor<v1::SmoothRequest, v1
     StartWrite(&out_);
   }
 
+  grpc::CallbackServerContext* const context_;
   const std::string peer_;
   Admission& admission_;
   WorkerPool& pool_;
@@ -295,7 +305,8 @@ class SmoothReactor final : public grpc::ServerBidiReactor<v1::SmoothRequest, v1
   std::optional<v1::Summary> summary_;
   bool have_result_ = false;
   std::optional<grpc::Status> finish_status_;
-  std::string job_id_;  // once known: the spec's, or the one the server gave the job
+  bool transient_ = false;  // finish_status_ is a refusal for the server's capacity
+  std::string job_id_;      // once known: the spec's, or the one the server gave the job
   bool write_in_flight_ = false;
   bool finished_ = false;
   bool cancelled_ = false;

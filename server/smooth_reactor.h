@@ -15,8 +15,8 @@
 
 namespace meshsmooth::server {
 
-// A new Smooth call's reactor on `context` (the client's address, for the log); it deletes
-// itself when gRPC is done with the call.
+// A new Smooth call's reactor on `context` (the client's address, for the log; the trailing
+// metadata of a RESOURCE_EXHAUSTED); it deletes itself when gRPC is done with the call.
 // `authenticated`: OK, or the status the call ends with at once (a refusal, logged and
 // counted). `new_job_id` names a job whose spec brings no id. The references must outlive every
 // call (the service owns them); events go to admission.metrics(), refusals to the log too.

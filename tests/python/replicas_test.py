@@ -191,6 +191,22 @@ def replica_checks(a, check, tmp):
     check("a second meshsmoothd on a port another one holds exits non-zero with 'address in use'; the first serves "
           "on", busy_port_is_refused)
 
+    def limits_the_mesh_exceeds_are_not_retried():
+        # builtin:noisy-sphere has 2562 vertices and uploads some 60 KB.
+        for flag, value in (("--max-vertices", "1000"), ("--max-upload-bytes", "10000")):
+            with Replica(server, "--workers", "1", flag, value) as rep:
+                job_id = f"too-big{flag}"
+                r = smooth(rep.address, "--retries", "4", "--job-id", job_id)
+                assert r.returncode == 1, (flag, r.returncode, r.stderr)
+                assert "retrying" not in r.stderr and "attempt" not in r.stderr, (flag, r.stderr)
+                assert "RESOURCE_EXHAUSTED" in r.stderr and flag in r.stderr, (flag, r.stderr)
+                time.sleep(0.2)
+                # One call reached the server: one log line names the job.
+                named = [line for line in rep.stderr_lines() if job_id in line]
+                assert len(named) == 1, (flag, named)
+    check("a mesh above --max-vertices or --max-upload-bytes: one upload, exit 1, the message names the limit",
+          limits_the_mesh_exceeds_are_not_retried)
+
     def health_statuses(address, into):
         """Watches grpc.health.v1 (service "") on a thread: (time, status) pairs into `into`;
         1 SERVING, 2 NOT_SERVING. The messages are encoded by hand: one enum field, number 1."""

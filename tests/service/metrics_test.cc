@@ -9,6 +9,7 @@
 #include <string>
 
 #include "gtest/gtest.h"
+#include "server/admission.h"
 #include "server/log.h"
 #include "server/metrics.h"
 
@@ -67,6 +68,14 @@ TEST(RefusalNames, EveryReasonHasItsOwnLabel) {
   EXPECT_EQ(names.size(), static_cast<size_t>(kRefusalCount));
   EXPECT_EQ(names.count("unknown"), 0u);
   EXPECT_EQ(RefusalName(Refusal::kQueueFull), "queue_full");
+}
+
+TEST(RefusalNames, OnlyTheServersCapacityIsTransient) {
+  std::set<std::string> transient;
+  for (int i = 0; i < kRefusalCount; ++i) {
+    if (IsTransient(static_cast<Refusal>(i))) transient.insert(std::string(RefusalName(static_cast<Refusal>(i))));
+  }
+  EXPECT_EQ(transient, (std::set<std::string>{"queue_full", "queue_wait", "memory_budget", "too_many_calls"}));
 }
 
 // A refused call's log entry: method, reason, status, peer, the job id once known, the error.
