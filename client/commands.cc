@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <functional>
 #include <iostream>
+#include <limits>
 #include <map>
 #include <memory>
 #include <string>
@@ -26,6 +27,7 @@
 #include "core/render/png.h"
 #include "core/render/render.h"
 #include "core/topology.h"
+#include "server/convert.h"
 
 namespace meshsmooth::client {
 namespace {
@@ -78,6 +80,12 @@ v1::JobSpec SpecFrom(const SmoothOptions& o) {
 }
 
 }  // namespace
+
+absl::Status CheckSmoothOptions(const SmoothOptions& options) {
+  v1::JobSpec spec = SpecFrom(options);
+  spec.clear_job_id();
+  return server::FromProto(spec, std::numeric_limits<int>::max()).status();
+}
 
 int RunSmooth(const SmoothOptions& o, const ConnectionOptions& c) {
   const bool gltf_out = IsGltfPath(o.output);
@@ -137,7 +145,8 @@ int RunSmooth(const SmoothOptions& o, const ConnectionOptions& c) {
     return kExitInterrupted;
   }
   if (!outcome.ok()) {
-    return Fail(std::string(absl::StatusCodeToString(outcome.status().code())) + ": ", outcome.status());
+    return Fail(std::string(absl::StatusCodeToString(outcome.status().code())) + ": ",
+                WithConnectionHint(outcome.status(), c));
   }
   std::vector<std::string> dropped = upload->dropped;
   DracoOptions draco;
@@ -179,10 +188,7 @@ int RunFlows(const ConnectionOptions& c, bool json) {
   }
   v1::ListFlowsResponse flows;
   const grpc::Status s = stub->ListFlows(&ctx, v1::ListFlowsRequest(), &flows);
-  if (!s.ok()) {
-    std::cerr << "meshsmooth: " << s.error_message() << "\n";
-    return ExitCodeFor(FromGrpc(s));
-  }
+  if (!s.ok()) return Fail("", WithConnectionHint(FromGrpc(s), c));
   if (json) {
     std::printf("%s", ToJson(flows).c_str());
   } else {

@@ -4,6 +4,7 @@
 
 #include <string>
 
+#include "absl/status/status.h"
 #include "client/connection.h"
 
 namespace meshsmooth::client {
@@ -43,6 +44,11 @@ struct SmoothOptions {
 struct RenderCommand {
   std::string input = "builtin:noisy-sphere", output, view = "30,20", size = "800x800", shading = "gouraud";
 };
+
+// The flow and output options of `meshsmooth smooth` checked as the server checks a JobSpec
+// (server::FromProto), but for the iteration limit and the job id, which are the server's to
+// judge: InvalidArgument naming the parameter, before any file is read.
+absl::Status CheckSmoothOptions(const SmoothOptions& options);
 
 // Smooths a mesh through the service and writes the result; prints the summary.
 int RunSmooth(const SmoothOptions& options, const ConnectionOptions& connection);

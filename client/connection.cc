@@ -8,6 +8,8 @@
 #include <string_view>
 #include <vector>
 
+#include "absl/strings/ascii.h"
+#include "absl/strings/match.h"
 #include "absl/strings/numbers.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_join.h"
@@ -106,6 +108,7 @@ absl::StatusOr<std::shared_ptr<grpc::Channel>> Connect(const ConnectionOptions& 
   if (options.server.empty()) {
     server::ServerOptions o;
     o.log_jobs = false;
+    o.log_refusals = false;  // the call's status tells the user
     o.workers = 1;
     absl::StatusOr<std::unique_ptr<server::Server>> s = server::Server::Start(o, /*listen=*/false);
     if (!s.ok()) return s.status();
@@ -133,6 +136,18 @@ absl::StatusOr<std::shared_ptr<grpc::Channel>> Connect(const ConnectionOptions& 
 std::chrono::system_clock::time_point CallDeadline(const ConnectionOptions& options) {
   return std::chrono::system_clock::now() +
          std::chrono::milliseconds(static_cast<int64_t>(options.timeout_seconds * 1000));
+}
+
+absl::Status WithConnectionHint(const absl::Status& status, const ConnectionOptions& options) {
+  if (status.code() != absl::StatusCode::kUnavailable || options.server.empty()) return status;
+  const char* hint = nullptr;
+  if (options.tls_ca.empty() && absl::StrContains(status.message(), "Socket closed")) {
+    hint = "the server may require TLS: --tls-ca FILE";
+  } else if (!options.tls_ca.empty() && absl::StrContains(absl::AsciiStrToLower(status.message()), "handshake")) {
+    hint = "the server may not use TLS: leave out --tls-ca";
+  }
+  if (hint == nullptr) return status;
+  return absl::Status(status.code(), absl::StrCat(status.message(), " (", hint, ")"));
 }
 
 absl::Status PrepareContext(const ConnectionOptions& options, grpc::ClientContext& context,

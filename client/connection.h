@@ -50,6 +50,11 @@ absl::StatusOr<std::shared_ptr<grpc::Channel>> Connect(const ConnectionOptions& 
 // The deadline of a call made now: `options.timeout_seconds` ahead. Retries share it.
 std::chrono::system_clock::time_point CallDeadline(const ConnectionOptions& options);
 
+// `status` of a failed call to `options.server`, with a hint when it looks like one side speaks
+// TLS and the other does not: a server that closes the connection at once ("Socket closed")
+// when no --tls-ca was given, a failed TLS handshake when one was. Anything else unchanged.
+absl::Status WithConnectionHint(const absl::Status& status, const ConnectionOptions& options);
+
 // Sets the call's deadline and, with a token file, its "authorization: Bearer" metadata.
 // InvalidArgument when the token file cannot be read or is blank.
 absl::Status PrepareContext(const ConnectionOptions& options, grpc::ClientContext& context,

@@ -16,6 +16,8 @@
 // could not be reached; 130 interrupted (Ctrl-C cancels the job on the server).
 #include <algorithm>
 #include <cstdint>
+#include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <map>
 #include <string>
@@ -24,6 +26,8 @@
 #include <vector>
 
 #include "CLI/CLI.hpp"
+#include "absl/strings/match.h"
+#include "absl/strings/numbers.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_join.h"
@@ -31,12 +35,55 @@
 #include "base/shutdown_signals.h"
 #include "client/commands.h"
 #include "client/inputs.h"
+#include "client/transfer.h"
 #include "core/flows/catalogue.h"
 #include "core/flows/flow.h"
 #include "core/io/draco_codec.h"
+#include "core/io/mesh_io.h"
+#include "grpc/support/log.h"
 
 namespace meshsmooth::client {
 namespace {
+
+// gRPC's own log lines (a failed TLS handshake, say) are not for the CLI's user: the call's
+// status says what failed, with a hint (WithConnectionHint). GRPC_VERBOSITY brings them back.
+void DiscardGrpcLog(gpr_log_func_args*) {}
+
+// An input that names a built-in shape must name one that exists.
+CLI::Validator KnownInput() {
+  return CLI::Validator(
+      [](std::string& input) -> std::string {
+        if (!absl::StartsWith(input, "builtin:")) return "";
+        std::vector<std::string> names;
+        for (const auto& [name, what] : BuiltinInputs()) {
+          if (input == "builtin:" + name) return "";
+          names.push_back("builtin:" + name);
+        }
+        return absl::StrCat("unknown built-in input '", input, "' (known: ", absl::StrJoin(names, ", "), ")");
+      },
+      "", "builtin");
+}
+
+// The output's extension must name a format the CLI writes.
+CLI::Validator KnownOutputFormat() {
+  return CLI::Validator(
+      [](std::string& output) -> std::string {
+        if (IsGltfPath(output) || FormatFromPath(output).ok()) return "";
+        return absl::StrCat("'", output, "': unknown output format (use .obj, .ply, .off, .stl, .drc, .glb or .gltf)");
+      },
+      "", "format");
+}
+
+// --timeout: a number of seconds above 0 (a deadline in the past fails every call).
+CLI::Validator PositiveSeconds() {
+  return CLI::Validator(
+      [](std::string& value) -> std::string {
+        double seconds = 0.0;
+        if (absl::SimpleAtod(value, &seconds) && seconds > 0.0 && seconds <= 1e9) return "";
+        return absl::StrCat("must be a number of seconds above 0 (at most 1e9), got '", value, "'");
+      },
+      "SECONDS > 0", "seconds");
+}
 
 // "laplacian/taubin": the flows that take the JobSpec parameter `name`.
 std::string FlowsTaking(const std::vector<FlowInfo>& flows, std::string_view name) {
@@ -84,7 +131,8 @@ void AddSmoothOptions(CLI::App* smooth, SmoothOptions& so) {
       ->add_option("input", so.input,
                    "mesh file (.obj .ply .off .stl .drc), glTF scene (.glb .gltf: every triangle primitive smoothed, "
                    "the rest of the scene kept; the output must be a scene too) or builtin:NAME")
-      ->required();
+      ->required()
+      ->check(KnownInput());
   smooth
       ->add_option("-o,--output", so.output,
                    "output file, its folder and format checked before the upload; its extension picks the format "
@@ -95,7 +143,8 @@ void AddSmoothOptions(CLI::App* smooth, SmoothOptions& so) {
                    "path from the output's folder to the input's .mtl, so materials and textures (named in the .mtl, "
                    "relative to it) resolve without copying. Whatever the output cannot hold is named in one "
                    "'not kept' warning and in the --json warnings")
-      ->required();
+      ->required()
+      ->check(KnownOutputFormat());
   std::vector<std::string> flow_choices = FlowNames();
   flow_choices.insert(flow_choices.begin(), "auto");
   smooth
@@ -222,15 +271,19 @@ void AddConnectionOptions(CLI::App* app, ConnectionOptions& c) {
         absl::StatusOr<std::string> target = ChannelTarget(s);
         return target.ok() ? std::string() : std::string(target.status().message());
       });
-  app->add_option("--token-file", c.token_file, "file with the bearer token the server expects");
-  app->add_option("--tls-ca", c.tls_ca, "PEM CA certificates: connect with TLS");
-  app->add_option("--timeout", c.timeout_seconds, "deadline of the call, seconds, retries included")
-      ->capture_default_str();
+  app->add_option("--token-file", c.token_file, "file with the bearer token the server expects")
+      ->check(CLI::ExistingFile);
+  app->add_option("--tls-ca", c.tls_ca, "PEM CA certificates: connect with TLS")->check(CLI::ExistingFile);
+  app->add_option("--timeout", c.timeout_seconds, "deadline of the call, seconds above 0, retries included")
+      ->capture_default_str()
+      ->check(PositiveSeconds());
   app->add_option(
          "--retries", c.retries,
-         "retries of a call refused with UNAVAILABLE or RESOURCE_EXHAUSTED before any result arrived, "
-         "after a random wait of up to 0.2 s, 0.4 s, ... 5 s (a job is a pure function of its input, "
-         "so a retry is safe); 0 = none. Without --server (the in-process server) there is no network to retry over")
+         "retries of a call refused with UNAVAILABLE, or with RESOURCE_EXHAUSTED for the server's capacity (a "
+         "full queue or memory budget; never a limit the mesh exceeds, such as --max-vertices), before any "
+         "result arrived, after a random wait of up to 0.2 s, 0.4 s, ... 5 s (a job is a pure function of its "
+         "input, so a retry is safe); 0 = none. Without --server (the in-process server) there is no network to "
+         "retry over")
       ->capture_default_str()
       ->check(CLI::Range(0, 100));
 }
@@ -254,6 +307,7 @@ int main(int argc, char** argv) {
   using namespace meshsmooth::client;
   // Before any thread exists: Ctrl-C is handled by InterruptWatcher, not by a handler.
   meshsmooth::BlockShutdownSignals();
+  if (std::getenv("GRPC_VERBOSITY") == nullptr) gpr_set_log_function(DiscardGrpcLog);
 
   CLI::App app{"meshsmooth: smooth noisy triangle meshes while making them more regular"};
   app.require_subcommand(1);
@@ -278,13 +332,15 @@ int main(int argc, char** argv) {
 
   std::string info_input = "builtin:noisy-sphere";
   CLI::App* info = app.add_subcommand("info", "Print a mesh's validation report and metrics (locally)");
-  info->add_option("input", info_input, "mesh file (.obj .ply .off .stl .drc) or builtin:NAME")->capture_default_str();
+  info->add_option("input", info_input, "mesh file (.obj .ply .off .stl .drc) or builtin:NAME")
+      ->capture_default_str()
+      ->check(KnownInput());
 
   std::string ridges_input, ridges_output;
   std::string ridges_threshold = "auto";
   CLI::App* ridges = app.add_subcommand(
       "ridges", "Detect ridge (black) and ravine (white) vertices of a mesh as it is, locally, into a PLY");
-  ridges->add_option("input", ridges_input, "mesh file or builtin:NAME")->required();
+  ridges->add_option("input", ridges_input, "mesh file or builtin:NAME")->required()->check(KnownInput());
   ridges->add_option("-o,--output", ridges_output, "output .ply (labels as vertex colours)")->required();
   ridges
       ->add_option("--threshold", ridges_threshold,
@@ -295,7 +351,7 @@ int main(int argc, char** argv) {
 
   RenderCommand rc;
   CLI::App* render = app.add_subcommand("render", "Render a mesh to a PNG picture (locally; vertex colours shown)");
-  render->add_option("input", rc.input, "mesh file or builtin:NAME")->capture_default_str();
+  render->add_option("input", rc.input, "mesh file or builtin:NAME")->capture_default_str()->check(KnownInput());
   render->add_option("-o,--output", rc.output, "output .png")->required();
   render
       ->add_option("--view", rc.view,
@@ -310,6 +366,12 @@ int main(int argc, char** argv) {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : kExitUsage;
+  }
+  if (smooth->parsed()) {
+    if (absl::Status s = CheckSmoothOptions(so); !s.ok()) {
+      std::fprintf(stderr, "meshsmooth: %s\n", std::string(s.message()).c_str());
+      return kExitUsage;
+    }
   }
   // Still no thread: the huge-page re-exec (base/huge_pages.h) where the input is large enough
   // to repay a second start of the program.

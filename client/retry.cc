@@ -6,8 +6,8 @@
 namespace meshsmooth::client {
 
 bool Retryable(const absl::Status& status, const CallState& state) {
-  const bool code =
-      status.code() == absl::StatusCode::kUnavailable || status.code() == absl::StatusCode::kResourceExhausted;
+  const bool code = status.code() == absl::StatusCode::kUnavailable ||
+                    (status.code() == absl::StatusCode::kResourceExhausted && state.transient_exhaustion);
   return code && !state.result_started;
 }
 

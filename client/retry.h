@@ -25,8 +25,10 @@ struct RetryPolicy {
   double backoff_multiplier = 2.0;
 };
 
-// True for a failed attempt worth another: UNAVAILABLE or RESOURCE_EXHAUSTED, before any
-// result byte arrived (later the client would have to merge two outputs).
+// True for a failed attempt worth another: UNAVAILABLE, or a RESOURCE_EXHAUSTED the server
+// marked transient (a full queue, the memory budget: state.transient_exhaustion), before any
+// result byte arrived (later the client would have to merge two outputs). Never a limit the
+// request exceeds (--max-vertices, --max-upload-bytes): that fails again.
 bool Retryable(const absl::Status& status, const CallState& state);
 
 // The wait before retry number `retry` (1, 2, ...): uniform in [0, min(max_backoff,

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include "server/admission.h"
+
 namespace meshsmooth::client {
 
 absl::Status FromGrpc(const grpc::Status& status) {
@@ -61,6 +63,11 @@ absl::StatusOr<SmoothOutcome> CallSmooth(v1::MeshSmoother::StubInterface& stub, 
     }
   }
   const grpc::Status status = stream->Finish();
+  if (status.error_code() == grpc::StatusCode::RESOURCE_EXHAUSTED) {
+    const auto& trailers = context.GetServerTrailingMetadata();
+    const auto it = trailers.find(server::kExhaustedKey);
+    state->transient_exhaustion = it != trailers.end() && it->second == server::kExhaustedTransient;
+  }
   if (!status.ok()) return FromGrpc(status);
   if (!order_ok || stage != kSummary) {
     return absl::InternalError("the server broke the response order (accepted, progress, result, summary)");

@@ -22,6 +22,10 @@ struct SmoothOutcome {
 struct CallState {
   bool accepted = false;        // Accepted arrived: a worker took the job
   bool result_started = false;  // at least one result chunk arrived
+  // The call ended with RESOURCE_EXHAUSTED and the server said it is transient (its capacity:
+  // trailing metadata "meshsmooth-exhausted: transient", smoothing.proto), not a limit the
+  // request exceeds.
+  bool transient_exhaustion = false;
 };
 
 // Runs one Smooth call on `context` (set its deadline and metadata before; TryCancel() on it

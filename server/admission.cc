@@ -50,21 +50,22 @@ void BudgetHold::Release() {
   bytes_ = 0;
 }
 
-absl::Status UploadBuffer::Append(std::string_view chunk) {
+std::optional<Refused> UploadBuffer::Append(std::string_view chunk) {
   const size_t size = bytes_.size() + chunk.size();
   if (static_cast<int64_t>(size) > max_bytes_) {
-    metrics_.Refused(Refusal::kUploadTooLarge);
-    return absl::ResourceExhaustedError(
-        absl::StrCat("the upload exceeds this server's limit of ", max_bytes_, " bytes"));
+    return Refused{Refusal::kUploadTooLarge, grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
+                                                          absl::StrCat("the upload exceeds this server's limit of ",
+                                                                       max_bytes_, " bytes (--max-upload-bytes)"))};
   }
   const size_t capacity = static_cast<size_t>(hold_.bytes());
   if (size > capacity) {
     const size_t grown = std::min(std::max(size, 2 * capacity), static_cast<size_t>(max_bytes_));
     if (!hold_.TryGrow(static_cast<int64_t>(grown - capacity))) {
-      metrics_.Refused(Refusal::kMemoryBudget);
-      return absl::ResourceExhaustedError(
-          absl::StrCat("this server's memory budget for uploads and queued jobs is full (", budget_->held(), " of ",
-                       budget_->limit(), " bytes held; --max-buffered-bytes); retry later"));
+      return Refused{Refusal::kMemoryBudget,
+                     grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
+                                  absl::StrCat("this server's memory budget for uploads and queued jobs is full (",
+                                               budget_->held(), " of ", budget_->limit(),
+                                               " bytes held; --max-buffered-bytes); retry later"))};
     }
     std::string bigger;
     bigger.reserve(grown);  // from empty: exactly `grown` (growing in place could double it)
@@ -73,7 +74,19 @@ absl::Status UploadBuffer::Append(std::string_view chunk) {
   }
   bytes_.append(chunk);
   metrics_.UploadReceived(static_cast<int64_t>(chunk.size()));
-  return absl::OkStatus();
+  return std::nullopt;
+}
+
+bool IsTransient(Refusal reason) {
+  switch (reason) {
+    case Refusal::kQueueFull:
+    case Refusal::kQueueWait:
+    case Refusal::kMemoryBudget:
+    case Refusal::kTooManyCalls:
+      return true;
+    default:
+      return false;
+  }
 }
 
 int64_t DefaultBufferedBytes(const std::string& meminfo_path) {
@@ -100,9 +113,10 @@ Admission::Clock::duration Limit(double seconds) {
 }
 
 // For a job that has not started when the server begins to shut down: safe to send again.
-grpc::Status ShuttingDown() {
-  return grpc::Status(grpc::StatusCode::UNAVAILABLE,
-                      "meshsmoothd is shutting down; the job did not start: send it to another replica");
+Refused ShuttingDown() {
+  return {Refusal::kShuttingDown,
+          grpc::Status(grpc::StatusCode::UNAVAILABLE,
+                       "meshsmoothd is shutting down; the job did not start: send it to another replica")};
 }
 
 }  // namespace
@@ -118,24 +132,21 @@ Admission::Admission(const ServerOptions& options, ServiceMetrics& metrics)
 
 Admission::~Admission() { StopReaper(); }
 
-grpc::Status Admission::Open(AdmittedCall* call) {
+std::optional<Refused> Admission::Open(AdmittedCall* call) {
   size_t open = 0;
   {
     std::lock_guard<std::mutex> lock(mu_);
     calls_.insert(call);
     open = calls_.size();
   }
-  if (draining_.load()) {
-    metrics_.Refused(Refusal::kShuttingDown);
-    return ShuttingDown();
-  }
+  if (draining_.load()) return ShuttingDown();
   if (static_cast<int64_t>(open) > options_.max_concurrent_streams) {
-    metrics_.Refused(Refusal::kTooManyCalls);
-    return grpc::Status(
-        grpc::StatusCode::RESOURCE_EXHAUSTED,
-        absl::StrCat("too many concurrent Smooth calls (limit ", options_.max_concurrent_streams, "); retry later"));
+    return Refused{Refusal::kTooManyCalls,
+                   grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
+                                absl::StrCat("too many concurrent Smooth calls (limit ",
+                                             options_.max_concurrent_streams, "); retry later"))};
   }
-  return grpc::Status::OK;
+  return std::nullopt;
 }
 
 void Admission::Close(AdmittedCall* call) {
@@ -143,23 +154,22 @@ void Admission::Close(AdmittedCall* call) {
   calls_.erase(call);
 }
 
-grpc::Status Admission::CheckNotDraining() const {
-  if (!draining_.load()) return grpc::Status::OK;
-  metrics_.Refused(Refusal::kShuttingDown);
+std::optional<Refused> Admission::CheckNotDraining() const {
+  if (!draining_.load()) return std::nullopt;
   return ShuttingDown();
 }
 
-grpc::Status Admission::QueueFull() const {
-  metrics_.Refused(Refusal::kQueueFull);
-  return grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
-                      absl::StrCat("the job queue is full (", options_.queue_depth, " jobs waiting); retry later"));
+Refused Admission::QueueFull() const {
+  return {Refusal::kQueueFull,
+          grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
+                       absl::StrCat("the job queue is full (", options_.queue_depth, " jobs waiting); retry later"))};
 }
 
-grpc::Status Admission::ChunkTooLarge(int64_t bytes) const {
-  metrics_.Refused(Refusal::kChunkTooLarge);
-  return grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
-                      absl::StrCat("a mesh chunk of ", bytes, " bytes is above this server's limit of ", kMaxChunkBytes,
-                                   " bytes per chunk"));
+Refused Admission::ChunkTooLarge(int64_t bytes) const {
+  return {Refusal::kChunkTooLarge,
+          grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
+                       absl::StrCat("a mesh chunk of ", bytes, " bytes is above this server's limit of ",
+                                    kMaxChunkBytes, " bytes per chunk"))};
 }
 
 int Admission::Drain(Clock::time_point deadline) {
@@ -169,10 +179,7 @@ int Admission::Drain(Clock::time_point deadline) {
   {
     std::lock_guard<std::mutex> lock(mu_);
     for (AdmittedCall* c : calls_) {
-      if (!c->Running()) {
-        metrics_.Refused(Refusal::kShuttingDown);
-        c->Abort(ShuttingDown());
-      }
+      if (!c->Running()) c->Refuse(ShuttingDown());
     }
   }
   for (;;) {
@@ -200,27 +207,27 @@ void Admission::Reap() {
   if (idle > Clock::duration::zero()) shortest = std::min(shortest, idle);
   if (queue_wait > Clock::duration::zero()) shortest = std::min(shortest, queue_wait);
   const auto period = std::clamp<Clock::duration>(shortest / 4, std::chrono::milliseconds(10), std::chrono::seconds(1));
-  const grpc::Status idle_status(
-      grpc::StatusCode::DEADLINE_EXCEEDED,
-      absl::StrFormat("no message for %g s: this server ends uploads that stop sending (--upload-idle-seconds); "
-                      "send the spec, the whole mesh, then half-close",
-                      options_.upload_idle_seconds));
-  const grpc::Status queue_status(
-      grpc::StatusCode::RESOURCE_EXHAUSTED,
-      absl::StrFormat("the job waited %g s for a worker without getting one (--max-queue-wait); this replica is "
-                      "saturated: retry later or on another replica",
-                      options_.max_queue_wait_seconds));
+  const Refused idle_refusal{
+      Refusal::kUploadIdle,
+      grpc::Status(grpc::StatusCode::DEADLINE_EXCEEDED,
+                   absl::StrFormat("no message for %g s: this server ends uploads that stop sending "
+                                   "(--upload-idle-seconds); send the spec, the whole mesh, then half-close",
+                                   options_.upload_idle_seconds))};
+  const Refused wait_refusal{
+      Refusal::kQueueWait,
+      grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
+                   absl::StrFormat("the job waited %g s for a worker without getting one (--max-queue-wait); this "
+                                   "replica is saturated: retry later or on another replica",
+                                   options_.max_queue_wait_seconds))};
   std::unique_lock<std::mutex> lock(mu_);
   while (!reaper_stop_) {
     reaper_cv_.wait_for(lock, period);
     const Clock::time_point now = Clock::now();
     for (AdmittedCall* c : calls_) {  // a call is deleted only after Close
       if (idle > Clock::duration::zero() && c->IdleSince(now - idle)) {
-        metrics_.Refused(Refusal::kUploadIdle);
-        c->Abort(idle_status);
+        c->Refuse(idle_refusal);
       } else if (queue_wait > Clock::duration::zero() && c->QueuedSince(now - queue_wait)) {
-        metrics_.Refused(Refusal::kQueueWait);
-        c->Abort(queue_status);
+        c->Refuse(wait_refusal);
       }
     }
   }

@@ -17,6 +17,7 @@
 #include <condition_variable>
 #include <cstdint>
 #include <mutex>
+#include <optional>
 #include <set>
 #include <string>
 #include <string_view>
@@ -29,6 +30,25 @@
 #include "server/options.h"
 
 namespace meshsmooth::server {
+
+// A call the server refuses: why (the metrics' `reason` label and the log's) and the status it
+// ends with.
+struct Refused {
+  Refusal reason;
+  grpc::Status status;
+};
+
+// True for a refusal that is the server's capacity at the moment (a full queue, too many open
+// calls, the memory budget, the queue wait): a retry later or on another replica can succeed.
+// False for every other one, and a RESOURCE_EXHAUSTED of any other origin (a limit the request
+// exceeds: --max-upload-bytes, --max-vertices, the chunk size, quadratic work) fails again.
+bool IsTransient(Refusal reason);
+
+// Trailing metadata of every RESOURCE_EXHAUSTED a Smooth call ends with, which smoothing.proto
+// documents for clients: kExhaustedTransient when IsTransient() holds, else kExhaustedPermanent.
+inline constexpr char kExhaustedKey[] = "meshsmooth-exhausted";
+inline constexpr char kExhaustedTransient[] = "transient";
+inline constexpr char kExhaustedPermanent[] = "permanent";
 
 class MemoryBudget {
  public:
@@ -76,10 +96,10 @@ class UploadBuffer {
   UploadBuffer(MemoryBudget* budget, int64_t max_bytes, ServiceMetrics& metrics = NoMetrics())
       : hold_(budget), budget_(budget), max_bytes_(max_bytes), metrics_(metrics) {}
 
-  // Appends `chunk`. ResourceExhausted, keeping nothing of it, when the upload would pass
-  // `max_bytes` or the budget has no room for the buffer it needs. Counts the bytes kept, or the
-  // refusal, in the metrics.
-  absl::Status Append(std::string_view chunk);
+  // Appends `chunk` and counts its bytes in the metrics; nullopt then. A RESOURCE_EXHAUSTED
+  // refusal, keeping nothing of it, when the upload would pass `max_bytes` (kUploadTooLarge)
+  // or the budget has no room for the buffer it needs (kMemoryBudget).
+  std::optional<Refused> Append(std::string_view chunk);
   bool empty() const { return bytes_.empty(); }
   // The bytes and their hold, for the job; the buffer is empty afterwards.
   std::string TakeBytes() { return std::exchange(bytes_, std::string()); }
@@ -112,25 +132,28 @@ class AdmittedCall {
   virtual bool Running() = 0;
   // Ends the call with `status` (its job, if any, is detached).
   virtual void Abort(const grpc::Status& status) = 0;
+  // Ends the call as refused: counted in the metrics, logged, then as Abort(refused.status).
+  virtual void Refuse(const Refused& refused) = 0;
 };
 
 class Admission {
  public:
   using Clock = std::chrono::steady_clock;
-  // Every refusal is counted in `metrics` (which must outlive this).
+  // `metrics` (which must outlive this) is the service's: a call counts its refusal there
+  // (AdmittedCall::Refuse).
   explicit Admission(const ServerOptions& options, ServiceMetrics& metrics = NoMetrics());
   ~Admission();  // stops the reaper
   Admission(const Admission&) = delete;
   Admission& operator=(const Admission&) = delete;
 
-  // Registers a new call; OK when it may go on, else the status to end it with (draining:
-  // UNAVAILABLE; more than --max-concurrent-streams open: RESOURCE_EXHAUSTED). Every call that
-  // was opened is closed, whatever Open answered.
-  grpc::Status Open(AdmittedCall* call);
+  // Registers a new call; nullopt when it may go on, else its refusal (draining: UNAVAILABLE;
+  // more than --max-concurrent-streams open: RESOURCE_EXHAUSTED). Every call that was opened is
+  // closed, whatever Open answered.
+  std::optional<Refused> Open(AdmittedCall* call);
   void Close(AdmittedCall* call);
 
-  // OK, or UNAVAILABLE once shutdown has begun: for a job about to be queued.
-  grpc::Status CheckNotDraining() const;
+  // nullopt, or UNAVAILABLE once shutdown has begun: for a job about to be queued.
+  std::optional<Refused> CheckNotDraining() const;
 
   MemoryBudget& budget() { return budget_; }
   const MemoryBudget& budget() const { return budget_; }
@@ -138,10 +161,10 @@ class Admission {
   ServiceMetrics& metrics() { return metrics_; }
 
   // The job queue is full: RESOURCE_EXHAUSTED.
-  grpc::Status QueueFull() const;
+  Refused QueueFull() const;
   // A mesh chunk of `bytes` above kMaxChunkBytes: RESOURCE_EXHAUSTED, as gRPC's own answer to a
   // message above its receive limit.
-  grpc::Status ChunkTooLarge(int64_t bytes) const;
+  Refused ChunkTooLarge(int64_t bytes) const;
 
   // Shutdown, in order: refuse new calls and end every call whose job has not started; wait
   // until `deadline` for the rest, returning as soon as none is left; end what is left with

@@ -7,6 +7,8 @@
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_join.h"
+#include "core/io/formats.h"
+#include "server/log.h"
 
 namespace meshsmooth::server {
 namespace {
@@ -21,8 +23,9 @@ absl::Status CheckEnum(const char* field, int value, const google::protobuf::Enu
       absl::StrCat(field, ": unknown value ", value, " (this server knows ", absl::StrJoin(names, ", "), ")"));
 }
 
-// JobSpec.job_id: empty, or 1..kMaxJobIdLength visible ASCII characters (no space, so that the
-// log line's "job=ID" stays one field).
+}  // namespace
+
+// Visible ASCII without spaces, so that the log line's "job=ID" stays one field.
 absl::Status CheckJobId(const std::string& id) {
   if (id.size() > kMaxJobIdLength) {
     return absl::InvalidArgumentError(
@@ -37,8 +40,6 @@ absl::Status CheckJobId(const std::string& id) {
   }
   return absl::OkStatus();
 }
-
-}  // namespace
 
 grpc::Status ToGrpc(const absl::Status& s) {
   std::string message(s.message());
@@ -259,7 +260,7 @@ std::string_view JobFlowName(const JobReport& report, const JobParams& params) {
   return FlowName(report.flow.iterations_run > 0 ? report.flow.flow : params.flow.flow.value_or(kDefaultFlow));
 }
 
-std::string JobLogLine(const JobReport& report, const JobParams& params) {
+std::string JobLogLine(const JobReport& report, const JobParams& params, std::string_view peer) {
   // printf's own rounding of the times, as the log has always had it.
   char seconds[128];
   std::snprintf(seconds, sizeof seconds, "decode=%.3fs queue=%.3fs smooth=%.3fs encode=%.3fs", report.decode_seconds,
@@ -268,7 +269,8 @@ std::string JobLogLine(const JobReport& report, const JobParams& params) {
       "meshsmoothd job=", report.job_id, " flow=", std::string(JobFlowName(report, params)),
       " vertices=", report.vertices, " iterations=", report.flow.iterations_run, "/",
       params.flow.iterations == kAutoIterations ? std::string("auto") : absl::StrCat(params.flow.iterations),
-      " status=", report.status, " ", seconds);
+      " status=", report.status, " ", seconds, peer.empty() ? "" : absl::StrCat(" peer=", io::Sv(peer)),
+      report.error.empty() ? "" : absl::StrCat(" error=", JsonQuote(report.error)));
 }
 
 }  // namespace meshsmooth::server

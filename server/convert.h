@@ -31,6 +31,10 @@ struct JobParams {
 // JobSpec.job_id's longest length.
 inline constexpr size_t kMaxJobIdLength = 128;
 
+// OK for a JobSpec.job_id the server takes: at most kMaxJobIdLength characters of printable
+// ASCII without spaces (empty: the server makes one up); else InvalidArgument naming job_id.
+absl::Status CheckJobId(const std::string& id);
+
 // Ridges and ravines a job found (Features without the per-vertex data).
 struct FeatureSummary {
   int64_t ridges = 0, ravines = 0, classified = 0;
@@ -41,6 +45,7 @@ struct FeatureSummary {
 struct JobReport {
   std::string job_id;
   std::string status = "OK";  // the status code's name when the job failed
+  std::string error;          // the status message when the job failed
   int64_t vertices = 0;       // of the welded mesh; 0 when it did not decode
   FlowResult flow;            // iterations_run: those completed, also when the run ends early
   double decode_seconds = 0.0, queue_seconds = 0.0, smooth_seconds = 0.0, encode_seconds = 0.0;
@@ -61,8 +66,9 @@ v1::Summary MakeSummary(const JobReport& report, const JobParams& params);
 std::string_view JobFlowName(const JobReport& report, const JobParams& params);
 
 // The job's log line, without a newline: "meshsmoothd job=ID flow=NAME vertices=N
-// iterations=RUN/ASKED status=CODE decode=Ss queue=Ss smooth=Ss encode=Ss".
-std::string JobLogLine(const JobReport& report, const JobParams& params);
+// iterations=RUN/ASKED status=CODE decode=Ss queue=Ss smooth=Ss encode=Ss", then " peer=PEER"
+// when `peer` is given and, for a failed job, " error=\"MESSAGE\"" (quoted as a JSON string).
+std::string JobLogLine(const JobReport& report, const JobParams& params, std::string_view peer = {});
 
 // InvalidArgument naming the field for anything out of range (iterations above
 // `max_iterations` included) and for enum values this server does not know; the flow's own

@@ -6,8 +6,10 @@
 
 #include <chrono>
 
+#include "absl/status/status.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
+#include "core/io/formats.h"
 #include "grpc/support/log.h"
 
 namespace meshsmooth::server {
@@ -45,6 +47,11 @@ std::string_view JobLevel(const std::string& status) {
   if (status == "OK") return "info";
   if (status == "INTERNAL" || status == "UNKNOWN" || status == "DATA_LOSS") return "error";
   return "warning";
+}
+
+// "RESOURCE_EXHAUSTED": the code's name (gRPC's and absl's codes share their numbers).
+std::string GrpcCodeName(grpc::StatusCode code) {
+  return absl::StatusCodeToString(static_cast<absl::StatusCode>(code));
 }
 
 void GrpcLogToJson(gpr_log_func_args* args) {
@@ -115,13 +122,11 @@ std::string JobLogJson(const JobReport& report, const JobParams& params, std::st
       .Str("flow", JobFlowName(report, params))
       .Int("vertices", report.vertices)
       .Int("iterations", report.flow.iterations_run);
-  if (params.flow.iterations == kAutoIterations) {
-    line.Str("iterations_asked", "auto");
-  } else {
-    line.Int("iterations_asked", params.flow.iterations);
-  }
-  line.Str("stop_reason", report.status == "OK" ? StopReasonName(report.flow.stop_reason) : "")
+  // kAutoIterations is 0, as in JobSpec.iterations: one type on every line.
+  line.Int("iterations_asked", params.flow.iterations == kAutoIterations ? 0 : params.flow.iterations)
+      .Str("stop_reason", report.status == "OK" ? StopReasonName(report.flow.stop_reason) : "")
       .Str("status", report.status)
+      .Str("error", report.error)
       .Str("peer", peer)
       .Num("queue_seconds", report.queue_seconds)
       .Num("decode_seconds", report.decode_seconds)
@@ -132,7 +137,31 @@ std::string JobLogJson(const JobReport& report, const JobParams& params, std::st
 }
 
 void LogJob(LogFormat format, const JobReport& report, const JobParams& params, std::string_view peer) {
-  WriteLine(format == LogFormat::kJson ? JobLogJson(report, params, peer) : JobLogLine(report, params));
+  WriteLine(format == LogFormat::kJson ? JobLogJson(report, params, peer) : JobLogLine(report, params, peer));
+}
+
+std::string RefusalLogLine(const RefusedCall& call) {
+  using io::Sv;
+  return absl::StrCat("meshsmoothd refused method=", Sv(call.method), " reason=", Sv(call.reason),
+                      " status=", GrpcCodeName(call.status.error_code()), " peer=", Sv(call.peer),
+                      call.job_id.empty() ? "" : absl::StrCat(" job=", Sv(call.job_id)),
+                      " error=", JsonQuote(call.status.error_message()));
+}
+
+std::string RefusalLogJson(const RefusedCall& call) {
+  JsonLine line("warning", "refused");
+  line.Str("message", RefusalLogLine(call))
+      .Str("method", call.method)
+      .Str("reason", call.reason)
+      .Str("status", GrpcCodeName(call.status.error_code()))
+      .Str("error", call.status.error_message())
+      .Str("peer", call.peer);
+  if (!call.job_id.empty()) line.Str("job_id", call.job_id);
+  return line.str();
+}
+
+void LogRefusal(LogFormat format, const RefusedCall& call) {
+  WriteLine(format == LogFormat::kJson ? RefusalLogJson(call) : RefusalLogLine(call));
 }
 
 void LogEvent(LogFormat format, std::string_view level, std::string_view event, std::string_view message,

@@ -1,12 +1,18 @@
-// meshsmoothd's log on stderr: one entry per job and per lifecycle event (listening, shutting
-// down, stopped, a shutdown cut short), as text for a terminal or, with --log-format json, as one
-// JSON object a line for a log pipeline.
+// meshsmoothd's log on stderr: one entry per job, per refused call and per lifecycle event
+// (listening, shutting down, stopped, a shutdown cut short), as text for a terminal or, with
+// --log-format json, as one JSON object a line for a log pipeline.
 //
 // Every JSON entry has "time" (RFC 3339, UTC, milliseconds), "level" ("info", "warning" or
-// "error"), "event" and "message". A job's entry ("event":"job") adds job_id, flow, vertices,
-// iterations, iterations_asked (a number, or "auto"), stop_reason, status (the gRPC code's name),
-// peer (gRPC's form, "ipv4:127.0.0.1:40312"), queue_seconds, decode_seconds, smooth_seconds,
-// encode_seconds and total_seconds. gRPC's own log lines become entries with "event":"grpc".
+// "error"), "event" and "message". A job's entry ("event":"job"; level "info" when it succeeded,
+// "warning" or "error" when it failed) adds job_id, flow, vertices, iterations,
+// iterations_asked (always a number: 0 for automatic stopping, as JobSpec.iterations),
+// stop_reason, status (the gRPC code's name), error (the status message of a failed job; empty
+// when it succeeded), peer (gRPC's form, "ipv4:127.0.0.1:40312"), queue_seconds,
+// decode_seconds, smooth_seconds, encode_seconds and total_seconds. A call refused before a job
+// ran ("event":"refused", level "warning": a wrong token, a bad spec or message order, a size
+// limit, a full queue or memory budget, an idle upload, a shutdown) adds method ("Smooth" or
+// "ListFlows"), reason (the metrics' refusal label, metrics.h), status, error, peer and, once
+// the call's spec was read, job_id. gRPC's own log lines become entries with "event":"grpc".
 #pragma once
 
 #include <cstdint>
@@ -14,6 +20,7 @@
 #include <string>
 #include <string_view>
 
+#include "grpcpp/support/status.h"
 #include "server/convert.h"
 #include "server/options.h"
 
@@ -40,6 +47,23 @@ std::string JobLogJson(const JobReport& report, const JobParams& params, std::st
 
 // Writes a job's entry in `format` on stderr, in one write.
 void LogJob(LogFormat format, const JobReport& report, const JobParams& params, std::string_view peer);
+
+// A call refused before its job ran, for the log.
+struct RefusedCall {
+  std::string_view method;  // "Smooth", "ListFlows"
+  std::string_view reason;  // RefusalName()
+  const grpc::Status& status;
+  std::string_view peer;
+  std::string_view job_id;  // empty when no spec was read
+};
+
+// Its text line, without a newline: "meshsmoothd refused method=M reason=R status=CODE peer=P
+// [job=ID] error=\"MESSAGE\"" (the message quoted as a JSON string).
+std::string RefusalLogLine(const RefusedCall& call);
+// Its JSON entry, without a newline.
+std::string RefusalLogJson(const RefusedCall& call);
+// Writes its entry in `format` on stderr, in one write.
+void LogRefusal(LogFormat format, const RefusedCall& call);
 
 // Writes a lifecycle event on stderr: "meshsmoothd: <message>" as text; as JSON, with the fields
 // `fields` adds after "message". `level`: "info", "warning" or "error".

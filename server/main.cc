@@ -87,12 +87,12 @@ int main(int argc, char** argv) {
   app.add_option("--auth-token-file", token_file,
                  "file holding a bearer token; calls must then send 'authorization: Bearer <token>'");
   app.add_flag(
-      "--quiet", [&o](int64_t) { o.log_jobs = false; }, "no per-job log lines");
+      "--quiet", [&o](int64_t) { o.log_jobs = false; }, "no per-job log lines (refused calls are still logged)");
   std::string log_format = "text";
   app.add_option("--log-format", log_format,
                  "text: lines for a terminal; json: one JSON object a line on stderr (time, level, event; a job's "
-                 "id, flow, vertices, iterations, stop reason, status, peer and each step's seconds) for a log "
-                 "pipeline")
+                 "id, flow, vertices, iterations, stop reason, status, error, peer and each step's seconds; a "
+                 "refused call's method, reason, status, error, peer and job id) for a log pipeline")
       ->capture_default_str()
       ->check(CLI::IsMember({"text", "json"}));
   app.add_option("--metrics-listen", o.metrics_listen,

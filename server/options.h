@@ -36,6 +36,7 @@ struct ServerOptions {
   std::string tls_cert_file, tls_key_file;  // both or neither
   std::string auth_token;                   // non-empty: calls need "authorization: Bearer <token>"
   bool log_jobs = true;                     // one line per job on stderr
+  bool log_refusals = true;                 // one line per refused call on stderr (not --quiet's)
   LogFormat log_format = LogFormat::kText;
   // host:port of the Prometheus endpoint (GET /metrics; port 0 picks a free one); empty: none.
   std::string metrics_listen;

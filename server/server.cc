@@ -1,7 +1,13 @@
 #include "server/server.h"
 
+#include <netdb.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
+#include <cstring>
 
 #include "absl/strings/str_cat.h"
 #include "core/io/file_bytes.h"
@@ -9,6 +15,41 @@
 #include "grpcpp/health_check_service_interface.h"
 
 namespace meshsmooth::server {
+namespace {
+
+// Why `listen` ("host:port") cannot be bound, as ": <reason>" for the start failure's message:
+// gRPC's builder only says that it failed. Binds a socket of its own as gRPC would
+// (SO_REUSEADDR, no SO_REUSEPORT); empty when that works or the address does not resolve.
+std::string WhyNotListening(const std::string& listen) {
+  const size_t colon = listen.rfind(':');
+  if (colon == std::string::npos) return ": no port (give host:port)";
+  std::string host = listen.substr(0, colon);
+  if (host.size() >= 2 && host.front() == '[' && host.back() == ']') host = host.substr(1, host.size() - 2);
+  addrinfo hints{};
+  hints.ai_family = AF_UNSPEC;
+  hints.ai_socktype = SOCK_STREAM;
+  hints.ai_flags = AI_PASSIVE;
+  addrinfo* found = nullptr;
+  if (getaddrinfo(host.empty() ? nullptr : host.c_str(), listen.c_str() + colon + 1, &hints, &found) != 0) {
+    return ": the host does not resolve to a local address";
+  }
+  std::string why;
+  for (const addrinfo* a = found; a != nullptr && why.empty(); a = a->ai_next) {
+    const int fd = socket(a->ai_family, a->ai_socktype, a->ai_protocol);
+    if (fd < 0) continue;
+    const int one = 1;
+    setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &one, sizeof one);
+    if (bind(fd, a->ai_addr, a->ai_addrlen) != 0) {
+      why = errno == EADDRINUSE ? ": address in use (another process listens on that port)"
+                                : absl::StrCat(": ", std::strerror(errno));
+    }
+    close(fd);
+  }
+  freeaddrinfo(found);
+  return why;
+}
+
+}  // namespace
 
 absl::StatusOr<std::unique_ptr<Server>> Server::Start(const ServerOptions& options, bool listen) {
   std::unique_ptr<Server> s(new Server());
@@ -43,9 +84,13 @@ absl::StatusOr<std::unique_ptr<Server>> Server::Start(const ServerOptions& optio
   builder.AddChannelArgument(GRPC_ARG_KEEPALIVE_TIMEOUT_MS, 20'000);
   builder.AddChannelArgument(GRPC_ARG_HTTP2_MIN_RECV_PING_INTERVAL_WITHOUT_DATA_MS, 10'000);
   builder.AddChannelArgument(GRPC_ARG_KEEPALIVE_PERMIT_WITHOUT_CALLS, 1);
+  // gRPC sets SO_REUSEPORT by default on Linux: a second server on a busy port would then start
+  // and take a share of the first one's connections. Without it the bind fails.
+  builder.AddChannelArgument(GRPC_ARG_ALLOW_REUSEPORT, 0);
   s->server_ = builder.BuildAndStart();
   if (s->server_ == nullptr || (listen && s->port_ == 0)) {
-    return absl::FailedPreconditionError(absl::StrCat("cannot listen on ", options.listen));
+    return absl::FailedPreconditionError(
+        absl::StrCat("cannot listen on ", options.listen, listen ? WhyNotListening(options.listen) : ""));
   }
   s->server_->GetHealthCheckService()->SetServingStatus(true);
   if (s->metrics_) s->metrics_->SetGaugeSource([service = s->service_.get()] { return service->Gauges(); });

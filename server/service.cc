@@ -9,6 +9,7 @@
 #include "absl/strings/str_format.h"
 #include "core/flows/catalogue.h"
 #include "server/convert.h"
+#include "server/log.h"
 #include "server/smooth_job.h"
 #include "server/smooth_reactor.h"
 
@@ -48,14 +49,18 @@ std::string MeshSmootherService::NewJobId() { return absl::StrFormat("%x-%d", st
 
 grpc::ServerBidiReactor<v1::SmoothRequest, v1::SmoothResponse>* MeshSmootherService::Smooth(
     grpc::CallbackServerContext* context) {
-  return NewSmoothReactor(Authenticate(context), context->peer(), admission_, pool_, options_,
-                          [this] { return NewJobId(); });
+  return NewSmoothReactor(Authenticate(context), context, admission_, pool_, options_, [this] { return NewJobId(); });
 }
 
 grpc::ServerUnaryReactor* MeshSmootherService::ListFlows(grpc::CallbackServerContext* context,
                                                          const v1::ListFlowsRequest*, v1::ListFlowsResponse* response) {
   grpc::ServerUnaryReactor* reactor = context->DefaultReactor();
   if (grpc::Status s = Authenticate(context); !s.ok()) {
+    admission_.metrics().Refused(Refusal::kUnauthenticated);
+    if (options_.log_refusals) {
+      LogRefusal(options_.log_format,
+                 {"ListFlows", RefusalName(Refusal::kUnauthenticated), s, context->peer(), /*job_id=*/""});
+    }
     reactor->Finish(s);
     return reactor;
   }

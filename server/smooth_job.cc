@@ -69,9 +69,10 @@ void SmoothJob::Log(const JobReport& report) const {
 }
 
 void SmoothJob::Fail(JobReport& report, const absl::Status& status) {
-  Emit([&](JobSink& sink) { sink.OnError(status); });
   report.status = std::string(absl::StatusCodeToString(status.code()));
-  Log(report);
+  report.error = std::string(status.message());
+  Log(report);  // first, as for a result: a client that sees the status finds the job counted
+  Emit([&](JobSink& sink) { sink.OnError(status); });
 }
 
 absl::Status SmoothJob::StepStatus(const absl::Status& status, const char* step) const {
@@ -191,6 +192,7 @@ void SmoothJob::Run() {
   report.queue_seconds = Seconds(submitted_.load(), start);
   if (cancel_.load()) {  // given up while it waited: logged, not counted as a job run
     report.status = "CANCELLED";
+    report.error = "the call ended before a worker took the job";
     if (options_.log_jobs) LogJob(options_.log_format, report, params_, peer_);
     return;
   }
@@ -206,7 +208,7 @@ void SmoothJob::Run() {
     report.decode_seconds = Seconds(start, Clock::now());
     return Fail(report, absl::ResourceExhaustedError(absl::StrCat("the mesh has ", mesh.num_vertices(),
                                                                   " vertices, above this server's limit of ",
-                                                                  options_.max_vertices)));
+                                                                  options_.max_vertices, " (--max-vertices)")));
   }
   // An output the encoder would refuse is refused before the smoothing it would waste.
   if (absl::Status s = draco->CheckEncodable(params_.output); !s.ok()) {

@@ -67,7 +67,7 @@ class SmoothJob {
   void Emit(Fn&& fn);
   // The job has ended: its log entry (unless options.log_jobs is off) and its metrics.
   void Log(const JobReport& report) const;
-  // Sends `status` to the sink and logs the job with its code.
+  // Logs the job with its code and error, counts it, then sends `status` to the sink.
   void Fail(JobReport& report, const absl::Status& status);
   // `status` of a step the job's StopToken ended: past the time limit, a DeadlineExceeded
   // naming the limit and the step (e.g. "decoding the upload"); anything else unchanged.

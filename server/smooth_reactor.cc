@@ -11,6 +11,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "server/convert.h"
+#include "server/log.h"
 #include "server/smooth_job.h"
 
 namespace meshsmooth::server {
@@ -26,9 +27,10 @@ class SmoothReactor final : public grpc::ServerBidiReactor<v1::SmoothRequest, v1
  public:
   // `authenticated`: OK, or the status the call ends with at once. `new_job_id` names a job
   // whose spec brings no id.
-  SmoothReactor(const grpc::Status& authenticated, std::string peer, Admission& admission, WorkerPool& pool,
-                const ServerOptions& options, std::function<std::string()> new_job_id)
-      : peer_(std::move(peer)),
+  SmoothReactor(const grpc::Status& authenticated, grpc::CallbackServerContext* context, Admission& admission,
+                WorkerPool& pool, const ServerOptions& options, std::function<std::string()> new_job_id)
+      : context_(context),
+        peer_(context->peer()),
         admission_(admission),
         pool_(pool),
         options_(options),
@@ -37,10 +39,9 @@ class SmoothReactor final : public grpc::ServerBidiReactor<v1::SmoothRequest, v1
         upload_(&admission.budget(), options.max_upload_bytes, admission.metrics()),
         last_read_(received_) {
     // Registered whatever the answer: OnDone closes every call.
-    const grpc::Status admitted = admission_.Open(this);
-    if (!authenticated.ok() && admitted.ok()) admission_.metrics().Refused(Refusal::kUnauthenticated);
-    if (!authenticated.ok() || !admitted.ok()) {
-      Abort(!authenticated.ok() ? authenticated : admitted);
+    const std::optional<Refused> refused = admission_.Open(this);
+    if (!authenticated.ok() || refused) {
+      Refuse(!authenticated.ok() ? Refused{Refusal::kUnauthenticated, authenticated} : *refused);
       return;
     }
     uploading_.store(true);
@@ -58,17 +59,19 @@ class SmoothReactor final : public grpc::ServerBidiReactor<v1::SmoothRequest, v1
     return job_ != nullptr && job_->started();
   }
   // Ends the call with `status` as soon as no write is in flight (pending events are dropped).
-  void Abort(const grpc::Status& status) override {
-    uploading_.store(false);
-    std::shared_ptr<SmoothJob> job;
+  void Abort(const grpc::Status& status) override { End(status, /*transient=*/false); }
+
+  void Refuse(const Refused& refused) override {
+    admission_.metrics().Refused(refused.reason);
+    std::string job_id;
     {
       std::lock_guard<std::mutex> lock(mu_);
-      if (!finish_status_) finish_status_ = status;
-      cancelled_ = true;
-      job = job_;
+      job_id = job_id_;
     }
-    if (job) job->Detach();
-    Pump();
+    if (options_.log_refusals) {
+      LogRefusal(options_.log_format, {"Smooth", RefusalName(refused.reason), refused.status, peer_, job_id});
+    }
+    End(refused.status, IsTransient(refused.reason));
   }
 
   void OnReadDone(bool ok) override {
@@ -78,32 +81,33 @@ class SmoothReactor final : public grpc::ServerBidiReactor<v1::SmoothRequest, v1
     switch (request_.kind_case()) {
       case v1::SmoothRequest::kSpec: {
         if (params_.has_value()) {
-          return Abort(InvalidArgument("a second JobSpec arrived: send exactly one spec, first, then the mesh"));
+          return Refuse(InvalidArgument("a second JobSpec arrived: send exactly one spec, first, then the mesh"));
+        }
+        if (CheckJobId(request_.spec().job_id()).ok()) {  // the log of a refusal names a valid id only
+          std::lock_guard<std::mutex> lock(mu_);
+          job_id_ = request_.spec().job_id();
         }
         absl::StatusOr<JobParams> params = FromProto(request_.spec(), options.max_iterations);
-        if (!params.ok()) {
-          admission_.metrics().Refused(Refusal::kInvalidRequest);
-          return Abort(ToGrpc(params.status()));
-        }
+        if (!params.ok()) return Refuse({Refusal::kInvalidRequest, ToGrpc(params.status())});
         params_ = std::move(params).value();
         break;
       }
       case v1::SmoothRequest::kMeshChunk: {
         if (!params_.has_value()) {
-          return Abort(InvalidArgument("the first message must be a JobSpec (spec), not a mesh chunk"));
+          return Refuse(InvalidArgument("the first message must be a JobSpec (spec), not a mesh chunk"));
         }
         const std::string& chunk = request_.mesh_chunk();
         // Sizes beyond this server's limits are RESOURCE_EXHAUSTED, as gRPC's own answer to a
         // message above its receive limit (a chunk of more than kMaxReceiveMessageBytes).
         if (static_cast<int64_t>(chunk.size()) > kMaxChunkBytes) {
-          return Abort(admission_.ChunkTooLarge(chunk.size()));
+          return Refuse(admission_.ChunkTooLarge(chunk.size()));
         }
         // The upload's own limit and the server's memory budget.
-        if (absl::Status s = upload_.Append(chunk); !s.ok()) return Abort(ToGrpc(s));
+        if (std::optional<Refused> refused = upload_.Append(chunk)) return Refuse(*refused);
         break;
       }
       default:
-        return Abort(InvalidArgument("an empty SmoothRequest (neither spec nor mesh_chunk)"));
+        return Refuse(InvalidArgument("an empty SmoothRequest (neither spec nor mesh_chunk)"));
     }
     StartRead(&request_);
   }
@@ -180,10 +184,27 @@ class SmoothReactor final : public grpc::ServerBidiReactor<v1::SmoothRequest, v1
   }
 
  private:
-  // A call that breaks the protocol: INVALID_ARGUMENT, counted as a refusal.
-  grpc::Status InvalidArgument(const std::string& message) {
-    admission_.metrics().Refused(Refusal::kInvalidRequest);
-    return grpc::Status(grpc::StatusCode::INVALID_ARGUMENT, message);
+  // A call that breaks the protocol: INVALID_ARGUMENT.
+  static Refused InvalidArgument(const std::string& message) {
+    return {Refusal::kInvalidRequest, grpc::Status(grpc::StatusCode::INVALID_ARGUMENT, message)};
+  }
+
+  // Ends the call with `status` as soon as no write is in flight (pending events are dropped);
+  // `transient`: a RESOURCE_EXHAUSTED that is the server's capacity (IsTransient).
+  void End(const grpc::Status& status, bool transient) {
+    uploading_.store(false);
+    std::shared_ptr<SmoothJob> job;
+    {
+      std::lock_guard<std::mutex> lock(mu_);
+      if (!finish_status_) {
+        finish_status_ = status;
+        transient_ = transient;
+      }
+      cancelled_ = true;
+      job = job_;
+    }
+    if (job) job->Detach();
+    Pump();
   }
 
   void OnHalfClose() {
@@ -193,22 +214,23 @@ class SmoothReactor final : public grpc::ServerBidiReactor<v1::SmoothRequest, v1
       if (finished_ || cancelled_) return;
     }
     if (!params_.has_value()) {
-      return Abort(InvalidArgument("the stream ended without a JobSpec: send a spec first, then the mesh"));
+      return Refuse(InvalidArgument("the stream ended without a JobSpec: send a spec first, then the mesh"));
     }
     if (upload_.empty()) {
-      return Abort(InvalidArgument("no mesh arrived: send the Draco bytes in mesh_chunk messages after the spec"));
+      return Refuse(InvalidArgument("no mesh arrived: send the Draco bytes in mesh_chunk messages after the spec"));
     }
-    if (grpc::Status s = admission_.CheckNotDraining(); !s.ok()) return Abort(s);
+    if (std::optional<Refused> refused = admission_.CheckNotDraining()) return Refuse(*refused);
     const std::string id = !params_->job_id.empty() ? params_->job_id : new_job_id_();
     auto job = std::make_shared<SmoothJob>(id, std::move(*params_), upload_.TakeBytes(), upload_.TakeHold(), received_,
                                            options_, this, peer_, admission_.metrics());
     {
       std::lock_guard<std::mutex> lock(mu_);
       job_ = job;
+      job_id_ = id;
     }
     job->set_submitted(Clock::now());
     const std::optional<int> position = pool_.TrySubmit([job] { job->Run(); }, [job] { return job->detached(); });
-    if (!position.has_value()) return Abort(admission_.QueueFull());
+    if (!position.has_value()) return Refuse(admission_.QueueFull());
     job->set_queue_position(*position);
   }
 
@@ -244,6 +266,10 @@ class SmoothReactor final : public grpc::ServerBidiReactor<v1::SmoothRequest, v1
     }
     if (finish) {
       finished_ = true;
+      // Whether a retry can help (smoothing.proto): only a refusal for the server's capacity.
+      if (finish->error_code() == grpc::StatusCode::RESOURCE_EXHAUSTED) {
+        context_->AddTrailingMetadata(kExhaustedKey, transient_ ? kExhaustedTransient : kExhaustedPermanent);
+      }
       lock.unlock();
       Finish(*finish);
       return;
@@ -253,6 +279,7 @@ class SmoothReactor final : public grpc::ServerBidiReactor<v1::SmoothRequest, v1
     StartWrite(&out_);
   }
 
+  grpc::CallbackServerContext* const context_;
   const std::string peer_;
   Admission& admission_;
   WorkerPool& pool_;
@@ -278,6 +305,8 @@ class SmoothReactor final : public grpc::ServerBidiReactor<v1::SmoothRequest, v1
   std::optional<v1::Summary> summary_;
   bool have_result_ = false;
   std::optional<grpc::Status> finish_status_;
+  bool transient_ = false;  // finish_status_ is a refusal for the server's capacity
+  std::string job_id_;      // once known: the spec's, or the one the server gave the job
   bool write_in_flight_ = false;
   bool finished_ = false;
   bool cancelled_ = false;
@@ -286,9 +315,9 @@ class SmoothReactor final : public grpc::ServerBidiReactor<v1::SmoothRequest, v1
 }  // namespace
 
 grpc::ServerBidiReactor<v1::SmoothRequest, v1::SmoothResponse>* NewSmoothReactor(
-    const grpc::Status& authenticated, std::string peer, Admission& admission, WorkerPool& pool,
+    const grpc::Status& authenticated, grpc::CallbackServerContext* context, Admission& admission, WorkerPool& pool,
     const ServerOptions& options, std::function<std::string()> new_job_id) {
-  return new SmoothReactor(authenticated, std::move(peer), admission, pool, options, std::move(new_job_id));
+  return new SmoothReactor(authenticated, context, admission, pool, options, std::move(new_job_id));
 }
 
 }  // namespace meshsmooth::server

@@ -15,12 +15,13 @@
 
 namespace meshsmooth::server {
 
-// A new Smooth call's reactor; it deletes itself when gRPC is done with the call.
-// `authenticated`: OK, or the status the call ends with at once. `peer`: the client's address,
-// for the job's log. `new_job_id` names a job whose spec brings no id. The references must
-// outlive every call (the service owns them); events go to admission.metrics().
+// A new Smooth call's reactor on `context` (the client's address, for the log; the trailing
+// metadata of a RESOURCE_EXHAUSTED); it deletes itself when gRPC is done with the call.
+// `authenticated`: OK, or the status the call ends with at once (a refusal, logged and
+// counted). `new_job_id` names a job whose spec brings no id. The references must outlive every
+// call (the service owns them); events go to admission.metrics(), refusals to the log too.
 grpc::ServerBidiReactor<v1::SmoothRequest, v1::SmoothResponse>* NewSmoothReactor(
-    const grpc::Status& authenticated, std::string peer, Admission& admission, WorkerPool& pool,
+    const grpc::Status& authenticated, grpc::CallbackServerContext* context, Admission& admission, WorkerPool& pool,
     const ServerOptions& options, std::function<std::string()> new_job_id);
 
 }  // namespace meshsmooth::server

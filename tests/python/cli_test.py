@@ -184,9 +184,48 @@ def cli_checks(a, check, tmp):
         assert r.returncode == 2, r.returncode
         r = run([cli, "smooth", "/nonexistent.obj", "-o", out_ply])
         assert r.returncode == 1 and "cannot open" in r.stderr, (r.returncode, r.stderr)
-        r = run([cli, "smooth", "builtin:noisy-sphere", "-o", os.path.join(tmp, "x.xyz")])
-        assert r.returncode == 1 and "unknown mesh format" in r.stderr, (r.returncode, r.stderr)
     check("bad command line exits 2, bad input exits 1 with a message", bad_usage)
+
+    def usage_errors_exit_2():
+        # Each is a mistake in the command line, caught before any work: exit 2, naming the option.
+        out = os.path.join(tmp, "usage.ply")
+        cases = [
+            (["builtin:noisy-sphere", "-o", os.path.join(tmp, "x.xyz")], ["x.xyz", ".ply"]),
+            (["builtin:noisy-sphere", "-o", out, "--step", "5"], ["step", "5"]),
+            (["builtin:nope", "-o", out], ["builtin:nope", "noisy-sphere"]),
+            (["builtin:noisy-sphere", "-o", out, "--token-file", os.path.join(tmp, "absent.token")],
+             ["--token-file", "absent.token"]),
+            (["builtin:noisy-sphere", "-o", out, "--timeout", "0"], ["--timeout"]),
+            (["builtin:noisy-sphere", "-o", out, "--timeout", "-1"], ["--timeout"]),
+            (["builtin:noisy-sphere", "-o", out, "--timeout", "nan"], ["--timeout"]),
+        ]
+        for args, words in cases:
+            r = run([cli, "smooth", *args])
+            assert r.returncode == 2, (args, r.returncode, r.stderr)
+            for w in words:
+                assert w in r.stderr, (args, w, r.stderr)
+            assert not os.path.exists(out), args
+        for sub in (["info", "builtin:nope"], ["ridges", "builtin:nope", "-o", os.path.join(tmp, "n.ply")],
+                    ["render", "builtin:nope", "-o", os.path.join(tmp, "n.png")]):
+            r = run([cli, *sub])
+            assert r.returncode == 2 and "builtin:nope" in r.stderr, (sub, r.returncode, r.stderr)
+        r = run([cli, "smooth", "builtin:noisy-sphere", "-o", out, "--timeout", "0.5", "--iterations", "1"])
+        assert r.returncode == 0, (r.returncode, r.stderr)
+    check("an unknown output format, a step out of range, an unknown builtin, a missing token file, --timeout 0 "
+          "or -1: exit 2 naming it", usage_errors_exit_2)
+
+    def readme_promises_what_the_cli_offers():
+        readme = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "README.md")
+        with open(readme) as f:
+            text = " ".join(f.read().split())
+        r = run([cli, "smooth", "--help"])
+        assert r.returncode == 0, r.returncode
+        # A per-vertex lock is a library field (FlowParams::locked); no option of the CLI sets it.
+        if "--lock" not in r.stdout:
+            assert "a lock mask can fix any vertex" not in text, "README promises a lock mask the CLI cannot set"
+            assert "FlowParams::locked" in text, "README does not say where a lock mask exists"
+    check("README promises no per-vertex lock the CLI cannot set, and says where one exists",
+          readme_promises_what_the_cli_offers)
 
     def unreachable():
         r = run([cli, "smooth", "builtin:sphere", "-o", out_ply, "--server", "127.0.0.1:1", "--timeout", "5"])
@@ -370,6 +409,34 @@ def cli_checks(a, check, tmp):
             assert "interrupted" in err, err
             assert not os.path.exists(os.path.join(tmp, "never.ply"))
         check("Ctrl-C cancels the job and exits 130", ctrl_c_cancels)
+
+    def plaintext_against_tls():
+        cert, key = os.path.join(tmp, "tls.crt"), os.path.join(tmp, "tls.key")
+        r = run(["openssl", "req", "-x509", "-newkey", "rsa:2048", "-nodes", "-subj", "/CN=localhost", "-addext",
+                 "subjectAltName=DNS:localhost,IP:127.0.0.1", "-keyout", key, "-out", cert, "-days", "1"])
+        assert r.returncode == 0, r.stderr
+        with Server(a.server, "--quiet", "--tls-cert", cert, "--tls-key", key) as tls:
+            r = run([cli, "smooth", "builtin:sphere", "-o", os.path.join(tmp, "plain.ply"), "--iterations", "1",
+                     "--server", tls.address, "--retries", "0", "--timeout", "20"])
+            assert r.returncode == 3, (r.returncode, r.stderr)
+            assert "--tls-ca" in r.stderr, r.stderr
+            grpc_lines = [l for l in r.stderr.splitlines() if re.match(r"^[DIWE]\d{4} \d\d:\d\d:\d\d", l)]
+            assert not grpc_lines, f"gRPC's own log lines on stderr: {grpc_lines}"
+            r = run([cli, "flows", "--server", tls.address, "--timeout", "20"])
+            assert r.returncode == 3 and "--tls-ca" in r.stderr, (r.returncode, r.stderr)
+            r = run([cli, "smooth", "builtin:sphere", "-o", os.path.join(tmp, "tls.ply"), "--iterations", "1",
+                     "--server", f"localhost:{tls.port}", "--tls-ca", cert])
+            assert r.returncode == 0, (r.returncode, r.stderr)
+        with Server(a.server, "--quiet") as plain:
+            # The other way round: gRPC logs the failed handshake itself, which the CLI keeps quiet.
+            r = run([cli, "smooth", "builtin:sphere", "-o", os.path.join(tmp, "tls2.ply"), "--iterations", "1",
+                     "--server", f"localhost:{plain.port}", "--tls-ca", cert, "--retries", "0", "--timeout", "20"])
+            assert r.returncode == 3, (r.returncode, r.stderr)
+            assert "may not use TLS" in r.stderr, r.stderr
+            grpc_lines = [l for l in r.stderr.splitlines() if re.match(r"^[DIWE]\d{4} \d\d:\d\d:\d\d", l)]
+            assert not grpc_lines, f"gRPC's own log lines on stderr: {grpc_lines}"
+    check("a plaintext client against a TLS server or a TLS client against a plaintext one: exit 3 with a hint, "
+          "no gRPC log lines on stderr", plaintext_against_tls)
 
     def token_files_trimmed_alike():
         # The server and the CLI read a token file by one rule: whitespace at both ends dropped.

@@ -154,13 +154,81 @@ def metrics_checks(a, check, tmp):
             assert e["status"] == "OK" and e["level"] == "info" and e["peer"].startswith("ipv4:127.0.0.1:"), e
             assert e["time"].endswith("Z") and "T" in e["time"], e["time"]
         assert sorted(e["vertices"] for e in jobs) == sorted(v for _, v, _ in JOBS)
-        assert [e["iterations_asked"] for e in jobs][:4] == [3, 2, 2, 4] and jobs[4]["iterations_asked"] == "auto"
+        # One type on every line: the count asked for, 0 for automatic (JobSpec.iterations).
+        assert [e["iterations_asked"] for e in jobs] == [3, 2, 2, 4, 0], [e["iterations_asked"] for e in jobs]
+        assert all(type(e["iterations_asked"]) is int for e in jobs), jobs
         assert jobs[4]["stop_reason"] and jobs[0]["stop_reason"] == "iterations", jobs
         events = [e["event"] for e in entries if e.get("event") != "job"]
         assert events[0] == "listening" and events[-2:] == ["shutdown", "stopped"], events
         assert entries[-1]["jobs_cut"] == 0 and entries[-2]["signal"] == "SIGTERM", entries[-2:]
     check("--log-format json: every stderr line is a JSON object; one per job with its fields, and the lifecycle "
           "events listening, shutdown, stopped", json_log)
+
+    token = os.path.join(tmp, "server.token")
+    with open(token, "w") as f:
+        f.write("s3cret\n")
+    wrong = os.path.join(tmp, "wrong.token")
+    with open(wrong, "w") as f:
+        f.write("guess\n")
+    guarded = Server(a.server, "--metrics-listen", "127.0.0.1:0", "--log-format", "json", "--workers", "1",
+                     "--auth-token-file", token, "--max-vertices", "1000", stderr=Server.KEEP)
+    try:
+        def refused_and_failed_calls():
+            def cli(*args, token_file=token):
+                return run([a.cli, *args, "--server", guarded.address, "--token-file", token_file, "--retries", "0"])
+            out = os.path.join(tmp, "refused.ply")
+            r = cli("smooth", "builtin:noisy-sphere", "-o", out, "--job-id", "guessing", token_file=wrong)
+            assert r.returncode == 1 and "UNAUTHENTICATED" in r.stderr, (r.returncode, r.stderr)
+            r = cli("flows", token_file=wrong)
+            assert r.returncode == 1 and "bearer token" in r.stderr, (r.returncode, r.stderr)
+            r = cli("smooth", "builtin:noisy-sphere", "-o", out, "--iterations", "20000", "--job-id", "too-many")
+            assert r.returncode == 1 and "INVALID_ARGUMENT" in r.stderr, (r.returncode, r.stderr)
+            r = cli("smooth", "builtin:noisy-sphere", "-o", out, "--iterations", "3", "--job-id", "too-big")
+            assert r.returncode == 1 and "RESOURCE_EXHAUSTED" in r.stderr, (r.returncode, r.stderr)
+            s = parse_metrics(scrape(guarded.metrics_address))
+            assert metric_sum(s, "meshsmooth_refusals_total", reason="unauthenticated") == 2, \
+                metric_sum(s, "meshsmooth_refusals_total", reason="unauthenticated")
+            assert metric_sum(s, "meshsmooth_refusals_total", reason="invalid_request") == 1
+            assert metric_sum(s, "meshsmooth_jobs_total", status="RESOURCE_EXHAUSTED") == 1
+            time.sleep(0.2)
+            entries = [json.loads(line) for line in guarded.stderr_lines()]
+            refused = [e for e in entries if e.get("event") == "refused"]
+            assert len(refused) == 3, refused
+            for e in refused:
+                assert e["level"] == "warning" and e["peer"].startswith("ipv4:127.0.0.1:"), e
+                assert e["message"] and e["error"], e
+            smooth, flows, spec = refused
+            assert (smooth["method"], smooth["status"], smooth["reason"]) == \
+                ("Smooth", "UNAUTHENTICATED", "unauthenticated"), smooth
+            assert (flows["method"], flows["status"], flows["reason"]) == \
+                ("ListFlows", "UNAUTHENTICATED", "unauthenticated"), flows
+            assert "job_id" not in smooth and "job_id" not in flows, (smooth, flows)  # no spec was read
+            assert (spec["status"], spec["reason"], spec["job_id"]) == \
+                ("INVALID_ARGUMENT", "invalid_request", "too-many"), spec
+            assert "iterations" in spec["error"], spec
+            jobs = [e for e in entries if e.get("event") == "job"]
+            assert len(jobs) == 1, jobs
+            job = jobs[0]
+            assert (job["job_id"], job["status"], job["level"]) == ("too-big", "RESOURCE_EXHAUSTED", "warning"), job
+            assert "2562 vertices" in job["error"] and "limit of 1000" in job["error"], job
+            assert type(job["iterations_asked"]) is int and job["iterations_asked"] == 3, job
+        check("refused calls (a wrong token on Smooth and ListFlows, a bad spec) and a failed job are logged with "
+              "status, reason, peer, job id and error; failed authentication is counted", refused_and_failed_calls)
+    finally:
+        guarded.stop()
+
+    def text_log_names_refusals():
+        with Server(a.server, "--auth-token-file", token, stderr=Server.KEEP) as s:
+            r = run([a.cli, "flows", "--server", s.address, "--token-file", wrong, "--retries", "0"])
+            assert r.returncode == 1, (r.returncode, r.stderr)
+            time.sleep(0.2)
+            lines = [l for l in s.stderr_lines() if l.startswith("meshsmoothd refused ")]
+            assert len(lines) == 1, s.stderr_lines()
+            for word in ("method=ListFlows", "status=UNAUTHENTICATED", "reason=unauthenticated", "peer=ipv4:127.0.0.1:",
+                         'error="missing or wrong bearer token'):
+                assert word in lines[0], (word, lines[0])
+    check("the text log has a 'meshsmoothd refused' line with method, status, reason, peer and error",
+          text_log_names_refusals)
 
 
 if __name__ == "__main__":

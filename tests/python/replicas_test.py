@@ -176,6 +176,37 @@ def replica_checks(a, check, tmp):
     finally:
         saturated.stop()
 
+    def busy_port_is_refused():
+        with Replica(server, "--workers", "1") as first:
+            # The port is taken: the second server must not start and share it.
+            r = run([server, "--listen", first.address, "--workers", "1"], timeout=30)
+            assert r.returncode != 0, (r.returncode, r.stdout, r.stderr)
+            assert "listening" not in r.stdout, r.stdout
+            assert "address in use" in r.stderr and first.address in r.stderr, r.stderr
+            # The first one serves on.
+            res = smooth(first.address, "--job-id", "after-busy-port")
+            assert res.returncode == 0, res.stderr
+            time.sleep(0.2)
+            assert first.jobs("OK") == ["after-busy-port"], first.jobs()
+    check("a second meshsmoothd on a port another one holds exits non-zero with 'address in use'; the first serves "
+          "on", busy_port_is_refused)
+
+    def limits_the_mesh_exceeds_are_not_retried():
+        # builtin:noisy-sphere has 2562 vertices and uploads some 60 KB.
+        for flag, value in (("--max-vertices", "1000"), ("--max-upload-bytes", "10000")):
+            with Replica(server, "--workers", "1", flag, value) as rep:
+                job_id = f"too-big{flag}"
+                r = smooth(rep.address, "--retries", "4", "--job-id", job_id)
+                assert r.returncode == 1, (flag, r.returncode, r.stderr)
+                assert "retrying" not in r.stderr and "attempt" not in r.stderr, (flag, r.stderr)
+                assert "RESOURCE_EXHAUSTED" in r.stderr and flag in r.stderr, (flag, r.stderr)
+                time.sleep(0.2)
+                # One call reached the server: one log line names the job.
+                named = [line for line in rep.stderr_lines() if job_id in line]
+                assert len(named) == 1, (flag, named)
+    check("a mesh above --max-vertices or --max-upload-bytes: one upload, exit 1, the message names the limit",
+          limits_the_mesh_exceeds_are_not_retried)
+
     def health_statuses(address, into):
         """Watches grpc.health.v1 (service "") on a thread: (time, status) pairs into `into`;
         1 SERVING, 2 NOT_SERVING. The messages are encoded by hand: one enum field, number 1."""

@@ -39,6 +39,12 @@ TEST(JobReportTest, LogLineNamesTheJobItsFlowAndItsTimes) {
   EXPECT_EQ(JobLogLine(failed, params),
             "meshsmoothd job=x flow=bilaplacian vertices=0 iterations=0/20 status=RESOURCE_EXHAUSTED decode=0.000s "
             "queue=3.000s smooth=0.000s encode=0.000s");
+  // With the client's address, and a failed job's error, quoted.
+  failed.error = "the mesh has 2562 vertices, above this server's limit of 1000 (--max-vertices)";
+  EXPECT_EQ(JobLogLine(failed, params, "ipv4:127.0.0.1:4242"),
+            "meshsmoothd job=x flow=bilaplacian vertices=0 iterations=0/20 status=RESOURCE_EXHAUSTED decode=0.000s "
+            "queue=3.000s smooth=0.000s encode=0.000s peer=ipv4:127.0.0.1:4242 error=\"the mesh has 2562 vertices, "
+            "above this server's limit of 1000 (--max-vertices)\"");
   params.flow.iterations = kAutoIterations;
   r.flow.stop_reason = StopReason::kNoiseRemoved;
   EXPECT_EQ(JobLogLine(r, params),

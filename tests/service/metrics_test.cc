@@ -9,6 +9,7 @@
 #include <string>
 
 #include "gtest/gtest.h"
+#include "server/admission.h"
 #include "server/log.h"
 #include "server/metrics.h"
 
@@ -67,6 +68,37 @@ TEST(RefusalNames, EveryReasonHasItsOwnLabel) {
   EXPECT_EQ(names.size(), static_cast<size_t>(kRefusalCount));
   EXPECT_EQ(names.count("unknown"), 0u);
   EXPECT_EQ(RefusalName(Refusal::kQueueFull), "queue_full");
+}
+
+TEST(RefusalNames, OnlyTheServersCapacityIsTransient) {
+  std::set<std::string> transient;
+  for (int i = 0; i < kRefusalCount; ++i) {
+    if (IsTransient(static_cast<Refusal>(i))) transient.insert(std::string(RefusalName(static_cast<Refusal>(i))));
+  }
+  EXPECT_EQ(transient, (std::set<std::string>{"queue_full", "queue_wait", "memory_budget", "too_many_calls"}));
+}
+
+// A refused call's log entry: method, reason, status, peer, the job id once known, the error.
+TEST(RefusalLog, TextAndJsonNameWhatAnOperatorFiltersOn) {
+  const grpc::Status status(grpc::StatusCode::RESOURCE_EXHAUSTED, "the job queue is full (0 jobs waiting); \"x\"");
+  const RefusedCall call{"Smooth", "queue_full", status, "ipv4:127.0.0.1:4242", "scan-7"};
+  EXPECT_EQ(RefusalLogLine(call),
+            "meshsmoothd refused method=Smooth reason=queue_full status=RESOURCE_EXHAUSTED peer=ipv4:127.0.0.1:4242 "
+            "job=scan-7 error=\"the job queue is full (0 jobs waiting); \\\"x\\\"\"");
+  const std::string json = RefusalLogJson(call);
+  for (const char* field :
+       {"\"level\":\"warning\"", "\"event\":\"refused\"", "\"method\":\"Smooth\"", "\"reason\":\"queue_full\"",
+        "\"status\":\"RESOURCE_EXHAUSTED\"", "\"peer\":\"ipv4:127.0.0.1:4242\"", "\"job_id\":\"scan-7\"",
+        "\"error\":\"the job queue is full"}) {
+    EXPECT_NE(json.find(field), std::string::npos) << field << " in " << json;
+  }
+  const grpc::Status unauthenticated(grpc::StatusCode::UNAUTHENTICATED, "missing or wrong bearer token");
+  const RefusedCall guess{"ListFlows", "unauthenticated", unauthenticated, "ipv4:10.0.0.9:5555", ""};
+  EXPECT_EQ(
+      RefusalLogLine(guess),
+      "meshsmoothd refused method=ListFlows reason=unauthenticated status=UNAUTHENTICATED peer=ipv4:10.0.0.9:5555 "
+      "error=\"missing or wrong bearer token\"");
+  EXPECT_EQ(RefusalLogJson(guess).find("job_id"), std::string::npos);
 }
 
 TEST(JsonQuote, EscapesQuotesControlsAndBytesThatAreNotUtf8) {

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <vector>
 
 #include "core/io/draco_codec.h"
 #include "grpcpp/create_channel.h"
@@ -16,11 +17,14 @@ namespace {
 using std::chrono::milliseconds;
 
 TEST(RetryTest, OnlyCapacityAndAvailabilityBeforeAnyResult) {
-  CallState fresh, accepted, streaming;
+  CallState fresh, accepted, streaming, transient;
   accepted.accepted = true;
   streaming.accepted = streaming.result_started = true;
+  transient.transient_exhaustion = true;
   EXPECT_TRUE(Retryable(absl::UnavailableError("shutting down"), fresh));
-  EXPECT_TRUE(Retryable(absl::ResourceExhaustedError("queue full"), fresh));
+  EXPECT_TRUE(Retryable(absl::ResourceExhaustedError("queue full"), transient));
+  // Without the server's word that it is its capacity: a limit the request exceeds.
+  EXPECT_FALSE(Retryable(absl::ResourceExhaustedError("above this server's limit"), fresh));
   EXPECT_TRUE(Retryable(absl::UnavailableError("cancelled after the grace"), accepted));
   EXPECT_FALSE(Retryable(absl::UnavailableError("went away mid-result"), streaming));
   for (const absl::Status& s :
@@ -86,6 +90,86 @@ TEST(RetryTest, UploadIsReleasedOnceTheLastAttemptHasSentIt) {
     EXPECT_EQ(call.attempts(), c.ok ? 1 : c.attempts);
     EXPECT_EQ(released, c.released);
   }
+}
+
+// The server says in the trailing metadata which RESOURCE_EXHAUSTED a retry can fix: a full
+// queue is retried up to the policy's attempts, a mesh above --max-vertices or an upload above
+// --max-upload-bytes is sent once.
+TEST(RetryTest, LimitsTheMeshExceedsAreSentOnceAFullQueueAgain) {
+  const std::string draco = *EncodeDraco(testing::FloatMesh(testing::NoisySphere(2)));  // 162 vertices
+  const auto deadline = std::chrono::system_clock::now() + std::chrono::seconds(60);
+  auto prepare = [deadline](grpc::ClientContext& ctx) {
+    ctx.set_deadline(deadline);
+    return absl::OkStatus();
+  };
+  RetryPolicy policy;
+  policy.max_attempts = 3;
+  policy.initial_backoff = milliseconds(1);
+  struct Case {
+    const char* limit;
+    server::ServerOptions options;
+  };
+  std::vector<Case> cases(2);
+  cases[0].limit = "--max-vertices";
+  cases[0].options.max_vertices = 100;
+  cases[1].limit = "--max-upload-bytes";
+  cases[1].options.max_upload_bytes = 100;
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.limit);
+    auto server = testing::StartServer(c.options);
+    ASSERT_TRUE(server);
+    auto stub = v1::MeshSmoother::NewStub(server->InProcessChannel());
+    RetryingSmooth call(policy, prepare, deadline);
+    const absl::Status s = call.Run(*stub, testing::Spec("laplacian", 3), draco).status();
+    testing::ExpectStatus(s, absl::StatusCode::kResourceExhausted, c.limit);
+    EXPECT_EQ(call.attempts(), 1);
+  }
+
+  server::ServerOptions o;
+  o.queue_depth = 0;
+  testing::BusyServer busy(o);  // its one worker busy, no room to wait
+  RetryingSmooth call(policy, prepare, deadline);
+  const absl::Status s = call.Run(*busy.long_job.stub, testing::Spec("laplacian", 3), draco).status();
+  testing::ExpectStatus(s, absl::StatusCode::kResourceExhausted, "queue is full");
+  EXPECT_EQ(call.attempts(), 3);
+  busy.long_job.ctx.TryCancel();
+  EXPECT_EQ(busy.long_job.running.get().status().code(), absl::StatusCode::kCancelled);
+}
+
+// What a client in another language reads: the trailing metadata of smoothing.proto.
+TEST(RetryTest, ResourceExhaustedCarriesTransientOrPermanent) {
+  const std::string draco = *EncodeDraco(testing::FloatMesh(testing::NoisySphere(2)));
+  server::ServerOptions o;
+  o.max_vertices = 100;
+  auto server = testing::StartServer(o);
+  ASSERT_TRUE(server);
+  auto stub = v1::MeshSmoother::NewStub(server->InProcessChannel());
+  grpc::ClientContext ctx;
+  ctx.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(60));
+  CallState state;
+  state.transient_exhaustion = true;
+  EXPECT_EQ(CallSmooth(*stub, ctx, testing::Spec("laplacian", 3), draco, nullptr, 1 << 20, &state).status().code(),
+            absl::StatusCode::kResourceExhausted);
+  EXPECT_FALSE(state.transient_exhaustion);
+  const auto& trailers = ctx.GetServerTrailingMetadata();
+  ASSERT_EQ(trailers.count("meshsmooth-exhausted"), 1u);
+  EXPECT_EQ(trailers.find("meshsmooth-exhausted")->second, "permanent");
+
+  server::ServerOptions q;
+  q.queue_depth = 0;
+  testing::BusyServer busy(q);
+  grpc::ClientContext full;
+  full.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(60));
+  CallState refused;
+  EXPECT_EQ(CallSmooth(*busy.long_job.stub, full, testing::Spec("laplacian", 3), draco, nullptr, 1 << 20, &refused)
+                .status()
+                .code(),
+            absl::StatusCode::kResourceExhausted);
+  EXPECT_TRUE(refused.transient_exhaustion);
+  ASSERT_EQ(full.GetServerTrailingMetadata().count("meshsmooth-exhausted"), 1u);
+  EXPECT_EQ(full.GetServerTrailingMetadata().find("meshsmooth-exhausted")->second, "transient");
+  busy.long_job.ctx.TryCancel();
+  EXPECT_EQ(busy.long_job.running.get().status().code(), absl::StatusCode::kCancelled);
 }
 
 }  // namespace

@@ -28,10 +28,11 @@ inline Mesh FloatMesh(Mesh m) {
   return m;
 }
 
-// A server with these options, quiet; listening on a free loopback port when `listen`, else
-// reachable in-process only.
+// A server with these options, quiet (no job or refusal lines); listening on a free loopback
+// port when `listen`, else reachable in-process only.
 inline std::unique_ptr<server::Server> StartServer(server::ServerOptions o = {}, bool listen = false) {
   o.log_jobs = false;
+  o.log_refusals = false;
   if (listen) o.listen = "127.0.0.1:0";
   absl::StatusOr<std::unique_ptr<server::Server>> s = server::Server::Start(o, listen);
   EXPECT_TRUE(s.ok()) << s.status();

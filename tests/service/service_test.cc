@@ -735,6 +735,22 @@ TEST(ServiceLimitsTest, ConcurrentCallsJobSecondsAndClientDeadline) {
   EXPECT_LT(next->summary.timings().queue_seconds(), 1.0);
 }
 
+// A port another server listens on is refused, naming the cause, rather than shared: with
+// gRPC's default SO_REUSEPORT the second server would start and take part of the traffic.
+TEST(ServiceTest, BusyPortIsRefusedNotShared) {
+  auto first = StartServer({}, /*listen=*/true);
+  ASSERT_TRUE(first);
+  ServerOptions o;
+  o.log_jobs = false;
+  o.listen = "127.0.0.1:" + std::to_string(first->port());
+  const absl::Status s = Server::Start(o).status();
+  ExpectStatus(s, absl::StatusCode::kFailedPrecondition, "address in use");
+  EXPECT_NE(s.message().find(o.listen), std::string::npos) << s;
+  // The first one serves on.
+  auto tcp = grpc::CreateChannel(o.listen, grpc::InsecureChannelCredentials());
+  EXPECT_TRUE(Call(tcp, Spec("laplacian", 2), *EncodeDraco(Icosphere(2))).ok());
+}
+
 // TLS with a self-signed certificate made at test time by the openssl CLI.
 TEST(ServiceTlsTest, TlsServerAcceptsTlsClientsOnly) {
   const std::filesystem::path dir = std::filesystem::path(::testing::TempDir()) / "meshsmooth_tls";
