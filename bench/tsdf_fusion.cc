@@ -15,15 +15,35 @@ Vec3 Rotate(const Vec3& v, const Vec3& k, double a) {
   return std::cos(a) * v + std::sin(a) * Cross(k, v) + (1.0 - std::cos(a)) * Dot(k, v) * k;
 }
 
+// The depth image at image point (u, v): bilinear between the four nearest pixel centres when
+// they all hold depths within 2% of each other, else the nearest pixel's (0: none).
+double DepthAt(const DepthImage& image, double u, double v) {
+  const int x = static_cast<int>(std::floor(u - 0.5)), y = static_cast<int>(std::floor(v - 0.5));
+  const int nx = static_cast<int>(std::floor(u)), ny = static_cast<int>(std::floor(v));
+  if (nx < 0 || ny < 0 || nx >= image.width || ny >= image.height) return 0.0;
+  const double nearest = image.depth[static_cast<size_t>(ny) * image.width + nx];
+  if (x < 0 || y < 0 || x + 1 >= image.width || y + 1 >= image.height) return nearest;
+  const size_t i = static_cast<size_t>(y) * image.width + x;
+  const double d00 = image.depth[i], d10 = image.depth[i + 1], d01 = image.depth[i + image.width],
+               d11 = image.depth[i + image.width + 1];
+  const double lo = std::min({d00, d10, d01, d11}), hi = std::max({d00, d10, d01, d11});
+  if (!(lo > 0.0) || hi - lo > 0.02 * lo) return nearest;
+  const double a = u - 0.5 - x, b = v - 0.5 - y;
+  return (1 - b) * ((1 - a) * d00 + a * d10) + b * ((1 - a) * d01 + a * d11);
+}
+
 }  // namespace
 
-Camera PerturbPose(const Camera& camera, const Vec3& centre, double rotation_deg, double shift, uint64_t seed) {
-  shapes_internal::SplitMix64 rng(seed);
-  const Vec3 axis = rng.NextDirection();
-  const double angle = rng.NextGaussian() * rotation_deg * std::numbers::pi / 180.0;
-  const Vec3 t{shift * rng.NextGaussian(), shift * rng.NextGaussian(), shift * rng.NextGaussian()};
+Camera PerturbPose(const Camera& camera, const Vec3& centre, const Vec3& rotation, const Vec3& shift) {
+  const double angle = Norm(rotation);
+  if (!(angle > 0.0)) {
+    Camera c = camera;
+    c.eye = camera.eye + shift;
+    return c;
+  }
+  const Vec3 axis = rotation * (1.0 / angle);
   Camera c = camera;
-  c.eye = centre + Rotate(camera.eye - centre, axis, angle) + t;
+  c.eye = centre + Rotate(camera.eye - centre, axis, angle) + shift;
   c.right = Rotate(camera.right, axis, angle);
   c.down = Rotate(camera.down, axis, angle);
   c.forward = Rotate(camera.forward, axis, angle);
@@ -53,10 +73,8 @@ Mesh FuseFrames(const std::vector<PosedFrame>& frames, const Vec3& lo, const Vec
           const Vec3 d = p - c.eye;
           const double z = Dot(d, c.forward);
           if (!(z > 0.0)) continue;
-          const int u = static_cast<int>(std::floor(0.5 * c.width + c.focal_px * Dot(d, c.right) / z));
-          const int v = static_cast<int>(std::floor(0.5 * c.height + c.focal_px * Dot(d, c.down) / z));
-          if (u < 0 || v < 0 || u >= c.width || v >= c.height) continue;
-          const double measured = f.depth.depth[static_cast<size_t>(v) * c.width + u];
+          const double measured = DepthAt(f.depth, 0.5 * c.width + c.focal_px * Dot(d, c.right) / z,
+                                          0.5 * c.height + c.focal_px * Dot(d, c.down) / z);
           if (!(measured > 0.0)) continue;
           const double s = measured - z;
           if (s < -truncation) {
@@ -122,14 +140,24 @@ Mesh SimulateFusedScan(const Mesh& clean, const std::vector<Camera>& cameras, co
   BoundingBox box;
   for (const Vec3& p : clean.positions) box.Add(p);
   const Vec3 centre = box.lo + 0.5 * (box.hi - box.lo);
+  // The drift: a rotation vector and a shift at segments + 1 evenly spaced frames.
+  shapes_internal::SplitMix64 rng(seed * 7919 + 1);
+  const double rot = options.pose_error_deg * std::numbers::pi / 180.0;
+  std::vector<Vec3> rotations, shifts;
+  for (int k = 0; k <= options.segments; ++k) {
+    rotations.push_back(rot * Vec3{rng.NextGaussian(), rng.NextGaussian(), rng.NextGaussian()});
+    shifts.push_back(options.pose_error_shift * Vec3{rng.NextGaussian(), rng.NextGaussian(), rng.NextGaussian()});
+  }
   std::vector<PosedFrame> frames;
   const auto n = static_cast<int>(cameras.size());
   for (int f = 0; f < n; ++f) {
     const Camera& truth = cameras[f];
     DepthImage measured = MeasureDepth(RenderDepth(clean, truth), clean, truth, sensor, seed * 1000 + f);
-    const uint64_t run = seed * 1000 + 500 + static_cast<uint64_t>(f * options.segments / n);
-    frames.push_back(
-        {std::move(measured), PerturbPose(truth, centre, options.pose_error_deg, options.pose_error_shift, run)});
+    const double x = n > 1 ? static_cast<double>(f) * options.segments / (n - 1) : 0.0;
+    const int k = std::min(static_cast<int>(x), options.segments - 1);
+    const double t = x - k;
+    frames.push_back({std::move(measured), PerturbPose(truth, centre, (1 - t) * rotations[k] + t * rotations[k + 1],
+                                                       (1 - t) * shifts[k] + t * shifts[k + 1])});
   }
   const double m = 3 * options.truncation;
   return FuseFrames(frames, box.lo - Vec3{m, m, m}, box.hi + Vec3{m, m, m}, options.voxel, options.truncation);

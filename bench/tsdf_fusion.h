@@ -25,9 +25,9 @@ struct PosedFrame {
 // extracted and the triangles of cells with a node no frame saw are dropped.
 Mesh FuseFrames(const std::vector<PosedFrame>& frames, const Vec3& lo, const Vec3& hi, double voxel, double truncation);
 
-// The camera `camera` moved by a pose error: turned about a random axis through `centre` by a
-// Gaussian angle of `rotation_deg` and shifted by a Gaussian of `shift` per axis (seeded).
-Camera PerturbPose(const Camera& camera, const Vec3& centre, double rotation_deg, double shift, uint64_t seed);
+// The camera `camera` moved by a pose error: turned about `centre` by the rotation vector
+// `rotation` (axis times angle in radians), then shifted by `shift`.
+Camera PerturbPose(const Camera& camera, const Vec3& centre, const Vec3& rotation, const Vec3& shift);
 
 // A fused scan as a hand-held depth camera makes one: a frame of `sensor` from each of
 // `cameras`, fused from poses off by a pose error shared by `segments` runs of consecutive
