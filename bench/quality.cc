@@ -5,14 +5,17 @@
 // JobSpec through the service's FromProto), BNF and GNF as their authors' code runs by default,
 // every flow of the flow table at its best iteration count ("oracle"), and any job given on the
 // command line run on it, and core/measure/evaluation.h measures each
-// result against the clean mesh. Markdown tables to stdout; docs/quality.md is its output:
+// result against the clean mesh. Then the scan cases (quality_scans.cc): the clean meshes as
+// simulated depth cameras scan them and the real Kinect-Fusion cone. Markdown tables to stdout; docs/quality.md is its
+// output:
 //   nice -n 10 build/bench/meshsmooth_quality --seeds 1 > docs/quality.md
 // docs/quality-method.md, written by hand, says how to read them; a change to what the tables
 // measure changes it too. `--help` lists the options; `--quick` runs a subset in about two
 // minutes.
 //
 // This file holds the options and main; quality_inputs.cc the meshes and noise, quality_runs.cc
-// the jobs and oracle sweeps, quality_tables.cc the tables, quality_paper.cc the paper's setting.
+// the jobs and oracle sweeps, quality_tables.cc the tables, quality_paper.cc the paper's setting,
+// quality_scans.cc the scan cases.
 #include <sys/resource.h>
 
 #include <algorithm>
@@ -36,6 +39,7 @@
 #include "bench/quality_inputs.h"
 #include "bench/quality_paper.h"
 #include "bench/quality_runs.h"
+#include "bench/quality_scans.h"
 #include "bench/quality_tables.h"
 #include "core/flows/flow.h"
 #include "core/io/mesh_io.h"
@@ -52,13 +56,20 @@ struct Options {
   std::vector<double> random_sigmas = {0.1, 0.2, 0.3};
   std::vector<double> impulsive = {1.0};
   int seeds = 3;
+  uint64_t first_seed = 1;         // kHeldOutFirstSeed with --held-out
   int large_seeds = 1;             // 0: as many as `seeds`
   std::vector<std::string> flows;  // empty: every flow of the table, unless no_flows
   bool no_flows = false;
   std::vector<std::string> jobs, oracle_jobs;  // JobSpecs in protobuf text format
   bool paper = true;
   int paper_iterations = 20;
+  bool scans = true;
+  bool scan_oracles = true;  // the oracle rows of bilateral_normal and guided_normal on the scans
+  ScanOptions scan;
 };
+
+// The synthetic cases' first held-out seed (--held-out); the tuning seeds are 1, 2, ...
+constexpr uint64_t kHeldOutFirstSeed = 1001;
 
 // The machine the header names.
 std::string CpuModel() {
@@ -89,6 +100,8 @@ constexpr char kUsage[] =
     "usage: meshsmooth_quality [--meshes a,b,...] [--sigmas 0,0.1,0.2,0.3,0.5,0.7] [--random-sigmas 0.1,0.2,0.3]\n"
     "                          [--seeds 3] [--large-seeds 1] [--flows a,b,...] [--job SPEC]... [--oracle-job SPEC]...\n"
     "                          [--shared DIR] [--paper-iterations 20] [--no-paper] [--quick]\n"
+    "                          [--scan-meshes a,b,...] [--scan-kinds tof,sl,fused] [--scan-seeds 2]\n"
+    "                          [--held-out] [--scan-set held-out|tuning] [--no-scans] [--no-real] [--scan-quick]\n"
     "  --meshes         real meshes by file name without extension, and `sphere`, `two-rate-torus`,\n"
     "                   `mt-torus`, `mt-cylinder`, `holey-sphere`,\n"
     "                   `perforated-sphere`\n"
@@ -106,7 +119,19 @@ constexpr char kUsage[] =
     "  --shared DIR     the folder holding data/meshes (default: ../shared beside the source tree)\n"
     "  --no-paper       skip the fixed-iteration tables of the paper's setting\n"
     "  --quick          fandisk, bunny-small and the sphere, sigma 0 and 0.2 (random: 0.2), one seed,\n"
-    "                   no paper tables\n"
+    "                   no paper tables, no scans\n"
+    "  --held-out       the synthetic cases' noisy copies from the held-out seeds 1001, 1002, ... rather\n"
+    "                   than 1, 2, ... (the seeds the defaults were tuned on)\n"
+    "  --scan-meshes    clean meshes the scan cases scan (default fandisk,stanford-bunny,nefertiti,sphere)\n"
+    "  --scan-kinds     tof (time-of-flight frame), sl (structured-light frame), fused (frames fused in a\n"
+    "                   voxel volume); default all three\n"
+    "  --scan-seeds     scans per mesh and kind, each from its own seed and pose (default 2)\n"
+    "  --scan-set       held-out (default: the seeds and poses docs/quality.md reports) or tuning\n"
+    "  --no-scans       skip the scan cases; --no-real skips the real cone of DIR/data/real\n"
+    "  --scan-quick     only the scan cases and the real cone, one seed each, without the oracle rows:\n"
+    "                   the default job against BNF and GNF on scanner noise in a few minutes\n"
+    "  --write-scan MESH KIND INDEX OUT  only write scan INDEX (0, 1, ...) of MESH of KIND (tof, sl,\n"
+    "                   fused) as the scan cases make it (after --scan-set, if given; metres) to OUT, and exit\n"
     "  --write-noisy MESH SIGMA SEED OUT [random|impulsive]  only write the benchmark's input for MESH\n"
     "                   with Gaussian noise of SIGMA h along the normals (or in random directions, or\n"
     "                   impulsive noise of scale SIGMA) and SEED (as the tables use it) to OUT, and exit\n";
@@ -184,6 +209,51 @@ int main(int argc, char** argv) {
         return 1;
       }
       return 0;
+    } else if (a == "--write-scan") {
+      const std::string name = next(), kind = next(), index = next(), out = next();
+      absl::StatusOr<Subject> subject = LoadSubject(name, opt.shared / "data" / "meshes");
+      absl::StatusOr<std::vector<ScanKind>> k = ParseScanKinds(kind);
+      if (!subject.ok() || !k.ok() || k->size() != 1) {
+        std::fprintf(stderr, "meshsmooth_quality: %s\n",
+                     (subject.ok() ? k.status() : subject.status()).ToString().c_str());
+        return 1;
+      }
+      const Mesh scan =
+          MakeScan(ToObjectScale(subject->truth->mesh()), (*k)[0], opt.scan.held_out, std::atoi(index.c_str()));
+      if (absl::Status s = WriteMesh(out, scan); !s.ok()) {
+        std::fprintf(stderr, "meshsmooth_quality: %s\n", s.ToString().c_str());
+        return 1;
+      }
+      return 0;
+    } else if (a == "--held-out") {
+      opt.first_seed = kHeldOutFirstSeed;
+    } else if (a == "--scan-meshes") {
+      opt.scan.meshes = absl::StrSplit(next(), ',', absl::SkipEmpty());
+    } else if (a == "--scan-kinds") {
+      absl::StatusOr<std::vector<ScanKind>> kinds = ParseScanKinds(next());
+      if (!kinds.ok()) {
+        std::fprintf(stderr, "%s\n", kinds.status().ToString().c_str());
+        return 2;
+      }
+      opt.scan.kinds = *kinds;
+    } else if (a == "--scan-seeds") {
+      opt.scan.seeds = std::max(1, std::atoi(next().c_str()));
+    } else if (a == "--scan-set") {
+      const std::string set = next();
+      if (set != "held-out" && set != "tuning") {
+        std::fputs(kUsage, stderr);
+        return 2;
+      }
+      opt.scan.held_out = set == "held-out";
+    } else if (a == "--no-scans") {
+      opt.scans = false;
+    } else if (a == "--no-real") {
+      opt.scan.real = false;
+    } else if (a == "--scan-quick") {
+      opt.meshes.clear();
+      opt.paper = false;
+      opt.scan.seeds = 1;
+      opt.scan_oracles = false;
     } else if (a == "--quick") {
       opt.meshes = {"fandisk", "bunny-small", "sphere"};
       opt.sigmas = {0.0, 0.2};
@@ -191,6 +261,7 @@ int main(int argc, char** argv) {
       opt.impulsive = {};
       opt.seeds = 1;
       opt.paper = false;
+      opt.scans = false;
     } else {
       std::fputs(kUsage, stderr);
       return a == "--help" ? 0 : 2;
@@ -217,14 +288,12 @@ int main(int argc, char** argv) {
       const Case& c = cases[ci];
       const int n = c.sigma == 0.0 ? 1 : seeds;  // the clean input has no seed
       std::vector<Mesh> noisy;
-      for (int s = 1; s <= n; ++s) noisy.push_back(MakeNoisy(truth.mesh(), c, static_cast<uint64_t>(s)));
-      MeshCase mc{name, InputRow(c.sigma == 0.0 ? "clean input" : "noisy input", truth, noisy), {}};
+      for (int s = 0; s < n; ++s)
+        noisy.push_back(MakeNoisy(truth.mesh(), c, opt.first_seed + static_cast<uint64_t>(s)));
+      const std::vector<Input> runs_on = CopiesOf(truth, noisy);
+      MeshCase mc{name, InputRow(c.sigma == 0.0 ? "clean input" : "noisy input", runs_on), JobRows(jobs, runs_on)};
       if (c.sigma > 0.0 && eval_seconds == 0.0) eval_seconds = OneThreadEvaluationSeconds(truth, noisy[0]);
-      for (const Job& job : jobs) {
-        mc.rows.push_back(job.oracle ? OracleRow(job, truth, noisy)
-                                     : RunRow(job.label, job.spec.iterations(), truth, noisy, ParamsOf(job.spec)));
-      }
-      DetailTable(detail, c, mc, n);
+      DetailTable(detail, c.Name(), mc, n);
       results[ci].push_back(std::move(mc));
       std::fprintf(stderr, "%s, %s: done at %.0f s\n", name.c_str(), c.Name().c_str(), Seconds(start, Clock::now()));
     }
@@ -232,13 +301,20 @@ int main(int argc, char** argv) {
     InputsRow(inputs, *subject, seeds, eval_seconds);
   }
 
-  InputsTable(body, inputs);
-  body += "\n## Summary: the default job against the noisy input and the best oracle row\n";
-  for (size_t ci = 0; ci < cases.size(); ++ci) SummaryTable(body, cases[ci], results[ci], jobs);
-  body += "\n## Every row, mesh by mesh\n";
-  for (const std::string& d : details) body += d;
+  if (!opt.meshes.empty()) {
+    InputsTable(body, inputs);
+    body += "\n## Summary: the default job against the noisy input and the best oracle row\n";
+    for (size_t ci = 0; ci < cases.size(); ++ci) SummaryTable(body, cases[ci], results[ci], jobs);
+    body += "\n## Every row, mesh by mesh\n";
+    for (const std::string& d : details) body += d;
+  }
 
   if (opt.paper) PaperSection(body, mesh_dir, opt.paper_iterations);
+  if (opt.scans) {
+    const std::vector<Job> scan_jobs =
+        MakeJobs({"bilateral_normal", "guided_normal"}, !opt.scan_oracles, opt.jobs, opt.oracle_jobs);
+    ScanSection(body, opt.scan, scan_jobs, mesh_dir, opt.shared / "data" / "real");
+  }
 
   const double wall = Seconds(start, Clock::now());
   errno = 0;
@@ -249,11 +325,15 @@ int main(int argc, char** argv) {
     if (std::fscanf(f, "%*f %*f %lf", &load) != 1) load = std::nan("");
     std::fclose(f);
   }
+  // A run of the scan cases alone is docs/quality-scans.md.
+  const bool scans_only = opt.meshes.empty() && !opt.paper;
   std::printf(
-      "# Smoothing quality\n\nGenerated by `%s > docs/quality.md` (bench/quality.cc) on %s, %u CPUs; "
+      "# Smoothing quality%s\n\nGenerated by `%s > docs/%s` (bench/quality.cc) on %s, %u CPUs; "
       "wall time %.1f min; the machine's load average over the 15 minutes before it ended was %.1f (times "
       "grow with other work on the machine).\n",
-      absl::StrJoin(command, " ").c_str(), CpuModel().c_str(), std::thread::hardware_concurrency(), wall / 60.0, load);
+      scans_only ? " on scans" : "", absl::StrJoin(command, " ").c_str(),
+      scans_only ? "quality-scans.md" : "quality.md", CpuModel().c_str(), std::thread::hardware_concurrency(),
+      wall / 60.0, load);
   std::fputs(kMethodPointer, stdout);
   std::fputs(body.c_str(), stdout);
   return 0;

@@ -15,11 +15,11 @@
 namespace meshsmooth::bench {
 namespace {
 
-Run RunJob(const GroundTruth& truth, const Mesh& noisy, const FlowParams& p) {
+Run RunJob(const Input& input, const FlowParams& p) {
   Run run;
-  Mesh m = noisy;
+  Mesh m = *input.mesh;
   const Clock::time_point t0 = Clock::now();
-  absl::StatusOr<FlowResult> r = Smooth(m, truth.topology(), p);
+  absl::StatusOr<FlowResult> r = Smooth(m, *input.topology, p);
   run.seconds = Seconds(t0, Clock::now());
   if (!r.ok()) {
     run.status = r.status();
@@ -28,13 +28,21 @@ Run RunJob(const GroundTruth& truth, const Mesh& noisy, const FlowParams& p) {
   run.iterations = r->iterations_run;
   run.stop = std::string(StopReasonName(r->stop_reason));
   if (r->auto_stop) run.noise_h = r->auto_stop->noise_sigma_h;
-  absl::StatusOr<Quality> q = truth.Evaluate(m);
+  absl::StatusOr<Quality> q = input.evaluate(m);
   run.status = q.status();
   if (q.ok()) run.q = *q;
   return run;
 }
 
 }  // namespace
+
+std::vector<Input> CopiesOf(const GroundTruth& truth, const std::vector<Mesh>& noisy) {
+  std::vector<Input> inputs;
+  for (const Mesh& m : noisy) {
+    inputs.push_back({&m, &truth.topology(), [&truth](const Mesh& result) { return truth.Evaluate(result); }});
+  }
+  return inputs;
+}
 
 std::vector<Job> MakeJobs(const std::vector<std::string>& flows, bool no_flows, const std::vector<std::string>& jobs,
                           const std::vector<std::string>& oracle_jobs) {
@@ -81,11 +89,11 @@ FlowParams ParamsOf(const v1::JobSpec& spec) {
   return params->flow;
 }
 
-Row InputRow(const std::string& label, const GroundTruth& truth, const std::vector<Mesh>& noisy) {
+Row InputRow(const std::string& label, const std::vector<Input>& inputs) {
   Row row{label, 0, {}};
-  for (const Mesh& m : noisy) {
+  for (const Input& in : inputs) {
     Run r;
-    absl::StatusOr<Quality> q = truth.Evaluate(m);
+    absl::StatusOr<Quality> q = in.evaluate(*in.mesh);
     r.status = q.status();
     if (q.ok()) r.q = *q;
     row.runs.push_back(r);
@@ -93,21 +101,29 @@ Row InputRow(const std::string& label, const GroundTruth& truth, const std::vect
   return row;
 }
 
-Row RunRow(const std::string& label, int iterations, const GroundTruth& truth, const std::vector<Mesh>& noisy,
-           const FlowParams& p) {
+Row RunRow(const std::string& label, int iterations, const std::vector<Input>& inputs, const FlowParams& p) {
   Row row{label, iterations, {}};
-  for (const Mesh& m : noisy) row.runs.push_back(RunJob(truth, m, p));
+  for (const Input& in : inputs) row.runs.push_back(RunJob(in, p));
   return row;
 }
 
-Row OracleRow(const Job& job, const GroundTruth& truth, const std::vector<Mesh>& noisy) {
+std::vector<Row> JobRows(const std::vector<Job>& jobs, const std::vector<Input>& inputs) {
+  std::vector<Row> rows;
+  for (const Job& job : jobs) {
+    rows.push_back(job.oracle ? OracleRow(job, inputs)
+                              : RunRow(job.label, static_cast<int>(job.spec.iterations()), inputs, ParamsOf(job.spec)));
+  }
+  return rows;
+}
+
+Row OracleRow(const Job& job, const std::vector<Input>& inputs) {
   Row best;
   double best_rms = HUGE_VAL;
   int worse = 0;
   for (int count : kOracleCounts) {
     v1::JobSpec spec = job.spec;
     spec.set_iterations(static_cast<uint32_t>(count));
-    Row row = RunRow(job.label, count, truth, noisy, ParamsOf(spec));
+    Row row = RunRow(job.label, count, inputs, ParamsOf(spec));
     if (!AllOk(row)) {
       if (best.runs.empty()) best = std::move(row);
       break;

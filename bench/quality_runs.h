@@ -3,6 +3,7 @@
 // the clean mesh, and their means over the seeds.
 #pragma once
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -48,6 +49,18 @@ struct MeshCase {
   std::vector<Row> rows;  // rows[0] is the default job
 };
 
+// One noisy input of a row: the mesh, its topology, and the measure of a result against the
+// clean surface (GroundTruth::Evaluate for a noisy copy of the clean mesh; a measure against the
+// clean surface for a scan, which has connectivity of its own).
+struct Input {
+  const Mesh* mesh = nullptr;
+  const Topology* topology = nullptr;
+  std::function<absl::StatusOr<Quality>(const Mesh&)> evaluate;
+};
+
+// The noisy copies `noisy` of `truth`'s mesh as inputs (both must outlive them).
+std::vector<Input> CopiesOf(const GroundTruth& truth, const std::vector<Mesh>& noisy);
+
 // The rows of the two normal filters as their authors' reference code runs by default, the
 // figures the denoising literature's tables report: one iteration of 20 filter passes (sigma_s
 // 1, the mean distance between the centroids of edge-adjacent faces; sigma_r 0.35) and 10
@@ -70,17 +83,19 @@ const Row* FindRow(const MeshCase& mc, const std::string& label);
 // it refuses.
 FlowParams ParamsOf(const v1::JobSpec& spec);
 
-// The measures of the inputs themselves (one run per noisy copy), labelled `label`.
-Row InputRow(const std::string& label, const GroundTruth& truth, const std::vector<Mesh>& noisy);
+// The measures of the inputs themselves (one run per input), labelled `label`.
+Row InputRow(const std::string& label, const std::vector<Input>& inputs);
 
-// `p` run on each of `noisy`, as row `label` at `iterations` (0: not a sweep).
-Row RunRow(const std::string& label, int iterations, const GroundTruth& truth, const std::vector<Mesh>& noisy,
-           const FlowParams& p);
+// `p` run on each of `inputs`, as row `label` at `iterations` (0: not a sweep).
+Row RunRow(const std::string& label, int iterations, const std::vector<Input>& inputs, const FlowParams& p);
 
 // The oracle: `job` at each count of kOracleCounts, keeping the count with the smallest mean
 // RMS distance over the seeds. The sweep stops two counts after the best so far (the error
 // of every flow here falls, then rises) and at the first count that fails on any seed.
-Row OracleRow(const Job& job, const GroundTruth& truth, const std::vector<Mesh>& noisy);
+Row OracleRow(const Job& job, const std::vector<Input>& inputs);
+
+// Each job of `jobs` on `inputs`: its oracle sweep or its run as given.
+std::vector<Row> JobRows(const std::vector<Job>& jobs, const std::vector<Input>& inputs);
 
 // Whether every run of `row` succeeded with finite positions (false for no runs).
 bool AllOk(const Row& row);

@@ -150,8 +150,8 @@ void InputsTable(std::string& out, const std::string& rows) {
       rows;
 }
 
-void DetailTable(std::string& out, const Case& c, const MeshCase& mc, int seeds) {
-  absl::StrAppendFormat(&out, "\n#### %s — %s (%d seed%s)\n\n", mc.mesh, c.Name(), seeds, seeds == 1 ? "" : "s");
+void DetailTable(std::string& out, const std::string& case_name, const MeshCase& mc, int seeds) {
+  absl::StrAppendFormat(&out, "\n#### %s — %s (%d seed%s)\n\n", mc.mesh, case_name, seeds, seeds == 1 ? "" : "s");
   out +=
       "| row | iterations | RMS dist (h) | max dist (h) | normal err (°) | crease normal err (°) | volume (%) | "
       "flipped | edge CV | min angle (°) | time (ms) | status |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n";

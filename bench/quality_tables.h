@@ -22,8 +22,9 @@ void SkippedInputRow(std::string& out, const std::string& name, const absl::Stat
 // Appends the Inputs section: its heading, the table's header and `rows`.
 void InputsTable(std::string& out, const std::string& rows);
 
-// Appends the table of every row of `mc` in case `c`, measured with `seeds` seeds.
-void DetailTable(std::string& out, const Case& c, const MeshCase& mc, int seeds);
+// Appends the table of every row of `mc` in the case named `case_name`, measured with `seeds`
+// seeds.
+void DetailTable(std::string& out, const std::string& case_name, const MeshCase& mc, int seeds);
 
 // Appends the summary of case `c` over `meshes` (their rows are `jobs`): the input, the default
 // job, the best oracle row and the targets the default job misses.

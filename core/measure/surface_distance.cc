@@ -74,11 +74,16 @@ Vec3 ClosestPointOnTriangle(const Vec3& p, const Vec3& a, const Vec3& b, const V
 SurfaceDistance::SurfaceDistance(const Mesh& mesh) {
   const int32_t n = mesh.num_vertices();
   std::vector<std::array<Vec3, 3>> triangles;
+  std::vector<int32_t> ids;
   triangles.reserve(mesh.triangles.size());
-  for (const Triangle& t : mesh.triangles) {
+  for (int32_t f = 0; f < mesh.num_triangles(); ++f) {
+    const Triangle& t = mesh.triangles[f];
     if (!IsUsableTriangle(t, n)) continue;
     const std::array<Vec3, 3> c = {mesh.positions[t[0]], mesh.positions[t[1]], mesh.positions[t[2]]};
-    if (IsFinite(c[0]) && IsFinite(c[1]) && IsFinite(c[2])) triangles.push_back(c);
+    if (IsFinite(c[0]) && IsFinite(c[1]) && IsFinite(c[2])) {
+      triangles.push_back(c);
+      ids.push_back(f);
+    }
   }
   if (triangles.empty()) return;
   std::vector<Vec3> centroids(triangles.size());
@@ -121,13 +126,16 @@ SurfaceDistance::SurfaceDistance(const Mesh& mesh) {
     work.push_back({left + 1, mid, r.end});
   }
   corners_.resize(order.size());
-  for (size_t i = 0; i < order.size(); ++i) corners_[i] = triangles[order[i]];
+  ids_.resize(order.size());
+  for (size_t i = 0; i < order.size(); ++i) {
+    corners_[i] = triangles[order[i]];
+    ids_[i] = ids[order[i]];
+  }
 }
 
-double SurfaceDistance::SquaredDistance(const Vec3& p, double bound2) const {
-  if (!IsFinite(p)) return std::nan("");
-  double best = bound2;
-  if (nodes_.empty() || !(BoxSquaredDistance(nodes_[0].box, p) < best)) return best;
+template <typename Visit>
+void SurfaceDistance::Search(const Vec3& p, double& best, Visit&& visit) const {
+  if (nodes_.empty() || !(BoxSquaredDistance(nodes_[0].box, p) < best)) return;
   int32_t stack[kMaxDepth];
   int sp = 0;
   stack[sp++] = 0;
@@ -135,10 +143,7 @@ double SurfaceDistance::SquaredDistance(const Vec3& p, double bound2) const {
     const Node& node = nodes_[stack[--sp]];
     if (!(BoxSquaredDistance(node.box, p) < best)) continue;  // best shrank since it was pushed
     if (node.count > 0) {
-      for (int32_t i = node.first; i < node.first + node.count; ++i) {
-        const std::array<Vec3, 3>& t = corners_[i];
-        best = std::min(best, SquaredNorm(p - ClosestPointOnTriangle(p, t[0], t[1], t[2])));
-      }
+      for (int32_t i = node.first; i < node.first + node.count; ++i) visit(i);
       continue;
     }
     int32_t near = node.first, far = node.first + 1;
@@ -151,7 +156,33 @@ double SurfaceDistance::SquaredDistance(const Vec3& p, double bound2) const {
     if (far2 < best) stack[sp++] = far;
     if (near2 < best) stack[sp++] = near;
   }
+}
+
+double SurfaceDistance::SquaredDistance(const Vec3& p, double bound2) const {
+  if (!IsFinite(p)) return std::nan("");
+  double best = bound2;
+  Search(p, best, [&](int32_t i) {
+    const std::array<Vec3, 3>& t = corners_[i];
+    best = std::min(best, SquaredNorm(p - ClosestPointOnTriangle(p, t[0], t[1], t[2])));
+  });
   return best;
+}
+
+int32_t SurfaceDistance::NearestTriangle(const Vec3& p, double* squared_distance) const {
+  double best = HUGE_VAL;
+  int32_t nearest = -1;
+  if (IsFinite(p)) {
+    Search(p, best, [&](int32_t i) {
+      const std::array<Vec3, 3>& t = corners_[i];
+      const double d2 = SquaredNorm(p - ClosestPointOnTriangle(p, t[0], t[1], t[2]));
+      if (d2 < best) {
+        best = d2;
+        nearest = ids_[i];
+      }
+    });
+  }
+  if (squared_distance != nullptr) *squared_distance = nearest >= 0 ? best : std::nan("");
+  return nearest;
 }
 
 }  // namespace meshsmooth

@@ -32,6 +32,12 @@ class SurfaceDistance {
   // the mesh has no triangles; NaN for a point that is not finite.
   double SquaredDistance(const Vec3& p, double bound2 = HUGE_VAL) const;
 
+  // The nearest triangle to p: its index in the mesh's `triangles` (-1 when the mesh has none or
+  // p is not finite) and, in `squared_distance` when given, the squared distance to it. For a
+  // mesh measured against a surface with other connectivity: the surface's normal at the point
+  // nearest to a vertex is its nearest triangle's.
+  int32_t NearestTriangle(const Vec3& p, double* squared_distance = nullptr) const;
+
   int64_t num_triangles() const { return static_cast<int64_t>(corners_.size()); }
 
  private:
@@ -41,8 +47,14 @@ class SurfaceDistance {
     int32_t count = 0;  // leaf: its triangles (> 0); inner node: 0, the right child is first + 1
   };
 
-  std::vector<Node> nodes_;                   // nodes_[0] is the root
+  std::vector<Node> nodes_;  // nodes_[0] is the root
+  // Visits the leaves that may hold a triangle nearer than `best`, nearer boxes first;
+  // visit(i) tests corners_[i] and lowers `best`.
+  template <typename Visit>
+  void Search(const Vec3& p, double& best, Visit&& visit) const;
+
   std::vector<std::array<Vec3, 3>> corners_;  // the triangles in leaf order
+  std::vector<int32_t> ids_;                  // per corners_ entry: its index in the mesh's triangles
 };
 
 }  // namespace meshsmooth

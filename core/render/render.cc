@@ -11,18 +11,13 @@
 
 #include "absl/strings/str_cat.h"
 #include "core/normals.h"
+#include "core/render/raster.h"
 
 namespace meshsmooth {
 namespace {
 
 constexpr double kAmbient = 0.25;
 constexpr double kDiffuse = 0.75;
-
-// Screen positions are snapped to 1/256 pixel so that the edge functions are exact integers:
-// neighbouring faces then share their edges exactly and the fill rule below covers every
-// pixel centre once (no cracks, no double-drawn pixels).
-constexpr int kSubBits = 8;
-constexpr int64_t kSub = int64_t{1} << kSubBits;
 
 bool ParseNumber(std::string_view s, double& out) {
   while (!s.empty() && s.front() == ' ') s.remove_prefix(1);
@@ -32,23 +27,12 @@ bool ParseNumber(std::string_view s, double& out) {
   return !s.empty() && ec == std::errc() && ptr == s.data() + s.size() && std::isfinite(out);
 }
 
-// Floor and ceiling of a / b for b > 0 and any sign of a.
-int64_t FloorDiv(int64_t a, int64_t b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
-int64_t CeilDiv(int64_t a, int64_t b) { return -FloorDiv(-a, b); }
-
 // One corner of a face on its way to the screen.
 struct Corner {
-  int64_t x, y;  // fixed point, kSubBits fractional bits
+  raster::ScreenPoint p;
   double z;      // toward the camera: larger is nearer
   float rgb[3];  // lit colour, 0..255
 };
-
-// Edge a->b owns the pixel centres exactly on it when this is true; for the same edge walked
-// the other way (by the neighbouring face) it is false, so a shared edge is drawn once.
-bool OwnsEdge(const Corner& a, const Corner& b) {
-  const int64_t dy = b.y - a.y;
-  return dy > 0 || (dy == 0 && b.x < a.x);
-}
 
 class Rasterizer {
  public:
@@ -56,57 +40,18 @@ class Rasterizer {
 
   // Fills the face's pixels that are nearer than what is there, interpolating depth and colour
   // linearly (orthographic projection: screen-space interpolation is exact).
-  void Draw(Corner c0, Corner c1, Corner c2) {
-    int64_t area = (c1.x - c0.x) * (c2.y - c0.y) - (c1.y - c0.y) * (c2.x - c0.x);
-    if (area == 0) return;  // edge-on or smaller than the snapping grid
-    if (area < 0) {         // two-sided: draw both windings with the same (positive) edge functions
-      std::swap(c1, c2);
-      area = -area;
-    }
-    const int w = image_.width, h = image_.height;
-    const int64_t half = kSub / 2;  // pixel x's centre is at x * kSub + half
-    const int64_t x_lo = std::max<int64_t>(0, CeilDiv(std::min({c0.x, c1.x, c2.x}) - half, kSub));
-    const int64_t x_hi = std::min<int64_t>(w - 1, FloorDiv(std::max({c0.x, c1.x, c2.x}) - half, kSub));
-    const int64_t y_lo = std::max<int64_t>(0, CeilDiv(std::min({c0.y, c1.y, c2.y}) - half, kSub));
-    const int64_t y_hi = std::min<int64_t>(h - 1, FloorDiv(std::max({c0.y, c1.y, c2.y}) - half, kSub));
-    if (x_lo > x_hi || y_lo > y_hi) return;  // covers no pixel centre
-
-    // Edge k is opposite corner k; its function is corner k's barycentric weight times area.
-    const Corner* v[3] = {&c0, &c1, &c2};
-    int64_t e_row[3], step_x[3], step_y[3], bias[3];
-    const int64_t px = x_lo * kSub + half, py = y_lo * kSub + half;
-    for (int k = 0; k < 3; ++k) {
-      const Corner& a = *v[(k + 1) % 3];
-      const Corner& b = *v[(k + 2) % 3];
-      e_row[k] = (b.x - a.x) * (py - a.y) - (b.y - a.y) * (px - a.x);
-      step_x[k] = -(b.y - a.y) * kSub;
-      step_y[k] = (b.x - a.x) * kSub;
-      bias[k] = OwnsEdge(a, b) ? 0 : 1;  // e >= bias: e > 0, or e == 0 on an owned edge
-    }
-    const double inv_area = 1.0 / static_cast<double>(area);
-    for (int64_t y = y_lo; y <= y_hi; ++y) {
-      int64_t e0 = e_row[0], e1 = e_row[1], e2 = e_row[2];
-      size_t index = static_cast<size_t>(y) * static_cast<size_t>(w) + static_cast<size_t>(x_lo);
-      for (int64_t x = x_lo; x <= x_hi; ++x, ++index) {
-        if (e0 >= bias[0] && e1 >= bias[1] && e2 >= bias[2]) {
-          const double l0 = static_cast<double>(e0) * inv_area, l1 = static_cast<double>(e1) * inv_area,
-                       l2 = static_cast<double>(e2) * inv_area;
-          const float z = static_cast<float>(l0 * c0.z + l1 * c1.z + l2 * c2.z);
-          if (z > depth_[index]) {
-            depth_[index] = z;
-            uint8_t* out = &image_.rgb[3 * index];
-            for (int ch = 0; ch < 3; ++ch) {
-              const double value = l0 * c0.rgb[ch] + l1 * c1.rgb[ch] + l2 * c2.rgb[ch];
-              out[ch] = static_cast<uint8_t>(std::clamp(value + 0.5, 0.0, 255.0));
-            }
-          }
-        }
-        e0 += step_x[0];
-        e1 += step_x[1];
-        e2 += step_x[2];
-      }
-      for (int k = 0; k < 3; ++k) e_row[k] += step_y[k];
-    }
+  void Draw(const Corner& c0, const Corner& c1, const Corner& c2) {
+    raster::ForEachCoveredPixel(image_.width, image_.height, c0.p, c1.p, c2.p,
+                                [&](size_t index, double l0, double l1, double l2) {
+                                  const float z = static_cast<float>(l0 * c0.z + l1 * c1.z + l2 * c2.z);
+                                  if (!(z > depth_[index])) return;
+                                  depth_[index] = z;
+                                  uint8_t* out = &image_.rgb[3 * index];
+                                  for (int ch = 0; ch < 3; ++ch) {
+                                    const double value = l0 * c0.rgb[ch] + l1 * c1.rgb[ch] + l2 * c2.rgb[ch];
+                                    out[ch] = static_cast<uint8_t>(std::clamp(value + 0.5, 0.0, 255.0));
+                                  }
+                                });
   }
 
  private:
@@ -229,8 +174,8 @@ absl::StatusOr<Image> Render(const Mesh& mesh, const RenderOptions& options) {
     if (!used[i]) continue;
     const Vec3 d = local[i] = offset(mesh.positions[i]) * (1.0 / radius);
     Corner& c = screen[i];
-    c.x = std::llround((0.5 * w + framed_pixels * Dot(d, right)) * kSub);
-    c.y = std::llround((0.5 * h - framed_pixels * Dot(d, up)) * kSub);  // rows grow downward
+    c.p.x = raster::ToFixed(0.5 * w + framed_pixels * Dot(d, right));
+    c.p.y = raster::ToFixed(0.5 * h - framed_pixels * Dot(d, up));  // rows grow downward
     c.z = Dot(d, toward);
   }
 

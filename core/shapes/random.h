@@ -1,5 +1,5 @@
-// Internal to core/shapes: the random numbers behind the seeded shapes and noise, defined by
-// this code alone (the standard distributions are not bit-identical across library
+// Internal to core/shapes and the benchmark's generators (bench/range_scan.h): the random numbers behind the seeded
+// shapes and noise, defined by this code alone (the standard distributions are not bit-identical across library
 // implementations, and glibc picks among log implementations by CPU features), so every
 // generator gives the same bytes on every machine.
 #pragma once

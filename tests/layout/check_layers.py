@@ -9,7 +9,8 @@ The rooms, lowest first (a file may include its own room and any lower layer, no
   base                                    process-wide plumbing the programs link
   server                                  the gRPC service
   client                                  the CLI and its client library
-  bench, fuzz, tests                      tools on top of everything
+  bench, fuzz                             tools on top of everything
+  tests                                   the tests, which may test the tools' own generators
 
 Exit status 1 and one line per offending include when a file breaks the order.
 """
@@ -26,7 +27,8 @@ LAYERS = [
     ["base"],
     ["server"],
     ["client"],
-    ["bench", "fuzz", "tests"],
+    ["bench", "fuzz"],
+    ["tests"],
 ]
 RANK = {room: rank for rank, rooms in enumerate(LAYERS) for room in rooms}
 TOP = {"core", "base", "server", "client", "bench", "fuzz", "tests"}

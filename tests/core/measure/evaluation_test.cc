@@ -95,6 +95,14 @@ TEST(SurfaceDistanceTest, MatchesBruteForceInsideNearAndFar) {
       ASSERT_NEAR(surface.SquaredDistance(p), brute, 1e-14 * brute) << v << " " << scale;
       // A bound that is not below the answer does not change it.
       ASSERT_NEAR(surface.SquaredDistance(p, 1.5 * brute), brute, 1e-14 * brute);
+      // The nearest triangle is one at that distance (ties share an edge or a corner).
+      double d2 = 0.0;
+      const int32_t f = surface.NearestTriangle(p, &d2);
+      ASSERT_GE(f, 0);
+      const Triangle& t = m.triangles[f];
+      ASSERT_NEAR(SquaredNorm(p - ClosestPointOnTriangle(p, m.positions[t[0]], m.positions[t[1]], m.positions[t[2]])),
+                  brute, 1e-14 * brute);
+      ASSERT_NEAR(d2, brute, 1e-14 * brute);
       ++checked;
     }
   }
@@ -102,6 +110,8 @@ TEST(SurfaceDistanceTest, MatchesBruteForceInsideNearAndFar) {
   EXPECT_EQ(surface.SquaredDistance(Vec3{0, 0, 0}, 1e-6), 1e-6);  // the bound when nothing is nearer
   EXPECT_TRUE(std::isnan(surface.SquaredDistance(Vec3{std::nan(""), 0, 0})));
   EXPECT_EQ(SurfaceDistance(Mesh{}).SquaredDistance(Vec3{1, 2, 3}), HUGE_VAL);
+  EXPECT_EQ(SurfaceDistance(Mesh{}).NearestTriangle(Vec3{1, 2, 3}), -1);
+  EXPECT_EQ(surface.NearestTriangle(Vec3{std::nan(""), 0, 0}), -1);
 }
 
 TEST(EvaluationTest, CleanMeshAgainstItselfIsZero) {
