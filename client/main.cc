@@ -248,7 +248,8 @@ void AddSmoothOptions(CLI::App* smooth, SmoothOptions& so) {
                    "glTF output: Draco-compress every primitive (KHR_draco_mesh_compression; positions and texture "
                    "coordinates quantized to 16 bits, normals to 12). Default: plain float32 accessors, every value "
                    "kept");
-  smooth->add_flag("-q,--quiet", so.quiet, "print nothing but errors");
+  smooth->add_flag("-q,--quiet", so.quiet,
+                   "print nothing but errors and warnings (what the output could not keep is always said)");
   smooth->add_flag("--json", so.json, "print the job summary as JSON on stdout (no progress)");
   smooth->add_flag("--ridges", so.ridges,
                    "detect ridge and ravine vertices after smoothing (paper Section 5); PLY output gets them as "
