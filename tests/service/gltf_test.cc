@@ -25,6 +25,7 @@
 #include "draco/io/scene_io.h"
 #include "draco/scene/scene.h"
 #include "gtest/gtest.h"
+#include "tests/gltf_fixtures.h"
 #include "tests/service/service_fixtures.h"
 
 namespace meshsmooth::testing {
@@ -66,9 +67,7 @@ std::unique_ptr<draco::Mesh> Primitive(const Mesh& sphere, const Keep& keep) {
   const uint32_t n = static_cast<uint32_t>(vertex_of.size());
   dm->set_num_points(n);
   auto add = [&](draco::GeometryAttribute::Type type, int components) {
-    draco::GeometryAttribute ga;
-    ga.Init(type, nullptr, components, draco::DT_FLOAT32, false, sizeof(float) * components, 0);
-    return dm->attribute(dm->AddAttribute(ga, true, n));
+    return AddFloatAttribute(*dm, type, components, n);
   };
   draco::PointAttribute* pos = add(draco::GeometryAttribute::POSITION, 3);
   draco::PointAttribute* uv = add(draco::GeometryAttribute::TEX_COORD, 2);
@@ -311,14 +310,6 @@ TEST(GltfTest, ScenesComeBackWithTheirNodesMaterialsTexturesAndUvs) {
     }
   }
   fs::remove_all(dir);
-}
-
-// A 4 x 4 grey PNG: the texture of the small scenes below.
-absl::StatusOr<std::string> GreyPng() {
-  Image image;
-  image.width = image.height = 4;
-  image.rgb.assign(3 * 4 * 4, 128);
-  return EncodePng(image);
 }
 
 // A Draco-compressed GLB whose "buffers" key is misspelt (as fuzz_gltf found it): Draco's own glTF

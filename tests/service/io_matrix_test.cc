@@ -33,12 +33,11 @@
 #include "core/io/gltf.h"
 #include "core/io/gltf_texcoords.h"
 #include "core/io/mesh_io.h"
-#include "core/render/image.h"
-#include "core/render/png.h"
 #include "core/shapes/parametric.h"
 #include "draco/io/scene_io.h"
 #include "draco/scene/scene.h"
 #include "gtest/gtest.h"
+#include "tests/gltf_fixtures.h"
 
 namespace meshsmooth::testing {
 namespace {
@@ -132,9 +131,7 @@ std::unique_ptr<draco::Scene> PatchScene(const Mesh& m, const Variant& v) {
   const uint32_t n = static_cast<uint32_t>(m.positions.size());
   dm->set_num_points(n);
   auto add = [&](draco::GeometryAttribute::Type type, int components) {
-    draco::GeometryAttribute ga;
-    ga.Init(type, nullptr, components, draco::DT_FLOAT32, false, sizeof(float) * components, 0);
-    return dm->attribute(dm->AddAttribute(ga, true, n));
+    return AddFloatAttribute(*dm, type, components, n);
   };
   draco::PointAttribute* pos = add(draco::GeometryAttribute::POSITION, 3);
   draco::PointAttribute* uv = v.attributes ? add(draco::GeometryAttribute::TEX_COORD, 2) : nullptr;
@@ -159,10 +156,7 @@ std::unique_ptr<draco::Scene> PatchScene(const Mesh& m, const Variant& v) {
   draco::MaterialLibrary& materials = scene->GetMaterialLibrary();
   draco::Material* skin = materials.MutableMaterial(0);
   if (v.attributes) {
-    Image image;
-    image.width = image.height = 4;
-    image.rgb.assign(3 * 4 * 4, 128);
-    const absl::StatusOr<std::string> png = EncodePng(image);
+    const absl::StatusOr<std::string> png = GreyPng();
     EXPECT_TRUE(png.ok());
     auto texture = std::make_unique<draco::Texture>();
     texture->source_image().MutableEncodedData().assign(png->begin(), png->end());
@@ -364,7 +358,9 @@ TEST_P(IoMatrixTest, EveryFormatToEveryFormat) {
       if (gltf_output) {
         absl::StatusOr<GltfScene> scene = GltfScene::Read((dir / output).string());
         ASSERT_TRUE(scene.ok()) << scene.status();
-        if (input.gltf) EXPECT_EQ(scene->counts(), GltfScene::Read((dir / input.name).string())->counts());
+        if (input.gltf) {
+          EXPECT_EQ(scene->counts(), GltfScene::Read((dir / input.name).string())->counts());
+        }
         out = scene->surface();
         UseDracoFileIo();
         auto raw = draco::ReadSceneFromFile((dir / output).string());
