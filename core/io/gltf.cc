@@ -70,8 +70,7 @@ std::vector<std::pair<draco::Texture*, std::string>> SceneImages(draco::Scene& s
 absl::Status WriteNamedAfter(draco::Scene& scene, const std::vector<std::pair<draco::Texture*, std::string>>& images,
                              const std::string& path) {
   const std::filesystem::path out(path);
-  std::string dir = out.parent_path().string();
-  if (dir.empty()) dir = ".";
+  const std::string dir = out.has_parent_path() ? out.parent_path().string() : std::string(".");
   const std::string stem = out.stem().string();
   for (const auto& [texture, name] : images) {
     draco::SourceImage& image = texture->source_image();
