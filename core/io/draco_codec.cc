@@ -416,6 +416,10 @@ void ReadAttributes(const draco::Mesh& dm, Mesh& mesh, std::vector<std::string>*
 
 }  // namespace
 
+absl::StatusOr<std::unique_ptr<draco::Mesh>> DecodeDracoMesh(std::string_view bytes) {
+  return DecodeToDraco(bytes, kMaxDracoVertices);
+}
+
 absl::StatusOr<Mesh> DecodeDraco(std::string_view bytes, std::vector<std::string>* dropped, bool attributes) {
   absl::StatusOr<std::unique_ptr<draco::Mesh>> dm = DecodeToDraco(bytes, kMaxDracoVertices);
   if (!dm.ok()) return dm.status();

@@ -26,6 +26,10 @@
 #include "core/mesh.h"
 #include "core/util/stop_token.h"
 
+namespace draco {
+class Mesh;
+}  // namespace draco
+
 namespace meshsmooth {
 
 enum class DracoMethod { kSequential, kEdgebreaker };
@@ -86,6 +90,10 @@ absl::StatusOr<std::string> EncodeDraco(const Mesh& mesh, const DracoOptions& op
 // `attributes` false: positions and faces only (a caller that keeps its own attributes).
 absl::StatusOr<Mesh> DecodeDraco(std::string_view bytes, std::vector<std::string>* dropped = nullptr,
                                  bool attributes = true);
+
+// The Draco mesh itself, every attribute and its metadata as Draco decoded them, for a caller
+// that hands it on to Draco (the glTF writer); the same checks and errors as DecodeDraco().
+absl::StatusOr<std::unique_ptr<draco::Mesh>> DecodeDracoMesh(std::string_view bytes);
 
 // Vertices a Draco mesh may have: an int32 holds every index.
 inline constexpr int64_t kMaxDracoVertices = std::numeric_limits<int32_t>::max();

@@ -13,8 +13,8 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_join.h"
 #include "core/io/draco_checks.h"
+#include "core/io/draco_codec.h"
 #include "core/io/gltf_texcoords.h"
-#include "draco/compression/decode.h"
 #include "draco/io/file_reader_factory.h"
 #include "draco/io/file_utils.h"
 #include "draco/io/file_writer_factory.h"
@@ -193,14 +193,11 @@ absl::StatusOr<GltfScene> GltfScene::Read(const std::string& path) {
   return GltfScene(std::move(impl));
 }
 
-absl::Status WriteMeshAsGltf(std::string_view draco, const Vec3& origin, const std::string& path, bool draco_compressed,
+absl::Status WriteMeshAsGltf(std::string_view bytes, const Vec3& origin, const std::string& path, bool draco_compressed,
                              std::vector<std::string>* dropped) {
-  draco::DecoderBuffer buffer;
-  buffer.Init(draco.data(), draco.size());
-  draco::Decoder decoder;
-  draco::StatusOr<std::unique_ptr<draco::Mesh>> mesh = decoder.DecodeMeshFromBuffer(&buffer);
-  if (!mesh.ok()) return absl::InvalidArgumentError(absl::StrCat("the result: ", mesh.status().error_msg()));
-  std::unique_ptr<draco::Mesh> m = std::move(mesh).value();
+  absl::StatusOr<std::unique_ptr<draco::Mesh>> mesh = DecodeDracoMesh(bytes);
+  if (!mesh.ok()) return absl::InvalidArgumentError(absl::StrCat("the result: ", mesh.status().message()));
+  std::unique_ptr<draco::Mesh> m = std::move(*mesh);
   std::vector<std::string> names;
   for (int a = m->num_attributes() - 1; a >= 0; --a) {
     if (m->attribute(a)->attribute_type() != draco::GeometryAttribute::GENERIC) continue;

@@ -30,13 +30,13 @@ struct GltfCounts {
   friend bool operator==(const GltfCounts&, const GltfCounts&) = default;
 };
 
-// Writes a mesh as a glTF scene at `path` (.glb, or .gltf with OUT.bin beside it): `draco`
+// Writes a mesh as a glTF scene at `path` (.glb, or .gltf with OUT.bin beside it): `bytes`
 // holds it as the service returns it (positions relative to `origin`, texture coordinates,
 // normals, colours), one node translated by `origin` places it (how glTF georeferences a mesh:
 // its float32 positions stay near zero), primitives Draco-compressed when `draco_compressed`.
 // What glTF has no place for (one-component vertex properties) is named in `dropped`.
 // InvalidArgument for bytes Draco cannot decode; Internal when its encoder fails.
-absl::Status WriteMeshAsGltf(std::string_view draco, const Vec3& origin, const std::string& path, bool draco_compressed,
+absl::Status WriteMeshAsGltf(std::string_view bytes, const Vec3& origin, const std::string& path, bool draco_compressed,
                              std::vector<std::string>* dropped);
 
 class GltfScene {
