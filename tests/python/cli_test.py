@@ -15,7 +15,7 @@ import sys
 import time
 import zlib
 
-from harness import Server, parser, ply_counts, run, run_checks
+from harness import Server, parser, ply_counts, run, run_checks, write_text
 
 
 def flow_names(cli, *server):
@@ -440,15 +440,9 @@ def cli_checks(a, check, tmp):
 
     def token_files_trimmed_alike():
         # The server and the CLI read a token file by one rule: whitespace at both ends dropped.
-        server_token = os.path.join(tmp, "server.token")
-        with open(server_token, "w") as f:
-            f.write("s3cret-token\n")
-        client_token = os.path.join(tmp, "client.token")
-        with open(client_token, "w") as f:
-            f.write("  s3cret-token \t \n")
-        wrong_token = os.path.join(tmp, "wrong.token")
-        with open(wrong_token, "w") as f:
-            f.write("s3cret-tokem\n")
+        server_token = write_text(os.path.join(tmp, "server.token"), "s3cret-token\n")
+        client_token = write_text(os.path.join(tmp, "client.token"), "  s3cret-token \t \n")
+        wrong_token = write_text(os.path.join(tmp, "wrong.token"), "s3cret-tokem\n")
         with Server(a.server, "--quiet", "--auth-token-file", server_token) as guarded:
             guarded_address = guarded.address
             out = os.path.join(tmp, "with_token.ply")

@@ -141,6 +141,13 @@ def fresh_dir(path=None, prefix="meshsmooth-test-"):
     return path
 
 
+def write_text(path, text):
+    """Writes `text` to `path` (created or truncated) and returns `path`."""
+    with open(path, "w") as f:
+        f.write(text)
+    return path
+
+
 def free_port():
     """A loopback port nothing listens on (bound, then closed)."""
     with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:

@@ -18,7 +18,7 @@ import sys
 import time
 import urllib.request
 
-from harness import Server, metric_sum, parse_metrics, parser, require, run, run_checks
+from harness import Server, metric_sum, parse_metrics, parser, require, run, run_checks, write_text
 
 # (builtin input, its vertices, extra flags): five jobs, one of them with automatic stopping.
 JOBS = [
@@ -164,12 +164,8 @@ def metrics_checks(a, check, tmp):
     check("--log-format json: every stderr line is a JSON object; one per job with its fields, and the lifecycle "
           "events listening, shutdown, stopped", json_log)
 
-    token = os.path.join(tmp, "server.token")
-    with open(token, "w") as f:
-        f.write("s3cret\n")
-    wrong = os.path.join(tmp, "wrong.token")
-    with open(wrong, "w") as f:
-        f.write("guess\n")
+    token = write_text(os.path.join(tmp, "server.token"), "s3cret\n")
+    wrong = write_text(os.path.join(tmp, "wrong.token"), "guess\n")
     guarded = Server(a.server, "--metrics-listen", "127.0.0.1:0", "--log-format", "json", "--workers", "1",
                      "--auth-token-file", token, "--max-vertices", "1000", stderr=Server.KEEP)
     try:
