@@ -178,10 +178,13 @@ absl::StatusOr<TexcoordOriginals> ReadTexcoordOriginals(const std::string& path)
     if (!fresh && it->second != bits) it->second = kAmbiguous;
   });
   if (!s.ok()) return s;
+  // A value Draco's round trip keeps needs nothing written back.
+  std::erase_if(originals.original_of, [](const auto& entry) { return entry.first == entry.second; });
   return originals;
 }
 
 absl::StatusOr<int64_t> RestoreTexcoords(const std::string& path, const TexcoordOriginals& originals) {
+  if (originals.original_of.empty()) return 0;  // nothing Draco changes: the file is not read again
   absl::StatusOr<GltfFile> f = Load(path);
   if (!f.ok()) return f.status();
   int64_t rewritten = 0;

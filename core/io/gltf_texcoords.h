@@ -19,7 +19,8 @@
 namespace meshsmooth {
 
 // Per float32 bit pattern of a round trip, the bits of the original v it came from; 0xffffffff
-// for a round trip two originals share.
+// for a round trip two originals share. Values the round trip keeps are left out: empty when
+// Draco changes none.
 struct TexcoordOriginals {
   std::unordered_map<uint32_t, uint32_t> original_of;
 };

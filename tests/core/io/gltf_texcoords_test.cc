@@ -40,15 +40,23 @@ TEST(GltfTexcoordsTest, ReadsEachVAndItsRoundTrip) {
   const std::string path = Write("uv.gltf", Scene("2", ""));
   absl::StatusOr<TexcoordOriginals> t = ReadTexcoordOriginals(path);
   ASSERT_TRUE(t.ok()) << t.status();
-  ASSERT_EQ(t->original_of.size(), 2u);
+  // Each v Draco's round trip changes is listed under its round trip; one it keeps is not.
+  size_t changed = 0;
   for (float v : {0.1f, 0.3f}) {
     const float trip = static_cast<float>(1.0 - static_cast<float>(1.0 - static_cast<double>(v)));
     uint32_t key, value;
     std::memcpy(&key, &trip, 4);
     std::memcpy(&value, &v, 4);
+    if (key == value) {
+      EXPECT_EQ(t->original_of.count(key), 0u) << v;
+      continue;
+    }
+    ++changed;
     ASSERT_TRUE(t->original_of.count(key)) << v;
     EXPECT_EQ(t->original_of.at(key), value) << v;
   }
+  EXPECT_GT(changed, 0u);  // 0.1 uses bits float32(1 - 0.1) does not have
+  EXPECT_EQ(t->original_of.size(), changed);
   std::filesystem::remove(path);
 }
 
