@@ -15,10 +15,11 @@ import subprocess
 import sys
 import threading
 import time
+import urllib.request
 
 import grpc
 
-from harness import Server, free_port, parser, run, run_checks
+from harness import Server, free_port, metric_sum, parse_metrics, parser, run, run_checks
 
 
 class Replica(Server):
@@ -223,9 +224,21 @@ def replica_checks(a, check, tmp):
         threading.Thread(target=loop, daemon=True).start()
         return channel
 
+    def wait_for_gauge(rep, name, value, timeout=30.0):
+        """Polls the replica's /metrics until the gauge `name` reads `value`."""
+        deadline = time.monotonic() + timeout
+        while True:
+            with urllib.request.urlopen(f"http://{rep.metrics_address}/metrics", timeout=10) as r:
+                now = metric_sum(parse_metrics(r.read().decode()), name)
+            if now == value:
+                return
+            assert time.monotonic() < deadline, f"{name} is {now}, not {value}, after {timeout:g} s"
+            time.sleep(0.02)
+
     def sigterm_drains():
         grace = 6.0
-        rep = Replica(server, "--workers", "2", "--threads-per-job", "1", "--grace-seconds", str(grace))
+        rep = Replica(server, "--workers", "2", "--threads-per-job", "1", "--grace-seconds", str(grace),
+                      "--metrics-listen", "127.0.0.1:0")
         statuses = []
         channel = health_statuses(rep.address, statuses)
         try:
@@ -250,9 +263,11 @@ def replica_checks(a, check, tmp):
             # fast the machine (median's ~8 s on two cores came close); the grace cuts it.
             long_job = job("guided_normal", "10000", "long")
             short_job = job("taubin", str(short_iterations), "short")   # finishes within it
-            time.sleep(0.5)
-            queued_job = job("median", "10000", "queued")  # both workers are busy
-            time.sleep(0.3)
+            # The queued job is sent only once both workers are busy, and SIGTERM only once it waits:
+            # under load (ASan, a busy CI machine) a CLI takes a varying time to upload.
+            wait_for_gauge(rep, "meshsmooth_jobs_running", 2)
+            queued_job = job("median", "10000", "queued")
+            wait_for_gauge(rep, "meshsmooth_queue_depth", 1)
             assert short_job.poll() is None, "the short job ended before SIGTERM: make it longer"
             t0 = time.monotonic()
             rep.proc.send_signal(signal.SIGTERM)
