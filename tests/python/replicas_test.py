@@ -33,6 +33,18 @@ class Replica(Server):
         return [jid for jid, st in self.job_lines() if status is None or st == status]
 
 
+def wait_for_gauge(rep, name, value, timeout=30.0):
+    """Polls the replica's /metrics (it runs with --metrics-listen) until the gauge `name` reads `value`."""
+    deadline = time.monotonic() + timeout
+    while True:
+        with urllib.request.urlopen(f"http://{rep.metrics_address}/metrics", timeout=10) as r:
+            now = metric_sum(parse_metrics(r.read().decode()), name)
+        if now == value:
+            return
+        assert time.monotonic() < deadline, f"{name} is {now}, not {value}, after {timeout:g} s"
+        time.sleep(0.02)
+
+
 def main():
     a = parser(__doc__, required=("cli", "server")).parse_args()
     return run_checks(lambda checks, tmp: replica_checks(a, checks.check, tmp), tmp_prefix="meshsmooth-replicas-")
@@ -51,6 +63,12 @@ def replica_checks(a, check, tmp):
         return subprocess.Popen([cli, "smooth", "builtin:noisy-sphere-large", "-o", os.path.join(tmp, "busy.ply"),
                                  "--flow", "taubin", "--iterations", iterations, "--server", address, "--quiet"],
                                 stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+    # The same, returned once it holds the replica's only worker (read from its /metrics).
+    def busy_running(rep, iterations):
+        b = busy(rep.address, iterations)
+        wait_for_gauge(rep, "meshsmooth_jobs_running", 1)
+        return b
 
     def help_documents_flags():
         r = run([cli, "smooth", "--help"])
@@ -126,12 +144,11 @@ def replica_checks(a, check, tmp):
         one.stop()
         two.stop()
 
-    saturated = Replica(server, "--workers", "1", "--queue-depth", "0")
+    saturated = Replica(server, "--workers", "1", "--queue-depth", "0", "--metrics-listen", "127.0.0.1:0")
     try:
         def retried_until_a_worker_is_free():
-            b = busy(saturated.address, "10000")
+            b = busy_running(saturated, "10000")  # the only worker; the queue takes none
             try:
-                time.sleep(0.8)  # the busy job holds the only worker; the queue takes none
                 p = subprocess.Popen([cli, "smooth", "builtin:noisy-sphere", "-o", os.path.join(tmp, "patient.ply"),
                                       "--iterations", "3", "--server", saturated.address, "--retries", "12",
                                       "--job-id", "patient"],
@@ -150,9 +167,8 @@ def replica_checks(a, check, tmp):
               retried_until_a_worker_is_free)
 
         def retries_are_bounded():
-            b = busy(saturated.address, "10000")
+            b = busy_running(saturated, "10000")
             try:
-                time.sleep(0.8)
                 r = smooth(saturated.address, "--retries", "0")
                 assert r.returncode == 1, (r.returncode, r.stderr)
                 assert "RESOURCE_EXHAUSTED: the job queue is full" in r.stderr and "retrying" not in r.stderr, r.stderr
@@ -224,17 +240,6 @@ def replica_checks(a, check, tmp):
         threading.Thread(target=loop, daemon=True).start()
         return channel
 
-    def wait_for_gauge(rep, name, value, timeout=30.0):
-        """Polls the replica's /metrics until the gauge `name` reads `value`."""
-        deadline = time.monotonic() + timeout
-        while True:
-            with urllib.request.urlopen(f"http://{rep.metrics_address}/metrics", timeout=10) as r:
-                now = metric_sum(parse_metrics(r.read().decode()), name)
-            if now == value:
-                return
-            assert time.monotonic() < deadline, f"{name} is {now}, not {value}, after {timeout:g} s"
-            time.sleep(0.02)
-
     def sigterm_drains():
         grace = 6.0
         rep = Replica(server, "--workers", "2", "--threads-per-job", "1", "--grace-seconds", str(grace),
@@ -303,11 +308,11 @@ def replica_checks(a, check, tmp):
           "finishes within the grace, the rest UNAVAILABLE, exit 1 within grace + 1 s", sigterm_drains)
 
     def max_queue_wait():
-        rep = Replica(server, "--workers", "1", "--threads-per-job", "1", "--max-queue-wait", "0.5")
+        rep = Replica(server, "--workers", "1", "--threads-per-job", "1", "--max-queue-wait", "0.5",
+                      "--metrics-listen", "127.0.0.1:0")
         try:
-            b = busy(rep.address, "10000")
+            b = busy_running(rep, "10000")
             try:
-                time.sleep(0.8)
                 t0 = time.monotonic()
                 r = smooth(rep.address, "--retries", "0", "--job-id", "impatient")
                 waited = time.monotonic() - t0
