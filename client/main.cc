@@ -162,9 +162,10 @@ void AddSmoothOptions(CLI::App* smooth, SmoothOptions& so) {
       ->add_option("--iterations", so.iterations,
                    "auto, or a number of iterations to run exactly. auto: estimate the input's noise, "
                    "estimate every iteration's error to the noise-free surface from it (SURE) and keep "
-                   "the best iteration (a clean mesh comes back unchanged, fine detail and all, and so does a "
-                   "mesh every run would leave rougher; closed meshes keep their volume); the summary "
-                   "prints the estimate and why it stopped")
+                   "the best iteration; when that turned the faces far less than the noise turns them (a fused "
+                   "scan's correlated noise), run until they turned that far instead (a clean mesh comes back "
+                   "unchanged, fine detail and all, and so does a mesh every run would leave rougher; closed "
+                   "meshes keep their volume); the summary prints the estimate and why it stopped")
       ->transform(CLI::Transformer(std::map<std::string, std::string>{{"auto", "0"}}))
       ->default_str("auto");
   smooth

@@ -2,16 +2,21 @@
 
 #include <algorithm>
 #include <iterator>
+#include <numbers>
 #include <optional>
 #include <utility>
 #include <vector>
 
 #include "absl/status/status.h"
 #include "core/flows/auto_stop.h"
+#include "core/flows/discrepancy.h"
 #include "core/measure/noise.h"
+#include "core/measure/normal_turn.h"
 
 namespace meshsmooth::flows {
 namespace {
+
+double Degrees(double radians) { return radians * 180.0 / std::numbers::pi; }
 
 // A sample holds one vertex in kSampleShare of the mesh's, at least kMinSample and at most
 // kMaxSample, in patches of at least kMinPatch vertices, at most kMaxPatches of them; the risk is
@@ -247,6 +252,85 @@ absl::StatusOr<FlowResult> SmoothWithEstimate(Mesh& mesh, const Topology& topo, 
   return result;
 }
 
+// The sample's vertices a run may not move: the patches' cuts (not the mesh's boundary) and the
+// mesh's own locked vertices.
+std::vector<uint8_t> SampleLocks(const Sample& sample, const Topology& sample_topo, const Topology& topo,
+                                 const FlowParams& q) {
+  std::vector<uint8_t> locked(sample_topo.num_vertices(), 0);
+  for (int32_t s = 0; s < sample_topo.num_vertices(); ++s) {
+    const int32_t v = sample.origin[s];
+    const bool cut = sample_topo.kind[s] == VertexKind::kBoundary && topo.kind[v] != VertexKind::kBoundary;
+    locked[s] = cut || (!q.locked.empty() && q.locked[v] != 0);
+  }
+  return locked;
+}
+
+// Every candidate (p.flow when set, else kChoiceFlows) on a copy of `mesh`, stopped once its
+// faces turned by `target` (DiscrepancyStop); the result whose face normals vary least
+// (NormalVariation) wins, none when every result varies more than the input.
+absl::StatusOr<std::optional<FlowResult>> ChooseByTurn(Mesh& mesh, const Topology& topo, const FlowParams& p,
+                                                       const RunControl& control, double h, const NoiseEstimate& noise,
+                                                       double target) {
+  std::vector<FlowId> candidates(std::begin(kChoiceFlows), std::end(kChoiceFlows));
+  if (p.flow) candidates.assign(1, *p.flow);
+  RunControl quiet = control;
+  quiet.on_progress = nullptr;
+  const double input_variation = NormalVariation(mesh.positions.data(), topo);
+  std::optional<FlowResult> best;
+  std::vector<Vec3> best_positions;
+  double best_variation = input_variation;
+  for (FlowId flow : candidates) {
+    Report(control, Phase::kChoosing, flow);
+    Mesh copy = mesh;
+    FlowParams q = p;
+    q.flow = flow;
+    SetBoundary(q, flow, p.boundary);
+    DiscrepancyStop rule(target);
+    AutoPlan plan{0, &noise, nullptr, std::nullopt, p.boundary != BoundaryMode::kFixed, false, &rule};
+    absl::StatusOr<FlowResult> r = SmoothOneFlow(copy, topo, q, quiet, h, plan);
+    if (!r.ok()) {
+      if (r.status().code() == absl::StatusCode::kFailedPrecondition && candidates.size() > 1) continue;
+      return r.status();
+    }
+    const double variation = NormalVariation(copy.positions.data(), topo);
+    if (variation >= best_variation) continue;
+    best = *std::move(r);
+    best_positions = std::move(copy.positions);
+    best_variation = variation;
+  }
+  if (best) mesh.positions = std::move(best_positions);
+  return best;
+}
+
+// SmoothAutomatic for noise the risk estimate cannot read: the candidates run to the discrepancy
+// target, on the mesh itself or on its sample (then the whole mesh at the chosen count). The
+// mesh keeps its positions when no candidate wins.
+absl::StatusOr<std::optional<FlowResult>> SmoothToTurn(Mesh& mesh, const Topology& topo, const FlowParams& q,
+                                                       const RunControl& control, double h,
+                                                       const NoiseEstimate& noise) {
+  const double target = kDiscrepancyTurnShare * noise.normal_turn;
+  const int32_t n = mesh.num_vertices();
+  if (n <= kMaxWholeTurnVertices) return ChooseByTurn(mesh, topo, q, control, h, noise, target);
+  const int32_t size = SampleSize(n);
+  Sample sample = SamplePatches(mesh, topo, size);
+  const Topology sample_topo = BuildTopology(sample.mesh);
+  FlowParams on_sample = q;
+  on_sample.reorder = ReorderMode::kNever;
+  on_sample.locked = SampleLocks(sample, sample_topo, topo, q);
+  absl::StatusOr<std::optional<FlowResult>> chosen =
+      ChooseByTurn(sample.mesh, sample_topo, on_sample, control, h, noise, target);
+  if (!chosen.ok() || !chosen->has_value()) return chosen;
+  FlowParams whole = q;
+  whole.flow = (*chosen)->flow;
+  SetBoundary(whole, whole.flow.value(), q.boundary);
+  absl::StatusOr<FlowResult> result = SmoothOneFlow(mesh, topo, whole, control, h,
+                                                    AutoPlan{std::max((*chosen)->iterations_run, 1), &noise, nullptr,
+                                                             std::nullopt, q.boundary != BoundaryMode::kFixed});
+  if (!result.ok()) return result.status();
+  result->stop_reason = (*chosen)->stop_reason;
+  return std::optional<FlowResult>(*std::move(result));
+}
+
 }  // namespace
 
 absl::StatusOr<FlowResult> SmoothAutomatic(Mesh& mesh, const Topology& topo, const FlowParams& p,
@@ -269,8 +353,32 @@ absl::StatusOr<FlowResult> SmoothAutomatic(Mesh& mesh, const Topology& topo, con
     for (uint8_t m : moved) outliers += m;
   }
   if (absl::Status s = control.stop.Check(); !s.ok()) return s;
+  const std::vector<Vec3> input = mesh.positions;
   absl::StatusOr<FlowResult> result = SmoothWithEstimate(mesh, topo, q, control, h, noise, outliers > 0);
-  if (result.ok()) result->outliers_moved = outliers;
+  if (!result.ok()) return result;
+  // The risk estimate assumes noise independent from vertex to vertex. When its best iteration
+  // turned the faces by less than kRiskTurnShare of the turn the noise gives them, the noise is
+  // not that (a fused scan's is correlated over many edges, and the estimate reads it as shape):
+  // the job starts again from its input with the discrepancy rule (discrepancy.h).
+  const bool ran = result->iterations_run > 0 || result->stop_reason == StopReason::kNoGain;
+  if (ran && Degrees(noise.normal_turn) >= kVisibleTurnDeg) {
+    Mesh before = mesh;
+    before.positions = input;
+    const double turned = NormalTurn(before, topo).Of(mesh.positions.data());
+    if (turned < kRiskTurnShare * noise.normal_turn) {
+      Report(control, Phase::kNoiseEstimate, q.flow.value_or(kDefaultFlow));
+      std::vector<Vec3> by_risk = std::move(mesh.positions);
+      mesh.positions = input;
+      absl::StatusOr<std::optional<FlowResult>> by_turn = SmoothToTurn(mesh, topo, q, control, h, noise);
+      if (!by_turn.ok()) return by_turn.status();
+      if (by_turn->has_value()) {
+        result = **std::move(by_turn);
+      } else {
+        mesh.positions = std::move(by_risk);
+      }
+    }
+  }
+  result->outliers_moved = outliers;
   return result;
 }
 

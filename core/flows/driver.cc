@@ -332,8 +332,9 @@ absl::StatusOr<FlowResult> RunIterations(Mesh& mesh, const Topology& topo, const
   // vertices on two cores): no per-pass wait between threads, and the bits do not depend on
   // the thread count. With more threads a large run keeps them all, the probe after it.
   const int threads = p.threads > 0 ? p.threads : omp_get_max_threads();
-  const bool side_by_side = p.iterations == kAutoIterations && plan.fixed_iterations == 0 && threads >= 2 &&
-                            (mesh.num_vertices() < kParallelThreshold || threads == 2);
+  StopRule* const rule = p.iterations == kAutoIterations && plan.fixed_iterations == 0 ? plan.stop_rule : nullptr;
+  const bool side_by_side = p.iterations == kAutoIterations && plan.fixed_iterations == 0 && rule == nullptr &&
+                            threads >= 2 && (mesh.num_vertices() < kParallelThreshold || threads == 2);
   FlowParams run_params = p;
   if (side_by_side) run_params.threads = 1;
   FlowRun run(topo, run_params, h, *diagonal);
@@ -353,7 +354,7 @@ absl::StatusOr<FlowResult> RunIterations(Mesh& mesh, const Topology& topo, const
     auto_stop.emplace(mesh, topo, run.roles(), h, run.threads(), plan.noise, plan.measured, plan.measure_rims);
     if (plan.rival_risk_h2) auto_stop->SetRival(*plan.rival_risk_h2);
     result.auto_stop = auto_stop->report();
-    if (auto_stop->nothing_to_do()) {
+    if (auto_stop->nothing_to_do() && rule == nullptr) {
       result.stop_reason = auto_stop->idle_reason();
       if (plan.repair_idle) {
         auto_stop->RepairFolds(mesh.positions.data());
@@ -368,7 +369,8 @@ absl::StatusOr<FlowResult> RunIterations(Mesh& mesh, const Topology& topo, const
   // Bound only now: a clean mesh (nothing to do) skips a normal filter's face graph.
   run.Bind(mesh);
   // A count chosen on a sample of the mesh (choice.h) runs as it is: no probe, no estimate.
-  const bool estimate_risk = auto_stop && plan.fixed_iterations == 0;
+  const bool estimate_risk = auto_stop && plan.fixed_iterations == 0 && rule == nullptr;
+  if (rule != nullptr) rule->Start(mesh, topo);
   const int32_t n = mesh.num_vertices();
   std::vector<Vec3> cur = std::move(mesh.positions), next(n), mid;
   if (run.passes() > 1) mid.resize(n);
@@ -440,7 +442,7 @@ absl::StatusOr<FlowResult> RunIterations(Mesh& mesh, const Topology& topo, const
       total = run.Iterate(it, cur, next, mid, out);
       if (estimate_risk) probe->Iterate(it, probe_mesh.positions, probe_next, probe_mid, probe_out);
     }
-    const Progress progress = run.ToProgress(it, total, estimate_risk ? 0 : last_iteration);
+    const Progress progress = run.ToProgress(it, total, estimate_risk || rule != nullptr ? 0 : last_iteration);
     if (absl::Status s = run.CheckDivergence(it, total, progress); !s.ok()) {
       mesh.positions = std::move(cur);  // the last iteration before the failure
       return s;
@@ -459,6 +461,12 @@ absl::StatusOr<FlowResult> RunIterations(Mesh& mesh, const Topology& topo, const
       if (!auto_stop->improved() && auto_stop->best_iteration() == it - 1) best.assign(out->begin(), out->end());
       result.auto_stop = auto_stop->report();
       if (stop) {
+        result.stop_reason = *stop;
+        break;
+      }
+    }
+    if (rule != nullptr) {
+      if (const std::optional<StopReason> stop = rule->After(it, cur.data())) {
         result.stop_reason = *stop;
         break;
       }

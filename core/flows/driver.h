@@ -22,6 +22,17 @@ int ThreadsFor(int32_t n, const FlowParams& p);
 
 // The iterations of a valid `p` (its flow set) on `mesh`: roles (free, fixed, boundary curve),
 // the Jacobi double buffer, eq. (14)'s threshold, stopping, progress and the divergence checks.
+// When a run with automatic iterations stops, if not at its least estimated error: told the
+// run's input (in the vertex order the run uses, reorder.h) before the first iteration, then
+// asked after every accepted one.
+class StopRule {
+ public:
+  virtual ~StopRule() = default;
+  virtual void Start(const Mesh& input, const Topology& topo) = 0;
+  // The reason to stop at iteration `iteration` (1-based) with positions `pos`, if any.
+  virtual std::optional<StopReason> After(int iteration, const Vec3* pos) = 0;
+};
+
 // How a run with automatic iterations stops.
 struct AutoPlan {
   // > 0: exactly this many iterations (a count chosen on a sample, choice.h), with no risk
@@ -42,6 +53,9 @@ struct AutoPlan {
   // The input was changed before the run (outliers moved, noise.h): a run that finds no noise
   // to remove still repairs the folds the change left (AutoStop::RepairFolds).
   bool repair_idle = false;
+  // Set: the run stops when this rule says so (StopRule), not at the least estimated error: no
+  // probe, no risk estimate; the folds are repaired and the volume kept as usual.
+  StopRule* stop_rule = nullptr;
 };
 
 // `h` is the input's mean edge length; `plan` applies with automatic iterations. Errors as

@@ -11,6 +11,7 @@
 #include <optional>
 #include <vector>
 
+#include "core/measure/normal_turn.h"
 #include "core/normals.h"
 
 namespace meshsmooth {
@@ -410,6 +411,7 @@ NoiseEstimate EstimateNoise(const Mesh& mesh, const Topology& topo, double h, in
     const double k2 = kDetailWideRatio * kDetailWideRatio, c2 = kNoiseWideRatio * kNoiseWideRatio;
     estimate.detail_free_h = std::sqrt(std::max(0.0, (k2 * narrow * narrow - far * far) / (k2 - c2)));
   }
+  estimate.normal_turn = PredictedNormalNoise(mesh, topo, estimate.sigma);
   const double outlier = OutlierThresholdH(estimate);
   int64_t outliers = 0;
   for (double r : residual) outliers += r > outlier;
