@@ -62,7 +62,7 @@ Mesh Scan(const Mesh& clean, ScanKind kind, std::pair<double, double> pose, uint
   if (kind != ScanKind::kFused) {
     const SensorModel s =
         kind == ScanKind::kTimeOfFlight ? SensorModel::TimeOfFlight() : SensorModel::StructuredLight();
-    return SimulateFrame(clean, CameraAt(s, pose.first, pose.second), s, seed).mesh;
+    return SimulateFrame(clean, CameraAt(s, pose.first, pose.second), s, seed, /*solid=*/true).mesh;
   }
   // Structured-light frames (KinectFusion's sensor) on a turn around the object from the pose,
   // the elevation rising and falling by 20 degrees.

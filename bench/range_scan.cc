@@ -163,7 +163,7 @@ SensorModel SensorModel::TimeOfFlight() {
   return s;
 }
 
-DepthImage RenderDepth(const Mesh& mesh, const Camera& camera) {
+DepthImage RenderDepth(const Mesh& mesh, const Camera& camera, bool solid) {
   DepthImage img;
   img.width = camera.width;
   img.height = camera.height;
@@ -188,6 +188,10 @@ DepthImage RenderDepth(const Mesh& mesh, const Camera& camera) {
   for (int32_t f = 0; f < mesh.num_triangles(); ++f) {
     const Triangle& t = mesh.triangles[f];
     if (!IsUsableTriangle(t, nv) || inv[t[0]] == 0.0 || inv[t[1]] == 0.0 || inv[t[2]] == 0.0) continue;
+    if (solid) {
+      const Vec3& a = mesh.positions[t[0]];
+      if (Dot(Cross(mesh.positions[t[1]] - a, mesh.positions[t[2]] - a), a - camera.eye) >= 0.0) continue;
+    }
     raster::ForEachCoveredPixel(camera.width, camera.height, screen[t[0]], screen[t[1]], screen[t[2]],
                                 [&](size_t index, double l0, double l1, double l2) {
                                   const double w = l0 * inv[t[0]] + l1 * inv[t[1]] + l2 * inv[t[2]];
@@ -290,8 +294,8 @@ RangeMesh Triangulate(const DepthImage& image, const Camera& camera, const Senso
   return out;
 }
 
-RangeMesh SimulateFrame(const Mesh& mesh, const Camera& camera, const SensorModel& sensor, uint64_t seed) {
-  return Triangulate(MeasureDepth(RenderDepth(mesh, camera), mesh, camera, sensor, seed), camera, sensor);
+RangeMesh SimulateFrame(const Mesh& mesh, const Camera& camera, const SensorModel& sensor, uint64_t seed, bool solid) {
+  return Triangulate(MeasureDepth(RenderDepth(mesh, camera, solid), mesh, camera, sensor, seed), camera, sensor);
 }
 
 }  // namespace meshsmooth::bench
