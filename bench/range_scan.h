@@ -74,9 +74,10 @@ struct SensorModel {
   // The depth difference between neighbouring pixels at depth z above which they are across a jump.
   double JumpThreshold(double z) const;
 
-  // Kinect v1 (structured light): Khoshelham & Elberink 2012, Nguyen, Izadi & Lovell 2012.
+  // Kinect v1 (structured light): the deviations of Nguyen, Izadi & Lovell 2012, depth from
+  // disparity as in Khoshelham & Elberink 2012.
   static SensorModel StructuredLight();
-  // Kinect v2 (time of flight): Fankhauser et al. 2015, Sarbolandi et al. 2015.
+  // Kinect v2 (time of flight): the axial deviation of Fankhauser et al. 2015.
   static SensorModel TimeOfFlight();
 };
 
