@@ -1,11 +1,11 @@
 // The simulator's fused scan (bench/tsdf_fusion.h) against a real one: the Kinect-Fusion cone of
 // ../shared/data/real. The simulator scans the cone's high-precision reference (same size; its
-// frames fused on a grid that puts as many vertices on the cone as the real scan's, the
-// reference drawn as the outside of a solid: it covers only the scanned side, and a camera that
-// saw the inside of that shell would fuse surfaces no real scan has), and its scan must look like the real scan in
-// numbers: the mean face-normal angle to the reference, the spread of the vertices' offsets along
-// the reference's normal, and the distance along the surface over which those offsets stay
-// correlated. Skips when ../shared/data/real is absent.
+// frames fused on a grid that puts as many vertices on the cone as the real scan's; the
+// reference drawn as the outside of a solid, since it covers only the scanned side and a camera
+// that saw the inside of that shell would fuse surfaces no real scan has), and its scans must
+// look like the real scan in numbers: the mean face-normal angle to the reference, the spread of
+// the vertices' offsets along the reference's normal, and the distance along the surface over
+// which those offsets stay correlated. Skips when ../shared/data/real is absent.
 #include <stdlib.h>
 
 #include <algorithm>
