@@ -146,16 +146,17 @@ int main(int argc, char** argv) {
   const Clock::time_point start = Clock::now();
   Options opt;
   std::vector<std::string> command = {"build/bench/meshsmooth_quality"};
+  // An argument as a shell would need it typed: quoted when it holds a space or is empty.
+  auto quoted = [](const std::string& s) { return s.empty() || s.find(' ') != std::string::npos ? "'" + s + "'" : s; };
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
-    command.push_back(a.find(' ') == std::string::npos ? a : "'" + a + "'");
+    command.push_back(quoted(a));
     auto next = [&]() -> std::string {
       if (i + 1 >= argc) {
         std::fputs(kUsage, stderr);
         std::exit(2);
       }
-      command.push_back(std::string(argv[i + 1]).find(' ') == std::string::npos ? argv[i + 1]
-                                                                                : "'" + std::string(argv[i + 1]) + "'");
+      command.push_back(quoted(argv[i + 1]));
       return argv[++i];
     };
     if (a == "--meshes") {

@@ -107,20 +107,20 @@ Row RunRow(const std::string& label, int iterations, const std::vector<Input>& i
   return row;
 }
 
-std::vector<Row> JobRows(const std::vector<Job>& jobs, const std::vector<Input>& inputs) {
+std::vector<Row> JobRows(const std::vector<Job>& jobs, const std::vector<Input>& inputs, const Sweep& sweep) {
   std::vector<Row> rows;
   for (const Job& job : jobs) {
-    rows.push_back(job.oracle ? OracleRow(job, inputs)
+    rows.push_back(job.oracle ? OracleRow(job, inputs, sweep)
                               : RunRow(job.label, static_cast<int>(job.spec.iterations()), inputs, ParamsOf(job.spec)));
   }
   return rows;
 }
 
-Row OracleRow(const Job& job, const std::vector<Input>& inputs) {
+Row OracleRow(const Job& job, const std::vector<Input>& inputs, const Sweep& sweep) {
   Row best;
   double best_rms = HUGE_VAL;
   int worse = 0;
-  for (int count : kOracleCounts) {
+  for (int count : sweep.counts) {
     v1::JobSpec spec = job.spec;
     spec.set_iterations(static_cast<uint32_t>(count));
     Row row = RunRow(job.label, count, inputs, ParamsOf(spec));
@@ -133,7 +133,7 @@ Row OracleRow(const Job& job, const std::vector<Input>& inputs) {
       best_rms = rms;
       best = std::move(row);
       worse = 0;
-    } else if (++worse == 2) {
+    } else if (++worse >= sweep.past_best) {
       break;
     }
   }

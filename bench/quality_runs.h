@@ -89,13 +89,21 @@ Row InputRow(const std::string& label, const std::vector<Input>& inputs);
 // `p` run on each of `inputs`, as row `label` at `iterations` (0: not a sweep).
 Row RunRow(const std::string& label, int iterations, const std::vector<Input>& inputs, const FlowParams& p);
 
-// The oracle: `job` at each count of kOracleCounts, keeping the count with the smallest mean
-// RMS distance over the seeds. The sweep stops two counts after the best so far (the error
-// of every flow here falls, then rises) and at the first count that fails on any seed.
-Row OracleRow(const Job& job, const std::vector<Input>& inputs);
+// How an oracle sweeps: the counts it tries (increasing), and how many counts past the best so
+// far it tries before it stops (the error of every flow here falls, then rises).
+struct Sweep {
+  std::vector<int> counts = kOracleCounts;
+  int past_best = 2;
+};
+
+// The oracle: `job` at each count of the sweep, keeping the count with the smallest mean RMS
+// distance over the seeds; it stops `past_best` counts after the best so far and at the first
+// count that fails on any seed. Each count runs from the input, so a sweep costs the sum of
+// the counts it tries.
+Row OracleRow(const Job& job, const std::vector<Input>& inputs, const Sweep& sweep = {});
 
 // Each job of `jobs` on `inputs`: its oracle sweep or its run as given.
-std::vector<Row> JobRows(const std::vector<Job>& jobs, const std::vector<Input>& inputs);
+std::vector<Row> JobRows(const std::vector<Job>& jobs, const std::vector<Input>& inputs, const Sweep& sweep = {});
 
 // Whether every run of `row` succeeded with finite positions (false for no runs).
 bool AllOk(const Row& row);

@@ -127,8 +127,9 @@ SensorModel SensorModel::StructuredLight() {
   // The disparity is matched over a 9 x 9 window: a box of 9 pixels is a Gaussian of standard
   // deviation 9 / sqrt(12) = 2.6 px, whose autocorrelation falls to 1/e at 5.2 px.
   s.correlation_px = 5.2;
-  // Khoshelham & Elberink 2012: disparity in 1/8 pixel over a 7.5 cm baseline, so a depth step of
-  // z^2 / (8 f b) = 2.9e-3 z^2 m.
+  // Disparity in 1/8 pixel over a 7.5 cm baseline, as the Kinect v1 is commonly described (its
+  // depth from disparity: Khoshelham & Elberink 2012), so a depth step of z^2 / (8 f b) =
+  // 2.9e-3 z^2 m.
   s.coding = DepthCoding::kDisparity;
   s.baseline = 0.075;
   s.disparity_step_px = 0.125;
@@ -144,8 +145,9 @@ SensorModel SensorModel::TimeOfFlight() {
   s.width = 512;
   s.height = 424;
   s.focal_px = 365.0;
-  // Fankhauser et al. 2015: 1.5 - 0.5 z + 0.3 z^2 mm (= 1.29 + 0.3 (z - 0.83)^2), plus
-  // 0.1 z^1.5 theta^2 / (pi/2 - theta)^2 mm toward grazing; lateral about half a pixel.
+  // Fankhauser et al. 2015 (axial, indoors): 1.5 - 0.5 z + 0.3 z^2 mm (= 1.29 + 0.3 (z - 0.83)^2),
+  // plus 0.1 z^1.5 theta^2 / (pi/2 - theta)^2 mm toward grazing. The lateral half pixel is ours,
+  // not the paper's figure.
   s.sigma_a = 0.00129;
   s.sigma_b = 0.0003;
   s.sigma_z0 = 0.833;
@@ -163,7 +165,7 @@ SensorModel SensorModel::TimeOfFlight() {
   return s;
 }
 
-DepthImage RenderDepth(const Mesh& mesh, const Camera& camera) {
+DepthImage RenderDepth(const Mesh& mesh, const Camera& camera, bool solid) {
   DepthImage img;
   img.width = camera.width;
   img.height = camera.height;
@@ -188,6 +190,10 @@ DepthImage RenderDepth(const Mesh& mesh, const Camera& camera) {
   for (int32_t f = 0; f < mesh.num_triangles(); ++f) {
     const Triangle& t = mesh.triangles[f];
     if (!IsUsableTriangle(t, nv) || inv[t[0]] == 0.0 || inv[t[1]] == 0.0 || inv[t[2]] == 0.0) continue;
+    if (solid) {
+      const Vec3& a = mesh.positions[t[0]];
+      if (Dot(Cross(mesh.positions[t[1]] - a, mesh.positions[t[2]] - a), a - camera.eye) >= 0.0) continue;
+    }
     raster::ForEachCoveredPixel(camera.width, camera.height, screen[t[0]], screen[t[1]], screen[t[2]],
                                 [&](size_t index, double l0, double l1, double l2) {
                                   const double w = l0 * inv[t[0]] + l1 * inv[t[1]] + l2 * inv[t[2]];
@@ -290,8 +296,8 @@ RangeMesh Triangulate(const DepthImage& image, const Camera& camera, const Senso
   return out;
 }
 
-RangeMesh SimulateFrame(const Mesh& mesh, const Camera& camera, const SensorModel& sensor, uint64_t seed) {
-  return Triangulate(MeasureDepth(RenderDepth(mesh, camera), mesh, camera, sensor, seed), camera, sensor);
+RangeMesh SimulateFrame(const Mesh& mesh, const Camera& camera, const SensorModel& sensor, uint64_t seed, bool solid) {
+  return Triangulate(MeasureDepth(RenderDepth(mesh, camera, solid), mesh, camera, sensor, seed), camera, sensor);
 }
 
 }  // namespace meshsmooth::bench

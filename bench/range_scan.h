@@ -74,9 +74,10 @@ struct SensorModel {
   // The depth difference between neighbouring pixels at depth z above which they are across a jump.
   double JumpThreshold(double z) const;
 
-  // Kinect v1 (structured light): Khoshelham & Elberink 2012, Nguyen, Izadi & Lovell 2012.
+  // Kinect v1 (structured light): the deviations of Nguyen, Izadi & Lovell 2012, depth from
+  // disparity as in Khoshelham & Elberink 2012.
   static SensorModel StructuredLight();
-  // Kinect v2 (time of flight): Fankhauser et al. 2015, Sarbolandi et al. 2015.
+  // Kinect v2 (time of flight): the axial deviation of Fankhauser et al. 2015.
   static SensorModel TimeOfFlight();
 };
 
@@ -91,8 +92,11 @@ struct DepthImage {
 
 // The clean depth of `mesh`'s usable faces from `camera`: the nearest face along each pixel's ray
 // (exact ray-plane depth of the face the raster found there). Faces with a corner behind or
-// within 1 mm of the camera are skipped.
-DepthImage RenderDepth(const Mesh& mesh, const Camera& camera);
+// within 1 mm of the camera are skipped. `solid`: the mesh is the outside of a solid object,
+// faces outward, so a face turned away from the camera is its inside and is not drawn: through
+// an open mesh's holes (a scan's, or a reference that covers only the scanned side) the camera
+// sees nothing rather than the inside of a shell, which no camera sees on a solid object.
+DepthImage RenderDepth(const Mesh& mesh, const Camera& camera, bool solid = false);
 
 // What `sensor` reports for the clean image `clean` of `mesh`: lateral jitter, correlated axial
 // noise and quantization, with the grazing pixels, the pixels next to a depth jump and those
@@ -110,7 +114,8 @@ struct RangeMesh {
 };
 RangeMesh Triangulate(const DepthImage& image, const Camera& camera, const SensorModel& sensor);
 
-// One frame: RenderDepth, MeasureDepth, Triangulate.
-RangeMesh SimulateFrame(const Mesh& mesh, const Camera& camera, const SensorModel& sensor, uint64_t seed);
+// One frame: RenderDepth (of a solid object when `solid`), MeasureDepth, Triangulate.
+RangeMesh SimulateFrame(const Mesh& mesh, const Camera& camera, const SensorModel& sensor, uint64_t seed,
+                        bool solid = false);
 
 }  // namespace meshsmooth::bench

@@ -152,7 +152,7 @@ Mesh SimulateFusedScan(const Mesh& clean, const std::vector<Camera>& cameras, co
   const auto n = static_cast<int>(cameras.size());
   for (int f = 0; f < n; ++f) {
     const Camera& truth = cameras[f];
-    DepthImage measured = MeasureDepth(RenderDepth(clean, truth), clean, truth, sensor, seed * 1000 + f);
+    DepthImage measured = MeasureDepth(RenderDepth(clean, truth, options.solid), clean, truth, sensor, seed * 1000 + f);
     const double x = n > 1 ? static_cast<double>(f) * options.segments / (n - 1) : 0.0;
     const int k = std::min(static_cast<int>(x), options.segments - 1);
     const double t = x - k;

@@ -32,13 +32,17 @@ Camera PerturbPose(const Camera& camera, const Vec3& centre, const Vec3& rotatio
 // A fused scan as a hand-held depth camera makes one: a frame of `sensor` from each of
 // `cameras`, fused from poses off by a pose error shared by `segments` runs of consecutive
 // frames (drift leaves a loop's frames registered run by run: low-frequency bumps where they
-// disagree), over the bounding box of `clean` grown by three truncations.
+// disagree), over the bounding box of `clean` grown by three truncations. The pose error's size
+// is calibrated against a real Kinect-Fusion scan (tests/bench/scan_calibration_test.cc): with it
+// the simulated scan of the real scan's cone has the real one's normal error, spread of offsets
+// and their correlation length along the surface, each within 1.5 times.
 struct FusedScanOptions {
   int segments = 6;
-  double pose_error_deg = 0.3;      // standard deviation of a run's turn about the object's centre
-  double pose_error_shift = 0.001;  // and of its shift per axis (metres)
-  double voxel = 0.8 / 256;         // metres: KinectFusion's 256^3 over 0.8 m
+  double pose_error_deg = 0.6;       // standard deviation of a run's turn about the object's centre
+  double pose_error_shift = 0.0025;  // and of its shift per axis (metres)
+  double voxel = 0.8 / 256;          // metres: KinectFusion's 256^3 over 0.8 m
   double truncation = 4 * 0.8 / 256;
+  bool solid = true;  // `clean` is the outside of a solid object (RenderDepth's `solid`)
 };
 Mesh SimulateFusedScan(const Mesh& clean, const std::vector<Camera>& cameras, const SensorModel& sensor,
                        const FusedScanOptions& options, uint64_t seed);

@@ -211,5 +211,27 @@ TEST(RangeScanTest, NoTriangleSpansADepthJump) {
   }
 }
 
+// A solid object's inside is never seen: drawn as a solid, a square turned away from the camera
+// (the inside of a shell, seen through a hole) is not drawn and the square behind it, turned
+// toward the camera, is; drawn with both sides, the nearer square hides the farther.
+TEST(RangeScanTest, SolidHidesFacesTurnedAway) {
+  const SensorModel s = SensorModel::StructuredLight();
+  const Camera cam = Front(s);
+  Mesh scene = Square({0, 0, 1.0}, {1, 0, 0}, {0, 1, 0}, 0.3);    // normal +z: turned away
+  Append(scene, Square({0, 0, 1.2}, {0, 1, 0}, {1, 0, 0}, 0.6));  // normal -z: toward the camera
+  for (bool solid : {true, false}) {
+    const DepthImage image = RenderDepth(scene, cam, solid);
+    const size_t centre = static_cast<size_t>(s.height / 2) * s.width + s.width / 2;
+    EXPECT_NEAR(image.depth[centre], solid ? 1.2 : 1.0, 1e-9) << "solid " << solid;
+    int64_t near = 0;
+    for (double z : image.depth) near += z > 0.0 && z < 1.1 ? 1 : 0;
+    if (solid) {
+      EXPECT_EQ(near, 0);
+    } else {
+      EXPECT_GT(near, 10000);
+    }
+  }
+}
+
 }  // namespace
 }  // namespace meshsmooth::bench

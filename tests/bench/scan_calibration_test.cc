@@ -1,9 +1,11 @@
 // The simulator's fused scan (bench/tsdf_fusion.h) against a real one: the Kinect-Fusion cone of
 // ../shared/data/real. The simulator scans the cone's high-precision reference (same size; its
-// frames fused on the real scan's 1.5625 mm grid), and its scan must look like the real scan in
-// numbers: the mean face-normal angle to the reference, the spread of the vertices' offsets along
-// the reference's normal, and the distance along the surface over which those offsets stay
-// correlated. Skips when ../shared/data/real is absent.
+// frames fused on a grid that puts as many vertices on the cone as the real scan's; the
+// reference drawn as the outside of a solid, since it covers only the scanned side and a camera
+// that saw the inside of that shell would fuse surfaces no real scan has), and its scans must
+// look like the real scan in numbers: the mean face-normal angle to the reference, the spread of
+// the vertices' offsets along the reference's normal, and the distance along the surface over
+// which those offsets stay correlated. Skips when ../shared/data/real is absent.
 #include <stdlib.h>
 
 #include <algorithm>
@@ -25,13 +27,12 @@
 namespace meshsmooth::bench {
 namespace {
 
-// How far the simulated figures may be from the real ones, either way: the normal error and the
-// offsets' spread within 1.5 times (measured: 18.6 degrees against 14.2, 1.63 mm against 1.32).
-// The correlation length is the simulator's known gap: its offsets stay correlated over 9.4 mm,
-// the real scan's over 23 mm (its bumps are wider than a drift of 0.3 degrees and 1 mm leaves);
-// the bound of 4 times holds that gap from growing, it does not claim a match.
+// How far the simulated figures may be from the real ones, either way. Each figure is the mean
+// over kSeeds simulated scans (one scan's drift is a handful of random poses: its figures vary by
+// 1.5 times from seed to seed). Measured: 14.5 degrees against 14.2, 1.48 mm against 1.32, 20.2
+// mm against 23.4 (docs/quality-method.md, "Calibration against the real cone").
 constexpr double kCalibrationFactor = 1.5;
-constexpr double kCorrelationGapFactor = 4.0;
+constexpr int kSeeds = 4;
 
 Mesh ReadXz(const std::filesystem::path& xz, const std::filesystem::path& dir) {
   const std::filesystem::path out = dir / xz.stem();
@@ -170,18 +171,26 @@ TEST(ScanCalibrationTest, FusedConeLooksLikeTheRealOne) {
   FusedScanOptions options;
   options.voxel = 0.0025;
   options.truncation = 4 * options.voxel;
-  const Mesh simulated = SimulateFusedScan(reference, cameras, sensor, options, 1);
-  ASSERT_GT(simulated.num_vertices(), 1000);
-  const ScanFigures sim = Figures(simulated, reference, surface);
+  ScanFigures sim;
+  for (int seed = 1; seed <= kSeeds; ++seed) {
+    const Mesh simulated = SimulateFusedScan(reference, cameras, sensor, options, seed);
+    ASSERT_GT(simulated.num_vertices(), 1000);
+    const ScanFigures one = Figures(simulated, reference, surface);
+    std::printf("simulated, seed %d: %d vertices, normal error %.2f deg, offsets sd %.3f mm, correlation %.2f mm\n",
+                seed, simulated.num_vertices(), one.normal_error_deg, 1000 * one.offset_sd, 1000 * one.correlation);
+    sim.normal_error_deg += one.normal_error_deg / kSeeds;
+    sim.offset_sd += one.offset_sd / kSeeds;
+    sim.correlation += one.correlation / kSeeds;
+  }
   std::printf("real: %d vertices, normal error %.2f deg, offsets sd %.3f mm, correlation %.2f mm\n",
               noisy.num_vertices(), real_figures.normal_error_deg, 1000 * real_figures.offset_sd,
               1000 * real_figures.correlation);
-  std::printf("simulated: %d vertices, normal error %.2f deg, offsets sd %.3f mm, correlation %.2f mm\n",
-              simulated.num_vertices(), sim.normal_error_deg, 1000 * sim.offset_sd, 1000 * sim.correlation);
+  std::printf("simulated, mean of %d: normal error %.2f deg, offsets sd %.3f mm, correlation %.2f mm\n", kSeeds,
+              sim.normal_error_deg, 1000 * sim.offset_sd, 1000 * sim.correlation);
   auto within = [](double a, double b, double k) { return a <= k * b && b <= k * a; };
   EXPECT_TRUE(within(sim.normal_error_deg, real_figures.normal_error_deg, kCalibrationFactor));
   EXPECT_TRUE(within(sim.offset_sd, real_figures.offset_sd, kCalibrationFactor));
-  EXPECT_TRUE(within(sim.correlation, real_figures.correlation, kCorrelationGapFactor));
+  EXPECT_TRUE(within(sim.correlation, real_figures.correlation, kCalibrationFactor));
 }
 
 }  // namespace
