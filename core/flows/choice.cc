@@ -353,7 +353,9 @@ absl::StatusOr<FlowResult> SmoothAutomatic(Mesh& mesh, const Topology& topo, con
     for (uint8_t m : moved) outliers += m;
   }
   if (absl::Status s = control.stop.Check(); !s.ok()) return s;
-  const std::vector<Vec3> input = mesh.positions;
+  // The input, kept only where the discrepancy rule may take over (24 bytes a vertex).
+  const bool visible = Degrees(noise.normal_turn) >= kVisibleTurnDeg;
+  const std::vector<Vec3> input = visible ? mesh.positions : std::vector<Vec3>{};
   absl::StatusOr<FlowResult> result = SmoothWithEstimate(mesh, topo, q, control, h, noise, outliers > 0);
   if (!result.ok()) return result;
   // The risk estimate assumes noise independent from vertex to vertex. When its best iteration
@@ -361,7 +363,7 @@ absl::StatusOr<FlowResult> SmoothAutomatic(Mesh& mesh, const Topology& topo, con
   // not that (a fused scan's is correlated over many edges, and the estimate reads it as shape):
   // the job starts again from its input with the discrepancy rule (discrepancy.h).
   const bool ran = result->iterations_run > 0 || result->stop_reason == StopReason::kNoGain;
-  if (ran && Degrees(noise.normal_turn) >= kVisibleTurnDeg) {
+  if (ran && visible) {
     Mesh before = mesh;
     before.positions = input;
     const double turned = NormalTurn(before, topo).Of(mesh.positions.data());

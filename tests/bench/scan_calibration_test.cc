@@ -15,6 +15,7 @@
 #include <numbers>
 #include <string>
 #include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include "bench/range_scan.h"
@@ -33,15 +34,6 @@ namespace {
 // mm against 23.4 (docs/quality-method.md, "Calibration against the real cone").
 constexpr double kCalibrationFactor = 1.5;
 constexpr int kSeeds = 4;
-
-Mesh ReadXz(const std::filesystem::path& xz, const std::filesystem::path& dir) {
-  const std::filesystem::path out = dir / xz.stem();
-  const std::string cmd = "xz -dc '" + xz.string() + "' > '" + out.string() + "'";
-  EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
-  absl::StatusOr<Mesh> m = ReadMesh(out.string());
-  EXPECT_TRUE(m.ok()) << m.status();
-  return m.ok() ? *m : Mesh{};
-}
 
 struct ScanFigures {
   double normal_error_deg = 0.0;  // mean angle of the faces to the nearest reference triangle's normal
@@ -132,14 +124,14 @@ ScanFigures Figures(const Mesh& scan, const Mesh& reference, const SurfaceDistan
 
 TEST(ScanCalibrationTest, FusedConeLooksLikeTheRealOne) {
   MESHSMOOTH_REQUIRE_SHARED("real");
-  const std::filesystem::path real = ::meshsmooth::testing::SharedData("real");
   char dir_template[] = "/tmp/meshsmooth-calibration-XXXXXX";
   const char* dir = mkdtemp(dir_template);
   ASSERT_NE(dir, nullptr);
-  Mesh noisy = ReadXz(real / "cone_noisy.obj.xz", dir);
-  Mesh reference = ReadXz(real / "cone_groundtruth.obj.xz", dir);
+  absl::StatusOr<Mesh> read_noisy = ::meshsmooth::testing::ReadSharedXz("real/cone_noisy.obj.xz", dir);
+  absl::StatusOr<Mesh> read_reference = ::meshsmooth::testing::ReadSharedXz("real/cone_groundtruth.obj.xz", dir);
   std::filesystem::remove_all(dir);
-  ASSERT_GT(noisy.num_vertices(), 0);
+  ASSERT_TRUE(read_noisy.ok() && read_reference.ok()) << read_noisy.status() << read_reference.status();
+  Mesh noisy = *std::move(read_noisy), reference = *std::move(read_reference);
   // Millimetres to metres: the sensor's figures are in metres.
   for (Mesh* m : {&noisy, &reference}) {
     for (Vec3& p : m->positions) p = p * 0.001;
