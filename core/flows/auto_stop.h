@@ -67,9 +67,9 @@ inline constexpr double kDetailOnlyH = 0.03;
 // ... unless the noise read, small in h, turns the faces by at least this many degrees
 // (NoiseEstimate::normal_turn): a fused scan's thin triangles turn far under offsets the
 // estimate's floor would take for misfit, and its noise, correlated over many edges, reads as
-// detail to the detail-free estimate. The clean meshes of the quality benchmark read 0.1-5.5
+// detail to the detail-free estimate. The clean meshes of the quality benchmark read 0.1-5.2
 // degrees (but the decimated dragon-8k, whose irregular triangles read 16), the real fused cone
-// 10.4 and the real iron scan 7.6 (docs/decisions.md, "Noise that turns thin triangles").
+// 10.4 and the real iron scan 7.6 (docs/decisions.md, "Noise the risk estimate cannot read").
 inline constexpr double kVisibleTurnDeg = 6.5;
 // ... on a mesh with at most this share of its vertices on creases (NoiseEstimate::crease_share):
 // a CAD part of slivers with noise (30-52% of its vertices on creases; every other input of the
@@ -81,10 +81,10 @@ inline constexpr double kVisibleCreaseShare = 0.2;
 // discrepancy rule (discrepancy.h), which runs until they turned by kDiscrepancyTurnShare of it:
 // the turn is predicted from the noise the local fits read, which misses the part of a
 // correlated noise they take for shape; the tuning fused scans' own noise turned their faces by
-// 1.0-1.6 times the prediction (median 1.4).
+// 1.0-1.6 times the prediction (median 1.5).
 // On the quality benchmark's tuning inputs the risk estimate's turn is 0.84-1.37 of the noise's
 // with noise independent from vertex to vertex (Gaussian along the normals, in random
-// directions) and on single range-scan frames (1.10-1.17), 0.34-0.58 on fused scans, 0.50 on
+// directions) and on single range-scan frames (1.10-1.17), 0.36-0.49 on fused scans, 0.50 on
 // the real fused cone, 0.68 on the real iron scan (docs/decisions.md, "Noise the risk estimate
 // cannot read").
 inline constexpr double kRiskTurnShare = 0.75;
