@@ -368,7 +368,6 @@ absl::StatusOr<FlowResult> SmoothAutomatic(Mesh& mesh, const Topology& topo, con
     before.positions = input;
     const double turned = NormalTurn(before, topo).Of(mesh.positions.data());
     if (turned < kRiskTurnShare * noise.normal_turn) {
-      Report(control, Phase::kNoiseEstimate, q.flow.value_or(kDefaultFlow));
       std::vector<Vec3> by_risk = std::move(mesh.positions);
       mesh.positions = input;
       absl::StatusOr<std::optional<FlowResult>> by_turn = SmoothToTurn(mesh, topo, q, control, h, noise);

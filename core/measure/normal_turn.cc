@@ -1,6 +1,7 @@
 #include "core/measure/normal_turn.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numbers>
 
@@ -12,6 +13,9 @@ namespace {
 // At most this many faces are measured (every k-th of a larger mesh): the mean turn over them
 // is within a fraction of a percent of the whole mesh's.
 constexpr int32_t kMaxMeasuredFaces = 100000;
+// The prediction draws offsets for at most this many faces: its mean is then within about half a
+// percent of the whole mesh's, at a small share of the noise estimate's cost.
+constexpr int32_t kMaxPredictedFaces = 20000;
 
 Vec3 UnitFaceNormal(const Vec3* pos, const Triangle& t) {
   const Vec3 c = Cross(pos[t[1]] - pos[t[0]], pos[t[2]] - pos[t[0]]);
@@ -38,17 +42,28 @@ double Gaussian(uint64_t i, uint64_t draw) {
 }  // namespace
 
 double PredictedNormalNoise(const Mesh& mesh, const Topology& topo, double sigma, int draws) {
-  const std::vector<Vec3> normals = VertexNormals(mesh);
   const Vec3* pos = mesh.positions.data();
-  std::vector<Vec3> moved(mesh.positions.size());
+  const auto faces = static_cast<int32_t>(topo.faces.size());
+  const int32_t stride = std::max<int32_t>(1, (faces + kMaxPredictedFaces - 1) / kMaxPredictedFaces);
   double sum = 0.0;
   int64_t count = 0;
-  for (int d = 0; d < draws; ++d) {
-    for (size_t v = 0; v < moved.size(); ++v) moved[v] = pos[v] + normals[v] * (sigma * Gaussian(v, d));
-    for (int32_t f : topo.faces) {
-      const Triangle& t = mesh.triangles[f];
-      const Vec3 before = UnitFaceNormal(pos, t), after = UnitFaceNormal(moved.data(), t);
-      if (before == Vec3{} || after == Vec3{}) continue;
+  for (int32_t i = 0; i < faces; i += stride) {
+    const Triangle& t = mesh.triangles[topo.faces[i]];
+    const Vec3 before = UnitFaceNormal(pos, t);
+    std::array<Vec3, 3> normal;
+    bool usable = before != Vec3{};
+    for (int c = 0; c < 3 && usable; ++c) {
+      const Vec3 n = RingNormal(topo, pos, t[c]);
+      const double len = Norm(n);
+      usable = len > 0.0 && std::isfinite(len);
+      if (usable) normal[c] = n * (1.0 / len);
+    }
+    if (!usable) continue;
+    for (int d = 0; d < draws; ++d) {
+      std::array<Vec3, 3> moved;
+      for (int c = 0; c < 3; ++c) moved[c] = pos[t[c]] + normal[c] * (sigma * Gaussian(t[c], d));
+      const Vec3 after = UnitFaceNormal(moved.data(), {0, 1, 2});
+      if (after == Vec3{}) continue;
       sum += Angle(before, after);
       ++count;
     }
