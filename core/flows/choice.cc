@@ -364,9 +364,7 @@ absl::StatusOr<FlowResult> SmoothAutomatic(Mesh& mesh, const Topology& topo, con
   // the job starts again from its input with the discrepancy rule (discrepancy.h).
   const bool ran = result->iterations_run > 0 || result->stop_reason == StopReason::kNoGain;
   if (ran && visible) {
-    Mesh before = mesh;
-    before.positions = input;
-    const double turned = NormalTurn(before, topo).Of(mesh.positions.data());
+    const double turned = NormalTurn(input.data(), mesh.triangles, topo).Of(mesh.positions.data());
     if (turned < kRiskTurnShare * noise.normal_turn) {
       std::vector<Vec3> by_risk = std::move(mesh.positions);
       mesh.positions = input;

@@ -10,12 +10,10 @@
 namespace meshsmooth {
 namespace {
 
-// At most this many faces are measured (every k-th of a larger mesh): the mean turn over them
-// is within a fraction of a percent of the whole mesh's.
-constexpr int32_t kMaxMeasuredFaces = 100000;
-// The prediction draws offsets for at most this many faces: its mean is then within about half a
-// percent of the whole mesh's, at a small share of the noise estimate's cost.
-constexpr int32_t kMaxPredictedFaces = 20000;
+// At most this many faces are measured, by the prediction and by the turn (every k-th of a larger
+// mesh): the mean angle over them is within about half a percent of the whole mesh's, at a small
+// share of an iteration's cost.
+constexpr int32_t kMaxMeasuredFaces = 20000;
 
 Vec3 UnitFaceNormal(const Vec3* pos, const Triangle& t) {
   const Vec3 c = Cross(pos[t[1]] - pos[t[0]], pos[t[2]] - pos[t[0]]);
@@ -44,7 +42,7 @@ double Gaussian(uint64_t i, uint64_t draw) {
 double PredictedNormalNoise(const Mesh& mesh, const Topology& topo, double sigma, int draws) {
   const Vec3* pos = mesh.positions.data();
   const auto faces = static_cast<int32_t>(topo.faces.size());
-  const int32_t stride = std::max<int32_t>(1, (faces + kMaxPredictedFaces - 1) / kMaxPredictedFaces);
+  const int32_t stride = std::max<int32_t>(1, (faces + kMaxMeasuredFaces - 1) / kMaxMeasuredFaces);
   double sum = 0.0;
   int64_t count = 0;
   for (int32_t i = 0; i < faces; i += stride) {
@@ -71,11 +69,12 @@ double PredictedNormalNoise(const Mesh& mesh, const Topology& topo, double sigma
   return count > 0 ? sum / static_cast<double>(count) : 0.0;
 }
 
-NormalTurn::NormalTurn(const Mesh& input, const Topology& topo) : triangles_(input.triangles) {
+NormalTurn::NormalTurn(const Vec3* input, const std::vector<Triangle>& triangles, const Topology& topo)
+    : triangles_(triangles) {
   const auto faces = static_cast<int32_t>(topo.faces.size());
   const int32_t stride = std::max<int32_t>(1, (faces + kMaxMeasuredFaces - 1) / kMaxMeasuredFaces);
   for (int32_t i = 0; i < faces; i += stride) {
-    const Vec3 n = UnitFaceNormal(input.positions.data(), input.triangles[topo.faces[i]]);
+    const Vec3 n = UnitFaceNormal(input, triangles[topo.faces[i]]);
     if (n == Vec3{}) continue;
     faces_.push_back(topo.faces[i]);
     normal_.push_back(n);

@@ -19,10 +19,12 @@ namespace meshsmooth {
 double PredictedNormalNoise(const Mesh& mesh, const Topology& topo, double sigma, int draws = 2);
 
 // How far a run has turned the faces of its input: the mean angle (radians) between each usable
-// face's normal in the input and in `pos` (every k-th face of a mesh of more than 100,000).
+// face's normal in the input and in `pos` (every k-th face of a mesh of more than 20,000).
 class NormalTurn {
  public:
-  NormalTurn(const Mesh& input, const Topology& topo);
+  NormalTurn(const Mesh& input, const Topology& topo) : NormalTurn(input.positions.data(), input.triangles, topo) {}
+  // The same for the input positions `input` of `triangles`' vertices.
+  NormalTurn(const Vec3* input, const std::vector<Triangle>& triangles, const Topology& topo);
   double Of(const Vec3* pos) const;
 
  private:
