@@ -22,9 +22,7 @@ AutoStop::AutoStop(const Mesh& mesh, const Topology& topo, const uint8_t* role, 
   report_.noise_to_remove_h = std::sqrt(std::max(0.0, noise.sigma_h * noise.sigma_h - floor2));
   // Fine detail, not noise: the run has nothing to remove.
   if (noise.detail_free_h < kDetailOnlyH) report_.noise_to_remove_h = 0.0;
-  if (noise.normal_turn * 180.0 / std::numbers::pi >= kVisibleTurnDeg && noise.crease_share <= kVisibleCreaseShare) {
-    report_.noise_to_remove_h = noise.sigma_h;
-  }
+  if (TurnsFacesVisibly(noise)) report_.noise_to_remove_h = noise.sigma_h;
   // Not less the floor: SURE weighs the fidelity to the input against the noise, and a floor
   // taken off small noise (0.06 h) makes it stop after an iteration or two.
   sigma_ = RiskSigmaH(noise) * h;

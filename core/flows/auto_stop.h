@@ -49,6 +49,7 @@
 #include <vector>
 
 #include "core/flows/flow.h"
+#include "core/flows/job_policy.h"
 #include "core/measure/noise.h"
 
 namespace meshsmooth::flows {
@@ -64,35 +65,7 @@ inline constexpr double kNoNoiseH = 0.02;
 // in random directions) 0.042 h and more (`dragon-8k` at random 0.1 h; the smooth meshes there
 // 0.046-0.052); docs/quality-method.md.
 inline constexpr double kDetailOnlyH = 0.03;
-// ... unless the noise read, small in h, turns the faces by at least this many degrees
-// (NoiseEstimate::normal_turn): a fused scan's thin triangles turn far under offsets the
-// estimate's floor would take for misfit, and its noise, correlated over many edges, reads as
-// detail to the detail-free estimate. The clean meshes of the quality benchmark read 0.1-5.2
-// degrees (but the decimated dragon-8k, whose irregular triangles read 16), the real fused cone
-// 10.4 and the real iron scan 7.6 (docs/decisions.md, "Noise the risk estimate cannot read").
-inline constexpr double kVisibleTurnDeg = 6.5;
-// ... on a mesh with at most this share of its vertices on creases (NoiseEstimate::crease_share):
-// a CAD part of slivers with noise (30-52% of its vertices on creases; every other input of the
-// quality benchmark at most 14%) turns its slivers far under any offset, and a run only slides
-// its vertices along them (normal error 42.7 -> 54.2 degrees on the shaft at 0.1 h).
-inline constexpr double kVisibleCreaseShare = 0.2;
-// A default job whose best iteration by the risk estimate turned the faces by less than this
-// share of the turn the noise gives them (NoiseEstimate::normal_turn) starts again with the
-// discrepancy rule (discrepancy.h), which runs until they turned by kDiscrepancyTurnShare of it:
-// the turn is predicted from the noise the local fits read, which misses the part of a
-// correlated noise they take for shape; the tuning fused scans' own noise turned their faces by
-// 1.0-1.6 times the prediction (median 1.5).
-// On the quality benchmark's tuning inputs the risk estimate's turn is 0.84-1.37 of the noise's
-// with noise independent from vertex to vertex (Gaussian along the normals, in random
-// directions) and on single range-scan frames (1.10-1.17), 0.36-0.49 on fused scans, 0.50 on
-// the real fused cone, 0.68 on the real iron scan (docs/decisions.md, "Noise the risk estimate
-// cannot read").
-inline constexpr double kRiskTurnShare = 0.75;
-inline constexpr double kDiscrepancyTurnShare = 1.25;
-// Up to this many vertices the discrepancy rule chooses on the whole mesh, not on a sample: the
-// patches' fixed cuts hold their faces back, and the count they give leaves a fused scan short
-// of its target (the real cone: 9.00 degrees from the sample's count, 7.3 on the whole mesh).
-inline constexpr int32_t kMaxWholeTurnVertices = 200000;
+// ... unless the noise turns the faces visibly (TurnsFacesVisibly, job_policy.h).
 // The run stops when the estimated error has not improved for this many iterations, and for
 // half as many as the best iteration took.
 inline constexpr int kPatience = 8;

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <iterator>
-#include <numbers>
 #include <optional>
 #include <utility>
 #include <vector>
@@ -15,8 +14,6 @@
 
 namespace meshsmooth::flows {
 namespace {
-
-double Degrees(double radians) { return radians * 180.0 / std::numbers::pi; }
 
 // A sample holds one vertex in kSampleShare of the mesh's, at least kMinSample and at most
 // kMaxSample, in patches of at least kMinPatch vertices, at most kMaxPatches of them; the risk is
@@ -47,6 +44,20 @@ void SetBoundary(FlowParams& q, FlowId flow, BoundaryMode requested) {
   if (kind == FlowKind::kUmbrella) q.small_hole_edges = kSmallHoleEdges;
 }
 
+// The candidates of a job: p.flow when set, else kChoiceFlows.
+std::vector<FlowId> CandidatesOf(const FlowParams& p) {
+  if (p.flow) return {*p.flow};
+  return {std::begin(kChoiceFlows), std::end(kChoiceFlows)};
+}
+
+// `p` for a run of `flow`: the flow set, its boundary as SetBoundary gives it.
+FlowParams ForFlow(const FlowParams& p, FlowId flow) {
+  FlowParams q = p;
+  q.flow = flow;
+  SetBoundary(q, flow, p.boundary);
+  return q;
+}
+
 void Report(const RunControl& control, Phase phase, FlowId flow) {
   if (!control.on_progress) return;
   Progress progress;
@@ -62,8 +73,7 @@ void Report(const RunControl& control, Phase phase, FlowId flow) {
 absl::StatusOr<FlowResult> Choose(Mesh& mesh, const Topology& topo, const FlowParams& p, const RunControl& control,
                                   double h, const NoiseEstimate& noise, const std::vector<uint8_t>* measured = nullptr,
                                   double margin_h2 = 0.0, bool repair_idle = false) {
-  std::vector<FlowId> candidates(std::begin(kChoiceFlows), std::end(kChoiceFlows));
-  if (p.flow) candidates.assign(1, *p.flow);
+  const std::vector<FlowId> candidates = CandidatesOf(p);
   RunControl quiet = control;
   quiet.on_progress = nullptr;
   std::optional<FlowResult> best;
@@ -73,9 +83,7 @@ absl::StatusOr<FlowResult> Choose(Mesh& mesh, const Topology& topo, const FlowPa
   for (FlowId flow : candidates) {
     Report(control, Phase::kChoosing, flow);
     Mesh copy = mesh;
-    FlowParams q = p;
-    q.flow = flow;
-    SetBoundary(q, flow, p.boundary);
+    const FlowParams q = ForFlow(p, flow);
     AutoPlan plan{0, &noise, measured, std::nullopt, p.boundary != BoundaryMode::kFixed, repair_idle};
     if (best && best->auto_stop && best->iterations_run > 0) plan.rival_risk_h2 = best->auto_stop->risk_h2 - margin_h2;
     absl::StatusOr<FlowResult> r = SmoothOneFlow(copy, topo, q, quiet, h, plan);
@@ -203,6 +211,21 @@ bool ChoosesFlow(const FlowParams& p) {
 
 namespace {
 
+// The sample's vertices a run may not move: the patches' cuts (not the mesh's boundary), which
+// the risk estimate does not measure either (they leave sample.core), and the mesh's own locked
+// vertices.
+std::vector<uint8_t> SampleLocks(Sample& sample, const Topology& sample_topo, const Topology& topo,
+                                 const FlowParams& q) {
+  std::vector<uint8_t> locked(sample_topo.num_vertices(), 0);
+  for (int32_t s = 0; s < sample_topo.num_vertices(); ++s) {
+    const int32_t v = sample.origin[s];
+    const bool cut = sample_topo.kind[s] == VertexKind::kBoundary && topo.kind[v] != VertexKind::kBoundary;
+    locked[s] = cut || (!q.locked.empty() && q.locked[v] != 0);
+    if (cut) sample.core[s] = 0;
+  }
+  return locked;
+}
+
 // SmoothAutomatic once the noise is read: `q` has its flow set unless the job chooses it;
 // `repair_idle` when outliers were moved (AutoPlan).
 absl::StatusOr<FlowResult> SmoothWithEstimate(Mesh& mesh, const Topology& topo, const FlowParams& q,
@@ -218,14 +241,7 @@ absl::StatusOr<FlowResult> SmoothWithEstimate(Mesh& mesh, const Topology& topo, 
   on_sample.reorder = ReorderMode::kNever;  // `core` is in the sample's order
   // The patches' rims are cuts, not the mesh's boundary: they stay fixed and unmeasured
   // whatever the boundary mode. The mesh's own locked vertices stay locked.
-  on_sample.locked.assign(sample_topo.num_vertices(), 0);
-  for (int32_t s = 0; s < sample_topo.num_vertices(); ++s) {
-    const int32_t v = sample.origin[s];
-    const bool cut = sample_topo.kind[s] == VertexKind::kBoundary && topo.kind[v] != VertexKind::kBoundary;
-    const bool locked = !q.locked.empty() && q.locked[v] != 0;
-    on_sample.locked[s] = cut || locked;
-    if (cut) sample.core[s] = 0;
-  }
+  on_sample.locked = SampleLocks(sample, sample_topo, topo, q);
   // The sample runs with the mesh's h (the step of a curvature flow scales with it): its count
   // is then a count of the same iterations.
   const double sigma_h = RiskSigmaH(noise);
@@ -234,9 +250,7 @@ absl::StatusOr<FlowResult> SmoothWithEstimate(Mesh& mesh, const Topology& topo, 
   if (!chosen.ok()) return chosen.status();
   // Every candidate left the sample rougher: the whole mesh comes back as it came.
   if (chosen->stop_reason == StopReason::kNoGain) return chosen;
-  FlowParams whole = q;
-  whole.flow = chosen->flow;
-  SetBoundary(whole, chosen->flow, q.boundary);
+  const FlowParams whole = ForFlow(q, chosen->flow);
   if (chosen->iterations_run == 0) {
     // An idle sample (no noise, or no estimate on it) leaves the decision to the whole mesh's
     // own estimate and stopping (nothing to do on a clean mesh: as cheap as the sample).
@@ -252,27 +266,13 @@ absl::StatusOr<FlowResult> SmoothWithEstimate(Mesh& mesh, const Topology& topo, 
   return result;
 }
 
-// The sample's vertices a run may not move: the patches' cuts (not the mesh's boundary) and the
-// mesh's own locked vertices.
-std::vector<uint8_t> SampleLocks(const Sample& sample, const Topology& sample_topo, const Topology& topo,
-                                 const FlowParams& q) {
-  std::vector<uint8_t> locked(sample_topo.num_vertices(), 0);
-  for (int32_t s = 0; s < sample_topo.num_vertices(); ++s) {
-    const int32_t v = sample.origin[s];
-    const bool cut = sample_topo.kind[s] == VertexKind::kBoundary && topo.kind[v] != VertexKind::kBoundary;
-    locked[s] = cut || (!q.locked.empty() && q.locked[v] != 0);
-  }
-  return locked;
-}
-
 // Every candidate (p.flow when set, else kChoiceFlows) on a copy of `mesh`, stopped once its
 // faces turned by `target` (DiscrepancyStop); the result whose face normals vary least
 // (NormalVariation) wins, none when every result varies more than the input.
 absl::StatusOr<std::optional<FlowResult>> ChooseByTurn(Mesh& mesh, const Topology& topo, const FlowParams& p,
                                                        const RunControl& control, double h, const NoiseEstimate& noise,
                                                        double target) {
-  std::vector<FlowId> candidates(std::begin(kChoiceFlows), std::end(kChoiceFlows));
-  if (p.flow) candidates.assign(1, *p.flow);
+  const std::vector<FlowId> candidates = CandidatesOf(p);
   RunControl quiet = control;
   quiet.on_progress = nullptr;
   const double input_variation = NormalVariation(mesh.positions.data(), topo);
@@ -282,9 +282,7 @@ absl::StatusOr<std::optional<FlowResult>> ChooseByTurn(Mesh& mesh, const Topolog
   for (FlowId flow : candidates) {
     Report(control, Phase::kChoosing, flow);
     Mesh copy = mesh;
-    FlowParams q = p;
-    q.flow = flow;
-    SetBoundary(q, flow, p.boundary);
+    const FlowParams q = ForFlow(p, flow);
     DiscrepancyStop rule(target);
     AutoPlan plan{0, &noise, nullptr, std::nullopt, p.boundary != BoundaryMode::kFixed, false, &rule};
     absl::StatusOr<FlowResult> r = SmoothOneFlow(copy, topo, q, quiet, h, plan);
@@ -308,9 +306,9 @@ absl::StatusOr<std::optional<FlowResult>> ChooseByTurn(Mesh& mesh, const Topolog
 absl::StatusOr<std::optional<FlowResult>> SmoothToTurn(Mesh& mesh, const Topology& topo, const FlowParams& q,
                                                        const RunControl& control, double h,
                                                        const NoiseEstimate& noise) {
-  const double target = kDiscrepancyTurnShare * noise.normal_turn;
+  const double target = kJobPolicy.discrepancy_turn_share * noise.normal_turn;
   const int32_t n = mesh.num_vertices();
-  if (n <= kMaxWholeTurnVertices) return ChooseByTurn(mesh, topo, q, control, h, noise, target);
+  if (n <= kJobPolicy.max_whole_turn_vertices) return ChooseByTurn(mesh, topo, q, control, h, noise, target);
   const int32_t size = SampleSize(n);
   Sample sample = SamplePatches(mesh, topo, size);
   const Topology sample_topo = BuildTopology(sample.mesh);
@@ -320,9 +318,7 @@ absl::StatusOr<std::optional<FlowResult>> SmoothToTurn(Mesh& mesh, const Topolog
   absl::StatusOr<std::optional<FlowResult>> chosen =
       ChooseByTurn(sample.mesh, sample_topo, on_sample, control, h, noise, target);
   if (!chosen.ok() || !chosen->has_value()) return chosen;
-  FlowParams whole = q;
-  whole.flow = (*chosen)->flow;
-  SetBoundary(whole, whole.flow.value(), q.boundary);
+  const FlowParams whole = ForFlow(q, (*chosen)->flow);
   absl::StatusOr<FlowResult> result = SmoothOneFlow(mesh, topo, whole, control, h,
                                                     AutoPlan{std::max((*chosen)->iterations_run, 1), &noise, nullptr,
                                                              std::nullopt, q.boundary != BoundaryMode::kFixed});
@@ -354,18 +350,18 @@ absl::StatusOr<FlowResult> SmoothAutomatic(Mesh& mesh, const Topology& topo, con
   }
   if (absl::Status s = control.stop.Check(); !s.ok()) return s;
   // The input, kept only where the discrepancy rule may take over (24 bytes a vertex).
-  const bool visible = Degrees(noise.normal_turn) >= kVisibleTurnDeg;
+  const bool visible = TurnsFacesVisibly(noise);
   const std::vector<Vec3> input = visible ? mesh.positions : std::vector<Vec3>{};
   absl::StatusOr<FlowResult> result = SmoothWithEstimate(mesh, topo, q, control, h, noise, outliers > 0);
   if (!result.ok()) return result;
   // The risk estimate assumes noise independent from vertex to vertex. When its best iteration
-  // turned the faces by less than kRiskTurnShare of the turn the noise gives them, the noise is
+  // turned the faces by less than JobPolicy::risk_turn_share of the turn the noise gives them, the noise is
   // not that (a fused scan's is correlated over many edges, and the estimate reads it as shape):
   // the job starts again from its input with the discrepancy rule (discrepancy.h).
   const bool ran = result->iterations_run > 0 || result->stop_reason == StopReason::kNoGain;
   if (ran && visible) {
     const double turned = NormalTurn(input.data(), mesh.triangles, topo).Of(mesh.positions.data());
-    if (turned < kRiskTurnShare * noise.normal_turn) {
+    if (turned < kJobPolicy.risk_turn_share * noise.normal_turn) {
       std::vector<Vec3> by_risk = std::move(mesh.positions);
       mesh.positions = input;
       absl::StatusOr<std::optional<FlowResult>> by_turn = SmoothToTurn(mesh, topo, q, control, h, noise);
