@@ -32,6 +32,7 @@
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_split.h"
 #include "base/huge_pages.h"
+#include "base/kernel_environment.h"
 #include "bench/bandwidth.h"
 #include "bench/bench_common.h"
 #include "bench/flow_speed.h"
@@ -136,6 +137,7 @@ void MeshSection(const NamedMesh& nm, const Options& opt, const std::vector<Peer
 
 int main(int argc, char** argv) {
   meshsmooth::UseHugePagesForLargeBuffers(argv);  // first: may re-execute the program
+  meshsmooth::ApplyKernelEnvironment();
   using namespace meshsmooth;
   using namespace meshsmooth::bench;
   Options opt;

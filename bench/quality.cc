@@ -35,6 +35,7 @@
 #include "absl/strings/str_join.h"
 #include "absl/strings/str_split.h"
 #include "base/huge_pages.h"
+#include "base/kernel_environment.h"
 #include "bench/bench_common.h"
 #include "bench/quality_inputs.h"
 #include "bench/quality_paper.h"
@@ -141,6 +142,7 @@ constexpr char kUsage[] =
 
 int main(int argc, char** argv) {
   meshsmooth::UseHugePagesForLargeBuffers(argv);  // first: may re-execute the program
+  meshsmooth::ApplyKernelEnvironment();
   using namespace meshsmooth;
   using namespace meshsmooth::bench;
   const Clock::time_point start = Clock::now();

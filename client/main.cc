@@ -32,6 +32,7 @@
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_join.h"
 #include "base/huge_pages.h"
+#include "base/kernel_environment.h"
 #include "base/shutdown_signals.h"
 #include "client/commands.h"
 #include "client/inputs.h"
@@ -382,6 +383,7 @@ int main(int argc, char** argv) {
                              : ridges->parsed() ? ridges_input
                                                 : rc.input;
   if (HugePagesPay(input)) meshsmooth::UseHugePagesForLargeBuffers(argv);
+  meshsmooth::ApplyKernelEnvironment();
   if (smooth->parsed()) return RunSmooth(so, sc);
   if (flows->parsed()) return RunFlows(fc, flows_json);
   if (info->parsed()) return RunInfo(info_input);

@@ -21,6 +21,7 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "base/huge_pages.h"
+#include "base/kernel_environment.h"
 #include "base/shutdown_signals.h"
 #include "core/io/file_bytes.h"
 #include "server/admission.h"
@@ -44,6 +45,7 @@ namespace {
 
 int main(int argc, char** argv) {
   meshsmooth::UseHugePagesForLargeBuffers(argv);  // first: may re-execute the program
+  meshsmooth::ApplyKernelEnvironment();
   using meshsmooth::server::ServerOptions;
   ServerOptions o;
   std::string token_file;

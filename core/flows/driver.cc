@@ -4,17 +4,14 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdlib>
 #include <memory>
+#include <mutex>
 #include <optional>
-#include <string>
-#include <string_view>
 #include <utility>
 #include <vector>
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
-#include "core/flows/auto_stop.h"
 #include "core/flows/chebyshev.h"
 #include "core/flows/flow_kernel.h"
 #include "core/flows/flow_table.h"
@@ -246,10 +243,9 @@ class FlowRun {
     ctx_.inv_h2 = 1.0 / (h_ * h_);
     ctx_.isa = BestVectorIsa();
     if (row_.kind != FlowKind::kUmbrella) ctx_.max_step_sq = h_ * h_;
-    // The cotangent flows run their free vertices in batches (lane_batches.h);
-    // MESHSMOOTH_LANE_BATCHES=0 makes them go vertex by vertex (for tests and measurements).
-    const char* want_batches = std::getenv("MESHSMOOTH_LANE_BATCHES");
-    if (curvature_ && (want_batches == nullptr || std::string_view(want_batches) != "0")) {
+    // The cotangent flows run their free vertices in batches (lane_batches.h), unless the
+    // kernel options say vertex by vertex.
+    if (curvature_ && GetKernelOptions().lane_batches) {
       batches_ = BuildLaneBatches(topo_, role_.data(), LaneWidthOf(ctx_.isa), threads_);
       if (!batches_.data.empty()) ctx_.batches = &batches_;
     }
@@ -302,6 +298,23 @@ class FlowRun {
 
 }  // namespace
 
+namespace {
+
+std::mutex kernel_options_mutex;
+KernelOptions kernel_options;
+
+}  // namespace
+
+void SetKernelOptions(const KernelOptions& options) {
+  const std::lock_guard<std::mutex> lock(kernel_options_mutex);
+  kernel_options = options;
+}
+
+KernelOptions GetKernelOptions() {
+  const std::lock_guard<std::mutex> lock(kernel_options_mutex);
+  return kernel_options;
+}
+
 int ThreadsFor(int32_t n, const FlowParams& p) {
   return n < kParallelThreshold ? 1 : (p.threads > 0 ? p.threads : omp_get_max_threads());
 }
@@ -312,29 +325,28 @@ VectorIsa BestVectorIsa() {
   if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl") && __builtin_cpu_supports("avx512dq")) {
     best = VectorIsa::kAvx512;
   }
-  if (const char* want = std::getenv("MESHSMOOTH_VECTOR_ISA")) {  // never wider than the CPU
-    const std::string w = want;
-    if (w == "sse2") best = VectorIsa::kSse2;
-    if (w == "avx2" && best == VectorIsa::kAvx512) best = VectorIsa::kAvx2;
-  }
+  if (const std::optional<VectorIsa> want = GetKernelOptions().isa) best = std::min(best, *want);
   return MESHSMOOTH_WIDE_LANES ? best : VectorIsa::kSse2;
 }
 
 absl::StatusOr<FlowResult> RunIterations(Mesh& mesh, const Topology& topo, const FlowParams& p,
-                                         const RunControl& control, double h, const AutoPlan& plan) {
+                                         const RunControl& control, double h, const RunPlan& plan) {
   const absl::StatusOr<double> diagonal = CheckInput(mesh, topo, h);
   if (!diagonal.ok()) return diagonal.status();
   FlowResult result;
   result.flow = *p.flow;
-  // A run with a risk estimate and its probe copy (below) share only the read-only topology:
-  // they iterate side by side, each on one thread, when the run would take one thread anyway
-  // (below kParallelThreshold) or the job has exactly two (the default job's samples of 20,000
-  // vertices on two cores): no per-pass wait between threads, and the bits do not depend on
-  // the thread count. With more threads a large run keeps them all, the probe after it.
+  // The rule (null: none) and whether it is asked after every iteration, with a probe run.
+  const bool automatic = p.iterations == kAutoIterations;
+  StopRule* const rule = automatic ? plan.rule : nullptr;
+  const bool watched = rule != nullptr && plan.fixed_iterations == 0;
+  const bool probed = watched && rule->wants_probe();
+  // A run and its probe share only the read-only topology: they iterate side by side, each on
+  // one thread, when the run would take one thread anyway (below kParallelThreshold) or the job
+  // has exactly two (the default job's samples of 20,000 vertices on two cores): no per-pass
+  // wait between threads, and the bits do not depend on the thread count. With more threads a
+  // large run keeps them all, the probe after it.
   const int threads = p.threads > 0 ? p.threads : omp_get_max_threads();
-  StopRule* const rule = p.iterations == kAutoIterations && plan.fixed_iterations == 0 ? plan.stop_rule : nullptr;
-  const bool side_by_side = p.iterations == kAutoIterations && plan.fixed_iterations == 0 && rule == nullptr &&
-                            threads >= 2 && (mesh.num_vertices() < kParallelThreshold || threads == 2);
+  const bool side_by_side = probed && threads >= 2 && (mesh.num_vertices() < kParallelThreshold || threads == 2);
   FlowParams run_params = p;
   if (side_by_side) run_params.threads = 1;
   FlowRun run(topo, run_params, h, *diagonal);
@@ -348,39 +360,31 @@ absl::StatusOr<FlowResult> RunIterations(Mesh& mesh, const Topology& topo, const
   // below). `cur` keeps the iteration's start until the iteration is accepted; passes write
   // `next`, then alternate with `mid` (taubin: cur -> next -> mid), so measuring the
   // displacement of a whole iteration needs no copy of the start.
-  std::optional<AutoStop> auto_stop;
   int last_iteration = p.iterations;
-  if (p.iterations == kAutoIterations) {
-    auto_stop.emplace(mesh, topo, run.roles(), h, run.threads(), plan.noise, plan.measured, plan.measure_rims);
-    if (plan.rival_risk_h2) auto_stop->SetRival(*plan.rival_risk_h2);
-    result.auto_stop = auto_stop->report();
-    if (auto_stop->nothing_to_do() && rule == nullptr) {
-      result.stop_reason = auto_stop->idle_reason();
-      if (plan.repair_idle) {
-        auto_stop->RepairFolds(mesh.positions.data());
-        result.auto_stop = auto_stop->Measure(mesh.positions.data());  // what the repair moved
-      }
-      return result;
-    }
+  if (automatic) {
     last_iteration = std::min(p.max_auto_iterations, kMaxAutoIterations);
     if (plan.fixed_iterations > 0) last_iteration = std::min(last_iteration, plan.fixed_iterations);
     result.stop_reason = StopReason::kIterations;
   }
+  if (rule != nullptr) {
+    if (const std::optional<StopReason> idle = rule->Start(mesh, topo, roles, run.threads())) {
+      result.stop_reason = *idle;
+      rule->Finish(mesh.positions.data(), result);
+      return result;
+    }
+  }
   // Bound only now: a clean mesh (nothing to do) skips a normal filter's face graph.
   run.Bind(mesh);
-  // A count chosen on a sample of the mesh (choice.h) runs as it is: no probe, no estimate.
-  const bool estimate_risk = auto_stop && plan.fixed_iterations == 0 && rule == nullptr;
-  if (rule != nullptr) rule->Start(mesh, topo);
   const int32_t n = mesh.num_vertices();
   std::vector<Vec3> cur = std::move(mesh.positions), next(n), mid;
   if (run.passes() > 1) mid.resize(n);
-  // Automatic stopping runs the flow a second time, beside the first, on a probe copy of the
-  // input (auto_stop.h), and keeps the best iteration in `best` once the run has passed it.
+  // The probe runs the flow a second time, beside the first, from the rule's probe input; the
+  // run keeps the rule's best iteration in `best` once it has passed it.
   Mesh probe_mesh;
   std::optional<FlowRun> probe;
   std::vector<Vec3> probe_next, probe_mid, best;
-  if (estimate_risk) {
-    probe_mesh.positions = auto_stop->ProbeStart(cur);  // `cur`: the input still
+  if (probed) {
+    probe_mesh.positions = rule->ProbeStart(cur);  // `cur`: the input still
     probe_mesh.triangles = mesh.triangles;
     probe.emplace(topo, run_params, h, *diagonal);
     FlowResult unused;
@@ -390,10 +394,8 @@ absl::StatusOr<FlowResult> RunIterations(Mesh& mesh, const Topology& topo, const
     if (probe->passes() > 1) probe_mid.resize(n);
   }
   int first_iteration = 1;
-  // MESHSMOOTH_CHEBYSHEV=0 runs them one by one (for tests and measurements).
-  const char* want_chebyshev = std::getenv("MESHSMOOTH_CHEBYSHEV");
-  const bool chebyshev = want_chebyshev == nullptr || std::string_view(want_chebyshev) != "0";
-  if (chebyshev && plan.fixed_iterations > 0 && !estimate_risk && last_iteration > 2) {
+  const bool chebyshev = GetKernelOptions().chebyshev;
+  if (chebyshev && automatic && plan.fixed_iterations > 0 && last_iteration > 2) {
     if (const std::optional<double> floor = run.LinearStepFloor()) {
       const ChebyshevSeries series = ChebyshevOfPower(last_iteration - 1, *floor, kChebyshevTail);
       const int terms = static_cast<int>(series.c.size()) - 1;
@@ -430,7 +432,7 @@ absl::StatusOr<FlowResult> RunIterations(Mesh& mesh, const Topology& topo, const
     std::vector<Vec3>* out = &next;
     std::vector<Vec3>* probe_out = &probe_next;
     BlockStats total;
-    if (side_by_side) {  // implies estimate_risk: automatic, no count chosen beforehand
+    if (side_by_side) {  // implies a probe: automatic, no count chosen beforehand
 #pragma omp parallel sections num_threads(2)
       {
 #pragma omp section
@@ -440,9 +442,9 @@ absl::StatusOr<FlowResult> RunIterations(Mesh& mesh, const Topology& topo, const
       }
     } else {
       total = run.Iterate(it, cur, next, mid, out);
-      if (estimate_risk) probe->Iterate(it, probe_mesh.positions, probe_next, probe_mid, probe_out);
+      if (probed) probe->Iterate(it, probe_mesh.positions, probe_next, probe_mid, probe_out);
     }
-    const Progress progress = run.ToProgress(it, total, estimate_risk || rule != nullptr ? 0 : last_iteration);
+    const Progress progress = run.ToProgress(it, total, watched ? 0 : last_iteration);
     if (absl::Status s = run.CheckDivergence(it, total, progress); !s.ok()) {
       mesh.positions = std::move(cur);  // the last iteration before the failure
       return s;
@@ -451,22 +453,15 @@ absl::StatusOr<FlowResult> RunIterations(Mesh& mesh, const Topology& topo, const
     result.iterations_run = it;
     result.last = progress;
     if (control.on_progress) control.on_progress(progress);
-    if (estimate_risk) {
-      std::vector<Vec3>& probe_cur = probe_mesh.positions;
-      probe_cur.swap(*probe_out);
-      const std::optional<StopReason> stop = auto_stop->After(it, cur.data(), probe_cur.data());
+    if (watched) {
+      if (probed) probe_mesh.positions.swap(*probe_out);
+      const std::optional<StopReason> stop =
+          rule->After(it, cur.data(), probed ? probe_mesh.positions.data() : nullptr);
       // The best iteration is kept only once the run moves past it: while every iteration
       // improves, it is `cur` itself; the iteration after it finds it in *out, which the swap
       // above gave the positions `cur` held, and copies it before anything overwrites it.
-      if (!auto_stop->improved() && auto_stop->best_iteration() == it - 1) best.assign(out->begin(), out->end());
-      result.auto_stop = auto_stop->report();
+      if (rule->best_iteration() == it - 1) best.assign(out->begin(), out->end());
       if (stop) {
-        result.stop_reason = *stop;
-        break;
-      }
-    }
-    if (rule != nullptr) {
-      if (const std::optional<StopReason> stop = rule->After(it, cur.data())) {
         result.stop_reason = *stop;
         break;
       }
@@ -480,21 +475,17 @@ absl::StatusOr<FlowResult> RunIterations(Mesh& mesh, const Topology& topo, const
       break;
     }
   }
-  if (estimate_risk && auto_stop->best_iteration() > 0 && auto_stop->best_iteration() < result.iterations_run) {
+  if (watched && rule->best_iteration() > 0 && rule->best_iteration() < result.iterations_run) {
     cur.swap(best);
-    result.iterations_run = auto_stop->best_iteration();
+    result.iterations_run = rule->best_iteration();
   }
-  // What follows (the measure, the fold repair, the volume) reads only `cur`: the run's other
-  // buffers go first, so that its own buffers do not add to theirs at the job's peak.
+  // What follows (the rule's Finish) reads only `cur`: the run's other buffers go first, so that
+  // its own buffers do not add to theirs at the job's peak.
   for (std::vector<Vec3>* buffer : {&next, &mid, &best, &probe_next, &probe_mid}) std::vector<Vec3>().swap(*buffer);
   probe.reset();
   probe_mesh = Mesh();
   run.Release();
-  if (auto_stop) {
-    result.auto_stop = auto_stop->Measure(cur.data());
-    auto_stop->RepairFolds(cur.data());
-    auto_stop->KeepVolume(cur.data());
-  }
+  if (rule != nullptr) rule->Finish(cur.data(), result);
   mesh.positions = std::move(cur);
   return result;
 }

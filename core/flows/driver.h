@@ -1,5 +1,5 @@
-// Internal to core/flows: the iteration driver Smooth() runs once the parameters are valid and
-// the mesh is in the order it runs in (core/flows/reorder.h).
+// Internal to core/flows and the default job (core/job/): the iteration driver a run goes to
+// once its parameters are valid and the mesh is in the order it runs in (core/flows/reorder.h).
 #pragma once
 
 #include <cstdint>
@@ -8,7 +8,6 @@
 
 #include "absl/status/statusor.h"
 #include "core/flows/flow.h"
-#include "core/measure/noise.h"
 
 namespace meshsmooth::flows {
 
@@ -20,47 +19,55 @@ inline constexpr int32_t kParallelThreshold = 20000;
 // (0 = all hardware threads).
 int ThreadsFor(int32_t n, const FlowParams& p);
 
-// The iterations of a valid `p` (its flow set) on `mesh`: roles (free, fixed, boundary curve),
-// the Jacobi double buffer, eq. (14)'s threshold, stopping, progress and the divergence checks.
-// When a run with automatic iterations stops, if not at its least estimated error: told the
-// run's input (in the vertex order the run uses, reorder.h) before the first iteration, then
-// asked after every accepted one.
+// How a run with automatic iterations stops and what it does with its result: a rule the
+// caller gives (the default job's: core/job/). The driver calls Start before the first
+// iteration; unless it says the run has nothing to do, ProbeStart once (when the rule wants a
+// probe) and After once per accepted iteration (unless the count was chosen beforehand:
+// RunPlan::fixed_iterations); last, always, Finish on the positions the run returns.
 class StopRule {
  public:
+  // best_iteration() of a rule that keeps the last iteration.
+  static constexpr int kLastIteration = -1;
+
   virtual ~StopRule() = default;
-  virtual void Start(const Mesh& input, const Topology& topo) = 0;
-  // The reason to stop at iteration `iteration` (1-based) with positions `pos`, if any.
-  virtual std::optional<StopReason> After(int iteration, const Vec3* pos) = 0;
+  // The run's input (in the vertex order the run uses, reorder.h), its vertices' roles
+  // (flow_kernel.h) and the run's threads. A reason when the run has nothing to do: it then does
+  // no iteration.
+  virtual std::optional<StopReason> Start(const Mesh& input, const Topology& topo, const uint8_t* role,
+                                          int threads) = 0;
+  // True when After() reads a probe: a second run of the same flow, beside the first, from
+  // ProbeStart(the input).
+  virtual bool wants_probe() const { return false; }
+  virtual std::vector<Vec3> ProbeStart(const std::vector<Vec3>& start) { return start; }
+  // After accepted iteration `it` (1-based) with positions `pos` (the probe's: `probe`, null
+  // without one): the reason to stop now, if any.
+  virtual std::optional<StopReason> After(int it, const Vec3* pos, const Vec3* probe) = 0;
+  // The iteration the run returns: kLastIteration, or an earlier one, which the driver keeps a
+  // copy of from the iteration after it.
+  virtual int best_iteration() const { return kLastIteration; }
+  // On the positions the run returns (its own buffers released first) and its result.
+  virtual void Finish(Vec3* /*pos*/, FlowResult& /*result*/) {}
 };
 
-// How a run with automatic iterations stops.
-struct AutoPlan {
-  // > 0: exactly this many iterations (a count chosen on a sample, choice.h), with no risk
-  // estimate; the folds are repaired and the volume kept as usual.
+// How a run with automatic iterations stops: after exactly `fixed_iterations` when > 0 (a count
+// chosen beforehand; a linear flow then runs its first N - 1 iterations as one polynomial,
+// chebyshev.h, and the rule is not asked after iterations), else when `rule` says so, else at
+// the cap (FlowParams::max_auto_iterations).
+struct RunPlan {
   int fixed_iterations = 0;
-  // The input's noise, read once by the caller (a job that tries several flows reads it once);
-  // null: the run reads it.
-  const NoiseEstimate* noise = nullptr;
-  // Per vertex: non-zero where the risk estimate measures (the cores of a sample's patches,
-  // away from their fixed rims); null: every free interior vertex (and see measure_rims).
-  const std::vector<uint8_t>* measured = nullptr;
-  // The estimated error (risk_h2) of a rival run on the same input: the run gives up once its
-  // own estimate can no longer fall below it (AutoStop::SetRival).
-  std::optional<double> rival_risk_h2;
-  // The estimate also measures the boundary vertices (among `measured`), moved or not: candidates
-  // that treat the rims differently are then compared on the same vertices.
-  bool measure_rims = false;
-  // The input was changed before the run (outliers moved, noise.h): a run that finds no noise
-  // to remove still repairs the folds the change left (AutoStop::RepairFolds).
-  bool repair_idle = false;
-  // Set: the run stops when this rule says so (StopRule), not at the least estimated error: no
-  // probe, no risk estimate; the folds are repaired and the volume kept as usual.
-  StopRule* stop_rule = nullptr;
+  StopRule* rule = nullptr;
 };
 
+// The iterations of a valid `p` (its flow set) on `mesh`: roles (free, fixed, boundary curve),
+// the Jacobi double buffer, eq. (14)'s threshold, stopping, progress and the divergence checks.
 // `h` is the input's mean edge length; `plan` applies with automatic iterations. Errors as
 // Smooth()'s; the mesh always gets back the positions of the last accepted iteration.
 absl::StatusOr<FlowResult> RunIterations(Mesh& mesh, const Topology& topo, const FlowParams& p,
-                                         const RunControl& control, double h, const AutoPlan& plan);
+                                         const RunControl& control, double h, const RunPlan& plan);
+
+// One flow (p.flow set, p valid) in the vertex order that pays (reorder.h), with `plan` for
+// automatic iterations; h is the input's mean edge length. Defined in smooth.cc.
+absl::StatusOr<FlowResult> SmoothOneFlow(Mesh& mesh, const Topology& topo, const FlowParams& p,
+                                         const RunControl& control, double h, const RunPlan& plan = {});
 
 }  // namespace meshsmooth::flows

@@ -86,12 +86,12 @@ inline constexpr int kMaxAutoIterations = 1000;
 struct FlowParams {
   // Unset: the job names no flow. With automatic iterations and no step it chooses: the input's
   // noise is estimated, the candidate flows each run to their least estimated error and the
-  // least of them wins (core/flows/choice.h; FlowResult::flow says which; on large meshes the
+  // least of them wins (core/job/choice.h; FlowResult::flow says which; on large meshes the
   // choice and the count are made on patches of the mesh). Otherwise unset is kDefaultFlow.
   std::optional<FlowId> flow;
   // 1 .. kMaxIterations, or kAutoIterations: estimate the input's noise (core/measure/noise.h)
   // and return the iteration whose estimated error to the noise-free surface is least (Stein's
-  // unbiased risk estimate, auto_stop.h; FlowResult says why the run stopped).
+  // unbiased risk estimate, core/job/rules.h; FlowResult says why the run stopped).
   int iterations = kAutoIterations;
   // The most iterations automatic stopping may run (1 .. kMaxAutoIterations; a server sets
   // its own limit here).
@@ -190,7 +190,7 @@ struct AutoStopReport {
   double detail_free_h = 0.0;      // NoiseEstimate::detail_free_h of the input, in h
   double displacement_h = 0.0;     // RMS normal displacement from the input when it stopped, in h
   // The run's estimated mean squared error to the noise-free surface, a vertex, less the
-  // noise's variance (auto_stop.h): comparable between flows run on the same input, in h^2.
+  // noise's variance (core/job/rules.h): comparable between flows run on the same input, in h^2.
   double risk_h2 = 0.0;
 };
 
@@ -204,8 +204,8 @@ struct FlowResult {
   // kCurve when some boundary vertex moved with the run (BoundaryMode::kCurve on a mesh with a
   // boundary), else kFixed.
   BoundaryMode boundary = BoundaryMode::kFixed;
-  // The default job's outliers moved onto their fitted surfaces before the run (kImpulsiveShare,
-  // core/flows/auto_stop.h); 0 for any other job.
+  // The default job's outliers moved onto their fitted surfaces before the run
+  // (core/job/default_job.cc); 0 for any other job.
   int64_t outliers_moved = 0;
   Progress last;
   std::optional<AutoStopReport> auto_stop;  // set when the run stopped automatically

@@ -1,6 +1,6 @@
-// Smooth(), the front door: validates the parameters, leaves the flow to the choice when none
-// is named (core/flows/choice.h), picks the order the mesh runs in (core/flows/reorder.h) and
-// hands the iterations to the driver (core/flows/driver.h).
+// What every run shares: the names of stop reasons and phases, the parameters' checks, and one
+// flow's run in the vertex order that pays (core/flows/reorder.h), handed to the driver
+// (core/flows/driver.h). The front door, Smooth(), is the default job's (core/job/default_job.cc).
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -10,13 +10,11 @@
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
-#include "core/flows/choice.h"
 #include "core/flows/driver.h"
 #include "core/flows/flow.h"
 #include "core/flows/flow_table.h"
 #include "core/flows/operators.h"
 #include "core/flows/reorder.h"
-#include "core/measure/metrics.h"
 
 namespace meshsmooth {
 namespace {
@@ -118,32 +116,10 @@ absl::Status ValidateFlowParams(const FlowParams& p, int32_t num_vertices) {
   return absl::OkStatus();
 }
 
-absl::StatusOr<FlowResult> Smooth(Mesh& mesh, const FlowParams& p, const RunControl& control) {
-  const Topology topo = BuildTopology(mesh);
-  return Smooth(mesh, topo, p, control);
-}
-
-// Large meshes whose order scatters neighbours run on a Morton-ordered copy (reorder.h); h is
-// taken in the caller's order, so it is the same value whatever the order the run uses.
-absl::StatusOr<FlowResult> Smooth(Mesh& mesh, const Topology& topo, const FlowParams& p, const RunControl& control) {
-  const int32_t n = mesh.num_vertices();
-  if (absl::Status s = ValidateFlowParams(p, n); !s.ok()) return s;
-  if (topo.num_vertices() != n) {
-    return absl::InvalidArgumentError("the topology was built for another mesh");
-  }
-  const double h = MeanEdgeLength(mesh, topo);
-  FlowParams q = p;
-  // Only the default job moves rims of its own accord (BoundaryMode::kAuto).
-  if (q.boundary == BoundaryMode::kAuto && !flows::ChoosesFlow(p)) q.boundary = BoundaryMode::kFixed;
-  if (p.iterations == kAutoIterations) return flows::SmoothAutomatic(mesh, topo, q, control, h);
-  q.flow = p.flow.value_or(kDefaultFlow);
-  return flows::SmoothOneFlow(mesh, topo, q, control, h, flows::AutoPlan{});
-}
-
 namespace flows {
 
 absl::StatusOr<FlowResult> SmoothOneFlow(Mesh& mesh, const Topology& topo, const FlowParams& p,
-                                         const RunControl& control, double h, const AutoPlan& plan) {
+                                         const RunControl& control, double h, const RunPlan& plan) {
   const int32_t n = mesh.num_vertices();
   const int iterations = p.iterations != kAutoIterations ? p.iterations
                          : plan.fixed_iterations > 0     ? plan.fixed_iterations

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <numbers>
 #include <optional>
 #include <vector>
@@ -32,17 +33,12 @@ constexpr double kTrimSigmas = 3.0;
 constexpr double kTrimmedSecondMoment = 0.97071;
 // Marks a vertex whose fit was tried but not well posed.
 constexpr double kUnusable = -1.0;
-// At most this many rounds of unfolding after the outliers go back (RemoveOutliers).
-constexpr int kUnfoldRounds = 6;
 // At most about this many vertices are fitted (every k-th vertex of a larger mesh): the median
 // of n residuals has a relative standard error of ~1.17 / sqrt(n), 0.8% at 20,000. Against
 // 50,000 fits, the deviation of the benchmark's noisy bunny, nefertiti and dragon moves by
 // 0.1-1.0% and every default row of docs/quality.md on the meshes above 20,000 vertices stays
 // within 1.005x, at less than half the cost (docs/decisions.md).
 constexpr int32_t kMaxFits = 20000;
-// Fewer fits than this run on one thread: a fit costs ~1 us, so below it waking a second
-// thread is not worth it.
-constexpr int32_t kMinParallelFits = 2000;
 // The least number of well-posed fits, absolute and as a share of the vertices tried, for the
 // median to be an estimate.
 constexpr int64_t kMinWellPosed = 25;
@@ -419,136 +415,24 @@ NoiseEstimate EstimateNoise(const Mesh& mesh, const Topology& topo, double h, in
   return estimate;
 }
 
-void RemoveOutliers(Mesh& mesh, const Topology& topo, double h, double threshold_h, int rounds,
-                    std::vector<uint8_t>& moved, int threads, const StopToken& stop, const uint8_t* keep) {
-  const int32_t n = topo.num_vertices();
-  moved.resize(n, 0);
-  if (!(h > 0.0) || !std::isfinite(h) || n == 0) return;
-  if (threads <= 0) threads = omp_get_max_threads();
-  const double inv_h = 1.0 / h;
-  std::vector<Vec3> target(n);
-  std::vector<uint8_t> moves(n, 0);
-  // The vertices to look at in a round: all in the first, then those within two rings of a
-  // vertex the round before moved (no other fit has changed).
-  std::vector<uint8_t> check(n, 1);
-  for (int round = 0; round < rounds && !stop.Fired(); ++round) {
-    // The outliers first, then each one's place from the other vertices around: a thrown
-    // neighbour would tilt the plane (a ring with one vertex 2 h up leans by ~40 degrees) and
-    // leave the vertex beside its place, with faces turned over.
-#pragma omp parallel num_threads(threads) if (threads > 1 && n >= kMinParallelFits)
-    {
-      FitScratch fit_scratch;
-      RingScratch scratch;
-#pragma omp for schedule(static, 128)
-      for (int32_t v = 0; v < n; ++v) {
-        moves[v] = 0;
-        const bool rim = topo.kind[v] == VertexKind::kBoundary;
-        if (!check[v] || (topo.kind[v] != VertexKind::kInterior && !rim) || (keep != nullptr && keep[v] != 0)) continue;
-        // A vertex without a fit (a boundary vertex's half ring, a ring too small) is judged by
-        // its ring's median height.
-        const std::optional<Fit> fit =
-            rim ? std::nullopt : FitAt(mesh, topo, v, RingNormal(topo, mesh.positions.data(), v), inv_h, fit_scratch);
-        if (fit) {
-          moves[v] = std::abs(fit->r) / std::sqrt(1.0 + fit->g) > threshold_h;
-        } else {
-          const std::optional<double> height = RingMedianHeight(mesh.positions.data(), topo, v, nullptr, scratch);
-          moves[v] = height && std::abs(*height) > threshold_h * h;
-        }
-      }
-    }
-#pragma omp parallel num_threads(threads) if (threads > 1 && n >= kMinParallelFits)
-    {
-      RingScratch scratch;
-#pragma omp for schedule(static, 128)
-      for (int32_t v = 0; v < n; ++v) {
-        if (!moves[v]) continue;
-        Vec3 axis;
-        const std::optional<double> height =
-            RingMedianHeight(mesh.positions.data(), topo, v, moves.data(), scratch, &axis);
-        if (height)
-          target[v] = mesh.positions[v] + axis * *height;
-        else
-          moves[v] = 0;
-      }
-    }
-    bool any = false;
-    std::fill(check.begin(), check.end(), 0);
-    for (int32_t v = 0; v < n; ++v) {
-      if (!moves[v]) continue;
-      mesh.positions[v] = target[v];
-      moved[v] = 1;
-      any = true;
-      check[v] = 1;
-      for (int32_t k = topo.ring_offsets[v]; k < topo.ring_offsets[v + 1]; ++k) {
-        const int32_t w = topo.ring[k];
-        check[w] = 1;
-        for (int32_t j = topo.ring_offsets[w]; j < topo.ring_offsets[w + 1]; ++j) check[topo.ring[j]] = 1;
-      }
-    }
-    if (!any) break;
-  }
-  UnfoldFans(mesh, topo, kUnfoldRounds, moved, threads, stop, keep);
+struct LocalFit::Buffers {
+  FitScratch fit;
+  RingScratch ring;
+};
+
+LocalFit::LocalFit() : buffers_(std::make_unique<Buffers>()) {}
+LocalFit::~LocalFit() = default;
+
+std::optional<double> LocalFit::ResidualH(const Mesh& mesh, const Topology& topo, int32_t v, double h) {
+  const std::optional<Fit> fit =
+      FitAt(mesh, topo, v, RingNormal(topo, mesh.positions.data(), v), 1.0 / h, buffers_->fit);
+  if (!fit) return std::nullopt;
+  return std::abs(fit->r) / std::sqrt(1.0 + fit->g);
 }
 
-bool FanFolds(const Vec3* pos, const Topology& topo, int32_t v) {
-  const int32_t first = topo.ring_offsets[v], end = topo.ring_offsets[v + 1];
-  const bool rim = topo.kind[v] == VertexKind::kBoundary;
-  const int32_t faces = rim ? end - first - 1 : end - first;
-  auto next = [&](int32_t k) { return k + 1 < end ? k + 1 : first; };
-  Vec3 orientation;
-  for (int32_t k = first; k < first + faces; ++k) {
-    const Vec3 &a = pos[topo.ring[k]], &b = pos[topo.ring[next(k)]];
-    orientation += rim ? Cross(a - pos[v], b - pos[v]) : Cross(a, b);
-  }
-  for (int32_t k = first; k < first + faces; ++k) {
-    if (Dot(Cross(pos[topo.ring[k]] - pos[v], pos[topo.ring[next(k)]] - pos[v]), orientation) < 0.0) return true;
-  }
-  return false;
-}
-
-int64_t UnfoldFans(Mesh& mesh, const Topology& topo, int rounds, std::vector<uint8_t>& moved, int threads,
-                   const StopToken& stop, const uint8_t* keep) {
-  const int32_t n = topo.num_vertices();
-  moved.resize(n, 0);
-  if (threads <= 0) threads = omp_get_max_threads();
-  std::vector<Vec3> target(n);
-  std::vector<uint8_t> moves(n, 0);
-  // The vertices to look at in a round: all in the first, then the last round's moves and their
-  // rings (a fan depends on its vertex and its ring only).
-  std::vector<uint8_t> check(n, 1);
-  int64_t count = 0;
-  for (int round = 0; round < rounds && !stop.Fired(); ++round) {
-#pragma omp parallel for num_threads(threads) if (threads > 1 && n >= kMinParallelFits) schedule(static, 512)
-    for (int32_t v = 0; v < n; ++v) {
-      moves[v] = 0;
-      const bool rim = topo.kind[v] == VertexKind::kBoundary;
-      if (!check[v] || (topo.kind[v] != VertexKind::kInterior && !rim) || (keep != nullptr && keep[v] != 0)) continue;
-      if (topo.valence(v) < 3 || !FanFolds(mesh.positions.data(), topo, v)) continue;
-      const int32_t first = topo.ring_offsets[v], end = topo.ring_offsets[v + 1];
-      Vec3 centre;
-      if (rim) {
-        centre = (mesh.positions[topo.ring[first]] + mesh.positions[topo.ring[end - 1]]) * 0.5;
-      } else {
-        for (int32_t k = first; k < end; ++k) centre += mesh.positions[topo.ring[k]];
-        centre *= 1.0 / static_cast<double>(end - first);
-      }
-      target[v] = centre;
-      moves[v] = 1;
-    }
-    bool any = false;
-    std::fill(check.begin(), check.end(), 0);
-    for (int32_t v = 0; v < n; ++v) {
-      if (!moves[v]) continue;
-      mesh.positions[v] = target[v];
-      count += !moved[v];
-      moved[v] = 1;
-      any = true;
-      check[v] = 1;
-      for (int32_t k = topo.ring_offsets[v]; k < topo.ring_offsets[v + 1]; ++k) check[topo.ring[k]] = 1;
-    }
-    if (!any) break;
-  }
-  return count;
+std::optional<double> LocalFit::RingHeight(const Vec3* pos, const Topology& topo, int32_t v, const uint8_t* skip,
+                                           Vec3* axis) {
+  return RingMedianHeight(pos, topo, v, skip, buffers_->ring, axis);
 }
 
 }  // namespace meshsmooth

@@ -34,12 +34,14 @@
 // and 0.2 h of noise 0.133 and 0.223 h, and 0.100 and 0.197 h detail-free (numpy).
 //
 // The same fits find outliers, vertices thrown far off the surface (a scanner's impulsive
-// noise): their share tells that kind of noise (NoiseEstimate::outlier_share), and
-// RemoveOutliers() moves them back (docs/quality-method.md, "Outliers").
+// noise): their share tells that kind of noise (NoiseEstimate::outlier_share); the default job
+// moves them back (RemoveOutliers, core/job/repair.h; docs/quality-method.md, "Outliers").
 #pragma once
 
 #include <algorithm>
 #include <cstdint>
+#include <memory>
+#include <optional>
 #include <vector>
 
 #include "core/mesh.h"
@@ -54,7 +56,7 @@ struct NoiseEstimate {
   // The root mean square of the offsets, from the residuals within three robust scales of
   // zero: sigma_h for Gaussian noise, larger for noise whose distribution is more peaked (noise
   // in random directions, whose normal part is a Gaussian times a uniform cosine), where the
-  // median reads low. What an estimate of a squared error needs (core/flows/auto_stop.h).
+  // median reads low. What an estimate of a squared error needs (core/job/rules.h).
   double deviation_h = 0.0;
   int64_t vertices_used = 0;   // interior vertices with a well-posed fit
   int64_t vertices_tried = 0;  // interior vertices fitted (every k-th one of a large mesh)
@@ -100,32 +102,36 @@ inline double OutlierThresholdH(const NoiseEstimate& estimate) {
   return std::max(kOutlierScales * estimate.sigma_h, kOutlierFloorH);
 }
 
-// True when a face of v's fan turns against the fan's orientation (an interior vertex's: the
-// vector area of its ring polygon, which does not depend on where the vertex is; a boundary
-// vertex's: the sum of its open fan's faces).
-bool FanFolds(const Vec3* pos, const Topology& topo, int32_t v);
+// Fewer fits than this run on one thread: a fit costs ~1 us, so below it waking a second thread
+// is not worth it.
+inline constexpr int32_t kMinParallelFits = 2000;
 
-// A vertex whose fan folds (FanFolds) goes to its ring's centroid (a boundary vertex to the
-// midpoint of its two neighbours along the rim, so that a hole keeps its size); Jacobi rounds,
-// at most `rounds`, until no fan folds. Vertices where `keep` is non-zero stay; `moved` is set
-// where a vertex moved. Returns how many vertices moved that `moved` did not hold yet.
-// Deterministic for any thread count; stops early once `stop` fires.
-int64_t UnfoldFans(Mesh& mesh, const Topology& topo, int rounds, std::vector<uint8_t>& moved, int threads = 0,
-                   const StopToken& stop = {}, const uint8_t* keep = nullptr);
+// The estimate's measures one vertex at a time, for a caller that finds and moves outliers
+// (core/job/repair.h). Holds buffers: one per thread.
+class LocalFit {
+ public:
+  LocalFit();
+  ~LocalFit();
+  LocalFit(const LocalFit&) = delete;
+  LocalFit& operator=(const LocalFit&) = delete;
 
-// Moves the outliers back: an interior vertex whose normalised residual exceeds `threshold_h`, or
-// a vertex without a fit (a boundary vertex, a ring too small) whose ring's median height exceeds
-// threshold_h h. Each goes along the normal of the plane through the inliers of its first and
-// second rings (fitted again without the points far off it) to the median height of its first
-// ring's inliers: the fit, pulled by the other outliers around, can reach far, and a thrown
-// vertex's faces tilt its own normal. A round flags the outliers, then moves them all from the
-// same positions; at most `rounds` rounds, until none is left (a thrown vertex pulls its
-// neighbours' fits, so the first round can leave some). Then the folds the throws leave
-// (UnfoldFans, a few rounds). Vertices where `keep` (per vertex) is non-zero stay; `moved` (one
-// entry per vertex) is set where a vertex moved. Deterministic for any thread count; stops
-// early once `stop` fires.
-void RemoveOutliers(Mesh& mesh, const Topology& topo, double h, double threshold_h, int rounds,
-                    std::vector<uint8_t>& moved, int threads = 0, const StopToken& stop = {},
-                    const uint8_t* keep = nullptr);
+  // How far interior vertex v lies off the surface its first and second rings sample, in h: its
+  // fit's normalised residual |r| / sqrt(1 + g), as the estimate reads it; none when the fit is
+  // not well posed.
+  std::optional<double> ResidualH(const Mesh& mesh, const Topology& topo, int32_t v, double h);
+
+  // The median height above v (in the mesh's units) of its ring's inliers (the vertices not
+  // flagged in `skip`, when at least three are not; else all of them), along the normal of the
+  // plane that fits the inliers of its first and second rings, fitted again without the points
+  // far off it (principal components: a dozen points or more, where the ring's own polygon leans
+  // by tens of degrees when some of it is thrown); that normal into `axis`. None for a degenerate
+  // ring.
+  std::optional<double> RingHeight(const Vec3* pos, const Topology& topo, int32_t v, const uint8_t* skip,
+                                   Vec3* axis = nullptr);
+
+ private:
+  struct Buffers;
+  std::unique_ptr<Buffers> buffers_;
+};
 
 }  // namespace meshsmooth

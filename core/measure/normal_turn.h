@@ -1,5 +1,5 @@
 // How far noise turns a mesh's faces, and how far a run turned them: the face-normal measures the
-// default job's discrepancy rule reads (core/flows/discrepancy.h). A face's normal turns under
+// default job's discrepancy rule reads (core/job/rules.h). A face's normal turns under
 // offsets of its vertices along the surface normal by about the offsets over its heights: the
 // same offsets turn a sliver far more than a well-shaped face.
 #pragma once

@@ -1,11 +1,13 @@
 #!/usr/bin/env python3
-"""Checks that no #include runs back up the project's layers.
+"""Checks that no #include runs back up the project's layers, that core reads no environment, and
+that the default job keeps its tuned numbers in JobPolicy (core/job/policy.h).
 
 The rooms, lowest first (a file may include its own room and any lower layer, nothing else):
   core/util                               stop token, radix sort
   core                                    the mesh model: mesh, vec3, topology, normals, weld
   core/io, core/measure                   files and the Draco codec; metrics, distances, noise
   core/shapes, core/features, core/flows, core/render
+  core/job                                the default job (the front door, Smooth(), is its)
   base                                    process-wide plumbing the programs link
   server                                  the gRPC service
   client                                  the CLI and its client library
@@ -24,6 +26,7 @@ LAYERS = [
     ["core"],
     ["core/io", "core/measure"],
     ["core/shapes", "core/features", "core/flows", "core/render"],
+    ["core/job"],
     ["base"],
     ["server"],
     ["client"],
@@ -64,9 +67,21 @@ def main() -> int:
                     continue
                 if other not in RANK or RANK[other] >= RANK[own]:
                     bad.append(f"{rel}: includes {inc} ({other} is not below {own})")
+    # The core library takes its settings as arguments: no process environment read inside it
+    # (the programs read theirs in base/, e.g. base/kernel_environment.h).
+    for f in sorted((args.root / "core").rglob("*")):
+        if f.suffix in (".h", ".cc") and re.search(r"\bgetenv\s*\(", f.read_text(errors="replace")):
+            bad.append(f"{f.relative_to(args.root).as_posix()}: reads the environment (getenv) inside core")
+    # The default job's tuned numbers are the fields of JobPolicy (core/job/policy.h), one line
+    # each: no named constant elsewhere in its room.
+    for f in sorted((args.root / "core" / "job").rglob("*")):
+        if f.suffix in (".h", ".cc") and f.name != "policy.h":
+            for line in f.read_text(errors="replace").splitlines():
+                if re.match(r"\s*(static\s+|inline\s+)*constexpr\s", line):
+                    bad.append(f"{f.relative_to(args.root).as_posix()}: a constant outside JobPolicy: {line.strip()}")
     for line in bad:
         print(line)
-    print(f"check_layers: {len(bad)} include(s) out of order")
+    print(f"check_layers: {len(bad)} problem(s)")
     return 1 if bad else 0
 
 

@@ -9,6 +9,8 @@
 
 #include "core/flows/driver.h"
 #include "core/flows/flow.h"
+#include "core/flows/vector_isa.h"
+#include "core/job/rules.h"
 #include "core/measure/metrics.h"
 #include "core/measure/noise.h"
 #include "core/shapes/added_noise.h"
@@ -60,8 +62,8 @@ TEST(ChebyshevTest, SeriesOfAPowerMatchesItOnItsInterval) {
   EXPECT_EQ(flows::ChebyshevOfPower(0, 0.2, 1e-15).c, std::vector<double>{1.0});
 }
 
-// The count a sample chose, run on the whole mesh (AutoPlan::fixed_iterations): as one
-// polynomial and iteration by iteration (MESHSMOOTH_CHEBYSHEV=0), on a closed sphere and on a
+// The count a sample chose, run on the whole mesh (RunPlan::fixed_iterations): as one
+// polynomial and iteration by iteration (KernelOptions::chebyshev off), on a closed sphere and on a
 // sphere with holes (fixed rims: the step is not symmetric there), the same positions within
 // 1e-9 h, the same count, and progress that rises to it.
 TEST(ChebyshevTest, CountChosenOnASampleRunsAsItsIterations) {
@@ -71,16 +73,18 @@ TEST(ChebyshevTest, CountChosenOnASampleRunsAsItsIterations) {
     const Topology topo = BuildTopology(noisy);
     const double h = MeanEdgeLength(noisy, topo);
     const NoiseEstimate noise = EstimateNoise(noisy, topo, h);
+    job::JobRule rule(h, noise);
     FlowParams p;
     p.flow = FlowId::kBilaplacian;  // automatic iterations, the count given by the plan
     auto run = [&](bool chebyshev, Mesh& m, std::vector<int>& seen) {
-      if (!chebyshev) setenv("MESHSMOOTH_CHEBYSHEV", "0", 1);
+      flows::KernelOptions options;
+      options.chebyshev = chebyshev;
+      flows::SetKernelOptions(options);
       m = noisy;
       RunControl control;
       control.on_progress = [&](const Progress& progress) { seen.push_back(progress.iteration); };
-      absl::StatusOr<FlowResult> r =
-          flows::RunIterations(m, topo, p, control, h, flows::AutoPlan{300, &noise, nullptr, std::nullopt, false});
-      unsetenv("MESHSMOOTH_CHEBYSHEV");
+      absl::StatusOr<FlowResult> r = flows::RunIterations(m, topo, p, control, h, {300, &rule});
+      flows::SetKernelOptions({});
       return r;
     };
     Mesh fast, slow;
@@ -118,12 +122,12 @@ TEST(ChebyshevTest, SameBitsForAnyThreadCount) {
     FlowParams p;
     p.flow = FlowId::kBilaplacian;
     p.threads = threads;
+    job::JobRule rule(h, noise);
     Mesh m = noisy;
     int terms = 0;
     RunControl control;
     control.on_progress = [&](const Progress& progress) { terms += progress.max_displacement == 0.0; };
-    const absl::StatusOr<FlowResult> r =
-        flows::RunIterations(m, topo, p, control, h, flows::AutoPlan{200, &noise, nullptr, std::nullopt, false});
+    const absl::StatusOr<FlowResult> r = flows::RunIterations(m, topo, p, control, h, {200, &rule});
     ASSERT_TRUE(r.ok()) << r.status();
     EXPECT_EQ(r->iterations_run, 200);
     EXPECT_GT(terms, 0);  // it ran as a polynomial

@@ -17,6 +17,9 @@
 #include "core/flows/reorder.h"
 #include "core/flows/vector_isa.h"
 #include "core/io/mesh_io.h"
+#include "core/job/rules.h"
+#include "core/measure/metrics.h"
+#include "core/measure/noise.h"
 #include "gtest/gtest.h"
 #include "tests/flow_fixtures.h"
 #include "tests/test_data.h"
@@ -130,7 +133,9 @@ TEST(FlowInvariantsTest, ProbeBesideTheRunChangesNoPosition) {
     FlowParams p = Params("bilaplacian", kAutoIterations);
     p.threads = threads;
     Mesh m = large;
-    absl::StatusOr<FlowResult> r = flows::RunIterations(m, topo, p, {}, h, flows::AutoPlan{});
+    const NoiseEstimate noise = EstimateNoise(large, topo, h);
+    job::RiskStop rule(h, noise);
+    absl::StatusOr<FlowResult> r = flows::RunIterations(m, topo, p, {}, h, {0, &rule});
     ASSERT_TRUE(r.ok()) << r.status();
     EXPECT_GT(r->iterations_run, 0);
     results.push_back(std::move(m));
@@ -227,13 +232,14 @@ Mesh SplitEverySeventhFace(Mesh m) {
 // positions must be the bytes of the x86-64 baseline build. (On a CPU without AVX2 every run
 // below is the baseline and the test cannot tell them apart.)
 TEST(FlowInvariantsTest, InstructionSetChangesNoPosition) {
-  // The builds of the cotangent kernel this CPU can run, by MESHSMOOTH_VECTOR_ISA ("" = the
+  // The builds of the cotangent kernel this CPU can run, by KernelOptions::isa (none = the
   // widest): SSE2 always, AVX2 and AVX-512 when the CPU has them.
-  unsetenv("MESHSMOOTH_VECTOR_ISA");
+  flows::SetKernelOptions({});
   const flows::VectorIsa widest = flows::BestVectorIsa();
-  std::vector<std::pair<std::string, const char*>> isas = {{"sse2", "sse2"}};
-  if (widest != flows::VectorIsa::kSse2) isas.push_back({"avx2", "avx2"});
-  if (widest == flows::VectorIsa::kAvx512) isas.push_back({"avx512", ""});
+  using flows::VectorIsa;
+  std::vector<std::pair<std::string, VectorIsa>> isas = {{"sse2", VectorIsa::kSse2}};
+  if (widest != VectorIsa::kSse2) isas.push_back({"avx2", VectorIsa::kAvx2});
+  if (widest == VectorIsa::kAvx512) isas.push_back({"avx512", VectorIsa::kAvx512});
   if (isas.size() == 1) GTEST_SKIP() << "this CPU has neither AVX2 nor AVX-512: nothing to compare SSE2 with";
   std::string compared = "sse2";
   for (size_t i = 1; i < isas.size(); ++i) compared += " = " + isas[i].first;
@@ -250,12 +256,14 @@ TEST(FlowInvariantsTest, InstructionSetChangesNoPosition) {
       FlowParams p = Params(flow, FlowOf(*ParseFlowName(flow)).kind == FlowKind::kNormalFilter ? 2 : 5);
       std::vector<Mesh> runs;
       for (const auto& [name, isa] : isas) {
-        setenv("MESHSMOOTH_VECTOR_ISA", isa, 1);
+        flows::KernelOptions options;
+        options.isa = isa;
+        flows::SetKernelOptions(options);
         Mesh m = c.mesh;
         ASSERT_TRUE(Smooth(m, topo, p).ok());
         runs.push_back(std::move(m));
       }
-      unsetenv("MESHSMOOTH_VECTOR_ISA");
+      flows::SetKernelOptions({});
       EXPECT_FALSE(SameBytes(runs[0], c.mesh));
       for (size_t i = 1; i < isas.size(); ++i)
         EXPECT_TRUE(SameBytes(runs[0], runs[i])) << "sse2 and " << isas[i].first << " differ";
@@ -266,14 +274,16 @@ TEST(FlowInvariantsTest, InstructionSetChangesNoPosition) {
 // Blocks of free vertices without eq. (14) step W vertices at a time (CurvatureStepLanes);
 // eq. (14) with T = 0, which leaves every speed as it is (F (|F| - 0) / |F| = F), takes the
 // per-vertex step. Positions and statistics must be the same bits.
-// Smooths `mesh` in lane batches and vertex by vertex (MESHSMOOTH_LANE_BATCHES=0): the same
+// Smooths `mesh` in lane batches and vertex by vertex (KernelOptions::lane_batches off): the same
 // bytes and statistics. Returns the batched run's result.
 FlowResult ExpectLanesMatchVertices(const Mesh& mesh, const Topology& topo, const FlowParams& p) {
   Mesh lanes = mesh, vertex = mesh;
   const absl::StatusOr<FlowResult> a = Smooth(lanes, topo, p);
-  setenv("MESHSMOOTH_LANE_BATCHES", "0", 1);
+  flows::KernelOptions vertex_by_vertex;
+  vertex_by_vertex.lane_batches = false;
+  flows::SetKernelOptions(vertex_by_vertex);
   const absl::StatusOr<FlowResult> b = Smooth(vertex, topo, p);
-  unsetenv("MESHSMOOTH_LANE_BATCHES");
+  flows::SetKernelOptions({});
   EXPECT_TRUE(a.ok() && b.ok()) << a.status() << b.status();
   if (!a.ok() || !b.ok()) return {};
   EXPECT_FALSE(SameBytes(lanes, mesh));

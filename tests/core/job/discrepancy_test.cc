@@ -1,13 +1,15 @@
 // The face-normal measures (core/measure/normal_turn.h) and the discrepancy rule
-// (core/flows/discrepancy.h) against closed forms.
-#include "core/flows/discrepancy.h"
+// (TurnStop, core/job/rules.h) against closed forms.
 
 #include <cmath>
 #include <numbers>
 #include <optional>
 #include <vector>
 
-#include "core/flows/auto_stop.h"
+#include "core/flows/flow_kernel.h"
+#include "core/job/rules.h"
+#include "core/measure/noise.h"
+#include "core/measure/normal_turn.h"
 #include "core/mesh.h"
 #include "core/topology.h"
 #include "gtest/gtest.h"
@@ -132,25 +134,27 @@ TEST(DiscrepancyTest, StopsOnceTheFacesTurnedByTheTarget) {
     }
     return out;
   };
-  flows::DiscrepancyStop rule(/*target=*/0.1);
-  rule.Start(sheet, topo);
+  const NoiseEstimate noise;
+  const std::vector<uint8_t> role(sheet.num_vertices(), flows::kFree);
+  job::TurnStop rule(1.0, noise, /*target=*/0.1, /*rims=*/false);
+  EXPECT_EQ(rule.Start(sheet, topo, role.data(), 1), std::nullopt);
   int stopped = 0;
   std::optional<StopReason> reason;
   for (int it = 1; it <= 20 && !reason; ++it) {
-    reason = rule.After(it, rotated(0.011 * it).data());
+    reason = rule.After(it, rotated(0.011 * it).data(), nullptr);
     stopped = it;
   }
   EXPECT_EQ(reason, StopReason::kNoiseRemoved);
   EXPECT_EQ(stopped, 10);  // 0.110 >= 0.1 > 0.099
-  flows::DiscrepancyStop slow(0.1);
-  slow.Start(sheet, topo);
+  job::TurnStop slow(1.0, noise, 0.1, false);
+  slow.Start(sheet, topo, role.data(), 1);
   reason.reset();
   for (int it = 1; it <= 40 && !reason; ++it) {
-    reason = slow.After(it, rotated(0.05 * (1.0 - std::pow(0.5, it))).data());  // levels off at 0.05
+    reason = slow.After(it, rotated(0.05 * (1.0 - std::pow(0.5, it))).data(), nullptr);  // levels off at 0.05
     stopped = it;
   }
   EXPECT_EQ(reason, StopReason::kConverged);
-  EXPECT_EQ(stopped, 2 * flows::kPatience);  // the first iteration the rule may call it
+  EXPECT_EQ(stopped, 2 * job::kPolicy.patience);  // the first iteration the rule may call it
 }
 
 }  // namespace

@@ -1,4 +1,4 @@
-// Automatic stopping (FlowParams::iterations == kAutoIterations; core/flows/auto_stop.h) and the
+// The default job (FlowParams::iterations == kAutoIterations; core/job/) and the
 // noise estimate it rests on (core/measure/noise.h), measured against the clean surface.
 #include <algorithm>
 #include <cmath>
@@ -11,12 +11,13 @@
 #include <utility>
 #include <vector>
 
-#include "core/flows/auto_stop.h"
-#include "core/flows/choice.h"
 #include "core/flows/driver.h"
 #include "core/flows/flow.h"
 #include "core/flows/flow_kernel.h"
 #include "core/io/mesh_io.h"
+#include "core/job/choice.h"
+#include "core/job/repair.h"
+#include "core/job/rules.h"
 #include "core/measure/evaluation.h"
 #include "core/measure/metrics.h"
 #include "core/measure/noise.h"
@@ -145,13 +146,13 @@ TEST(NoiseEstimateTest, OutlierShareTellsThrownVerticesFromNoiseAndCreases) {
     Mesh noisy = clean;
     AddNormalNoise(noisy, sigma, 7);
     const NoiseEstimate e = EstimateNoise(noisy, topo, h);
-    EXPECT_LT(e.outlier_share, 0.25 * flows::kImpulsiveShare) << sigma;
+    EXPECT_LT(e.outlier_share, 0.25 * job::kPolicy.impulsive_share) << sigma;
   }
   Mesh thrown = clean;
   AddImpulsiveNoise(thrown, 0.1, 1.0, 7);
   const NoiseEstimate e = EstimateNoise(thrown, topo, h);
   std::printf("a tenth thrown 1-3 h: outliers %.4f of the fits, robust scale %.3f h\n", e.outlier_share, e.sigma_h);
-  EXPECT_GT(e.outlier_share, 1.5 * flows::kImpulsiveShare);
+  EXPECT_GT(e.outlier_share, 1.5 * job::kPolicy.impulsive_share);
   const std::filesystem::path cad = testing::SharedData("meshes") / "fandisk.obj";
   if (std::filesystem::exists(cad)) {
     const absl::StatusOr<Mesh> fandisk = ReadMesh(cad.string());
@@ -180,7 +181,7 @@ TEST(NoiseEstimateTest, RemoveOutliersPutsAThrownVertexBackInItsPlane) {
   m.positions[a].z += 2.0 * h;
   m.positions[b].z -= 1.5 * h;
   std::vector<uint8_t> moved;
-  RemoveOutliers(m, topo, h, 0.5, 3, moved);
+  job::RemoveOutliers(m, topo, h, 0.5, 3, moved);
   EXPECT_TRUE(moved[a] && moved[b]);
   for (int32_t v = 0; v < m.num_vertices(); ++v) {
     // A neighbour whose fit they pull may be moved too: to its ring's median height, the plane.
@@ -190,7 +191,7 @@ TEST(NoiseEstimateTest, RemoveOutliersPutsAThrownVertexBackInItsPlane) {
   }
   // A clean plane: nothing is an outlier.
   Mesh flat = plane;
-  RemoveOutliers(flat, topo, h, 0.5, 3, moved);
+  job::RemoveOutliers(flat, topo, h, 0.5, 3, moved);
   EXPECT_EQ(flat.positions, plane.positions);
 }
 
@@ -227,7 +228,7 @@ TEST(NoiseEstimateTest, UnfoldFansTurnsFoldedFacesBack) {
   m.positions[rim] += inward * (1.5 / (topo.valence(rim) - 2));
   ASSERT_GT(turned_over(m), 0);
   std::vector<uint8_t> moved;
-  EXPECT_GT(UnfoldFans(m, topo, 6, moved), 0);
+  EXPECT_GT(job::UnfoldFans(m, topo, 6, moved), 0);
   EXPECT_EQ(turned_over(m), 0);
   std::vector<uint8_t> near(plane.num_vertices(), 0);
   for (int32_t s : {inner, rim}) {
@@ -250,7 +251,7 @@ TEST(NoiseEstimateTest, UnfoldFansTurnsFoldedFacesBack) {
   // Nothing folded: nothing moves.
   Mesh flat = plane;
   std::vector<uint8_t> none;
-  EXPECT_EQ(UnfoldFans(flat, topo, 6, none), 0);
+  EXPECT_EQ(job::UnfoldFans(flat, topo, 6, none), 0);
   EXPECT_EQ(flat.positions, plane.positions);
 }
 
@@ -262,8 +263,8 @@ TEST(NoiseEstimateTest, RemoveOutliersIsTheSameForAnyThreadCount) {
   AddImpulsiveNoise(one, 0.1, 1.0, 5);
   Mesh two = one;
   std::vector<uint8_t> moved_one, moved_two;
-  RemoveOutliers(one, topo, h, 0.5, 3, moved_one, 1);
-  RemoveOutliers(two, topo, h, 0.5, 3, moved_two, 2);
+  job::RemoveOutliers(one, topo, h, 0.5, 3, moved_one, 1);
+  job::RemoveOutliers(two, topo, h, 0.5, 3, moved_two, 2);
   EXPECT_EQ(one.positions, two.positions);
   EXPECT_EQ(moved_one, moved_two);
   EXPECT_GT(std::count(moved_one.begin(), moved_one.end(), 1), clean.num_vertices() / 20);
@@ -272,7 +273,7 @@ TEST(NoiseEstimateTest, RemoveOutliersIsTheSameForAnyThreadCount) {
 // A tenth of the vertices thrown 1-3 h: the default job moves them back before it reads the noise
 // again. Without that it stopped after one iteration, further from the clean surface's normals
 // than its input (fandisk: 21.7 against 18.4 degrees; 3.4 with it).
-TEST(AutoStopTest, DefaultJobMovesThrownVerticesBack) {
+TEST(DefaultJobTest, DefaultJobMovesThrownVerticesBack) {
   const GroundTruth truth(Icosphere(5));
   const Mesh& clean = truth.mesh();
   Mesh noisy = clean;
@@ -320,7 +321,7 @@ TEST(AutoStopTest, DefaultJobMovesThrownVerticesBack) {
   EXPECT_EQ(r->outliers_moved, 0);
 }
 
-TEST(AutoStopTest, CleanMeshComesBackUnchanged) {
+TEST(DefaultJobTest, CleanMeshComesBackUnchanged) {
   const Mesh clean = TwoRateTorus();
   Mesh m = clean;
   FlowParams p;  // automatic stopping with the default flow
@@ -337,7 +338,7 @@ TEST(AutoStopTest, CleanMeshComesBackUnchanged) {
 
 // The clean wave of DetailIsNotReadAsNoise comes back unchanged from the default job; with
 // noise of 0.2 h it comes back closer to the clean wave.
-TEST(AutoStopTest, CleanFineDetailComesBackUnchanged) {
+TEST(DefaultJobTest, CleanFineDetailComesBackUnchanged) {
   const GroundTruth truth(CosineHeightField(1.0, 12, 8, 60));
   Mesh m = truth.mesh();
   absl::StatusOr<FlowResult> r = Smooth(m, FlowParams{});
@@ -363,7 +364,7 @@ TEST(AutoStopTest, CleanFineDetailComesBackUnchanged) {
 // polar cap). A run that keeps its rims fixed moves the small holes' vertices with the surface
 // when told to (FlowParams::small_hole_edges), and the default job tells its umbrella runs to:
 // their noise goes, while the cap's rim stays where it is.
-TEST(AutoStopTest, SmallHolesLoseTheirNoiseWithTheSurface) {
+TEST(DefaultJobTest, SmallHolesLoseTheirNoiseWithTheSurface) {
   Mesh clean = Icosphere(4);
   std::vector<uint8_t> used(clean.positions.size(), 0);
   std::vector<Triangle> kept;
@@ -436,7 +437,7 @@ TEST(AutoStopTest, SmallHolesLoseTheirNoiseWithTheSurface) {
 
 // A clean CAD part of slivers comes back as it went in from the default job (no estimate: every
 // vertex on a crease), where the fits once read 0.38 h of noise and the job moved it.
-TEST(AutoStopTest, CleanCadPartOfSliversComesBackUnchanged) {
+TEST(DefaultJobTest, CleanCadPartOfSliversComesBackUnchanged) {
   const Mesh clean = SliverShaft(128);
   Mesh m = clean;
   absl::StatusOr<FlowResult> r = Smooth(m, FlowParams{});
@@ -451,7 +452,7 @@ TEST(AutoStopTest, CleanCadPartOfSliversComesBackUnchanged) {
 // faster than noise would make it (the creases), so the detail-free estimate reads no noise;
 // and every run the job would try moves the vertices along the slivers and turns their faces
 // (RunLeavingSliversRougherIsNotTaken).
-TEST(AutoStopTest, NoisyCadPartsOfSliversAreNotMadeWorse) {
+TEST(DefaultJobTest, NoisyCadPartsOfSliversAreNotMadeWorse) {
   const Mesh part = SliverShaft(128);
   for (int copies : {1, 40}) {
     Mesh clean;
@@ -481,33 +482,33 @@ TEST(AutoStopTest, NoisyCadPartsOfSliversAreNotMadeWorse) {
 // The run the default job took on the noisy shaft before it read the noise detail-free
 // (bilateral_normal, 9 iterations) leaves more area or more folded edges than the noisy input,
 // at 0.1 and 0.2 h, and Rougher() says so; a run on a noisy sphere takes both away.
-TEST(AutoStopTest, RunLeavingSliversRougherIsNotTaken) {
+TEST(DefaultJobTest, RunLeavingSliversRougherIsNotTaken) {
   for (double sigma : {0.1, 0.2}) {
     Mesh noisy = SliverShaft(128);
     AddNormalNoise(noisy, sigma, 5);
     const Topology topo = BuildTopology(noisy);
-    const flows::Roughness input = flows::RoughnessOf(noisy.positions, noisy, topo);
+    const job::Roughness input = job::RoughnessOf(noisy.positions, noisy, topo);
     Mesh m = noisy;
     ASSERT_TRUE(Smooth(m, topo, testing::Params("bilateral_normal", 9)).ok());
-    const flows::Roughness after = flows::RoughnessOf(m.positions, m, topo);
+    const job::Roughness after = job::RoughnessOf(m.positions, m, topo);
     std::printf("%.1f h: area %.4f -> %.4f, folded edges %lld -> %lld\n", sigma, input.area, after.area,
                 static_cast<long long>(input.folds), static_cast<long long>(after.folds));
-    EXPECT_TRUE(flows::Rougher(after, input, topo.faces.size())) << sigma;
+    EXPECT_TRUE(job::Rougher(after, input, topo.faces.size())) << sigma;
   }
   const Mesh sphere = Icosphere(4);
   Mesh m = sphere;
   AddNormalNoise(m, 0.2, 5);
   const Topology sphere_topo = BuildTopology(m);
-  const flows::Roughness before = flows::RoughnessOf(m.positions, m, sphere_topo);
+  const job::Roughness before = job::RoughnessOf(m.positions, m, sphere_topo);
   ASSERT_TRUE(Smooth(m, sphere_topo, testing::Params("bilaplacian", 20)).ok());
-  const flows::Roughness after = flows::RoughnessOf(m.positions, m, sphere_topo);
+  const job::Roughness after = job::RoughnessOf(m.positions, m, sphere_topo);
   EXPECT_LT(after.area, before.area);
-  EXPECT_FALSE(flows::Rougher(after, before, sphere_topo.faces.size()));
+  EXPECT_FALSE(job::Rougher(after, before, sphere_topo.faces.size()));
 }
 
 // Automatic stopping on a noisy closed surface: far closer to the clean one, its volume kept,
 // no face turned over.
-TEST(AutoStopTest, NoisySphereComesBackCloserWithItsVolume) {
+TEST(DefaultJobTest, NoisySphereComesBackCloserWithItsVolume) {
   const GroundTruth truth(Icosphere(4));
   for (double sigma : {0.1, 0.2, 0.3}) {
     Mesh m = truth.mesh();
@@ -536,7 +537,7 @@ TEST(AutoStopTest, NoisySphereComesBackCloserWithItsVolume) {
 // No mesh that validates as manifold fails with the default job: needles (a tube of 4 x 0.13
 // triangles) with noise; every coordinate stays finite. (Fans of huge valence:
 // tests/core/long_work_test.cc.)
-TEST(AutoStopTest, DefaultJobNeverFailsOnNeedles) {
+TEST(DefaultJobTest, DefaultJobNeverFailsOnNeedles) {
   std::vector<std::pair<std::string, Mesh>> meshes;
   meshes.emplace_back("needle tube", Cylinder(1.0, 20.0, 48, 6));
   for (auto& [name, clean] : meshes) {
@@ -561,7 +562,7 @@ TEST(AutoStopTest, DefaultJobNeverFailsOnNeedles) {
 // holes (their rims fixed, with their noise). At sigma = 0.2 the result is nearer the clean
 // surface than the input by the factor the quality benchmark holds every mesh to (0.6), in
 // distance and in normals, its volume kept, nothing non-finite.
-TEST(AutoStopTest, DefaultJobGeneralisesToIsoSurfacesAndHoleyMeshes) {
+TEST(DefaultJobTest, DefaultJobGeneralisesToIsoSurfacesAndHoleyMeshes) {
   std::vector<std::pair<std::string, Mesh>> meshes;
   meshes.emplace_back(
       "marching-tetrahedra torus",
@@ -597,7 +598,7 @@ TEST(AutoStopTest, DefaultJobGeneralisesToIsoSurfacesAndHoleyMeshes) {
 // update, so they lose their noise, and the holes keep their size. With the rims fixed (an
 // explicit BoundaryMode::kFixed, or the rule disabled) the job keeps their noise: RMS 0.72x the
 // input's against 0.19x, and 0.44x against 0.14x on the larger sphere.
-TEST(AutoStopTest, OpenMeshLosesTheNoiseOfItsRims) {
+TEST(DefaultJobTest, OpenMeshLosesTheNoiseOfItsRims) {
   struct Case {
     const char* name;
     Mesh clean;
@@ -653,7 +654,7 @@ TEST(AutoStopTest, OpenMeshLosesTheNoiseOfItsRims) {
 }
 
 // An explicit flow keeps the boundary fixed unless asked otherwise, automatic count or not.
-TEST(AutoStopTest, ExplicitFlowKeepsItsRimsUnlessAsked) {
+TEST(DefaultJobTest, ExplicitFlowKeepsItsRimsUnlessAsked) {
   const Mesh clean = HoleySphere(5, 60, 0.07, 7);
   const Topology topo = BuildTopology(clean);
   Mesh noisy = clean;
@@ -715,7 +716,7 @@ void RunOnNoisySharedMesh(const char* file, double sigma, const FlowParams& p, N
 
 // A candidate with a rival it cannot beat gives up after a few iterations, its estimate above
 // the rival's; one whose rival it beats at once runs exactly as it would alone.
-TEST(AutoStopTest, RunGivesUpOnceItCannotBeatItsRival) {
+TEST(DefaultJobTest, RunGivesUpOnceItCannotBeatItsRival) {
   const Mesh noisy = testing::NoisySphere(4);
   const Topology topo = BuildTopology(noisy);
   const double h = MeanEdgeLength(noisy, topo);
@@ -723,17 +724,20 @@ TEST(AutoStopTest, RunGivesUpOnceItCannotBeatItsRival) {
   p.flow = FlowId::kBilateralNormal;  // automatic iterations
   auto run = [&](std::optional<double> rival, Mesh& m) {
     m = noisy;
-    return flows::RunIterations(m, topo, p, {}, h, flows::AutoPlan{0, nullptr, nullptr, rival});
+    const NoiseEstimate noise = EstimateNoise(noisy, topo, h);
+    job::RiskStop rule(h, noise);
+    if (rival) rule.SetRival(*rival);
+    return flows::RunIterations(m, topo, p, {}, h, {0, &rule});
   };
   Mesh alone_mesh, beaten_mesh, beating_mesh;
   const absl::StatusOr<FlowResult> alone = run(std::nullopt, alone_mesh);
   ASSERT_TRUE(alone.ok() && alone->auto_stop);
-  ASSERT_GT(alone->last.iteration, 4 * flows::kRivalWindow);
+  ASSERT_GT(alone->last.iteration, 4 * job::kPolicy.rival_window);
   const double risk = alone->auto_stop->risk_h2;
   const absl::StatusOr<FlowResult> beaten = run(risk - 1.0, beaten_mesh);
   ASSERT_TRUE(beaten.ok() && beaten->auto_stop);
-  EXPECT_LE(beaten->last.iteration, 3 * flows::kRivalWindow);
-  EXPECT_GT(beaten->last.iteration, 2 * flows::kRivalWindow);
+  EXPECT_LE(beaten->last.iteration, 3 * job::kPolicy.rival_window);
+  EXPECT_GT(beaten->last.iteration, 2 * job::kPolicy.rival_window);
   EXPECT_GT(beaten->auto_stop->risk_h2, risk - 1.0);
   const absl::StatusOr<FlowResult> beating = run(risk + 1.0, beating_mesh);
   ASSERT_TRUE(beating.ok());
@@ -743,8 +747,8 @@ TEST(AutoStopTest, RunGivesUpOnceItCannotBeatItsRival) {
 
 // The fold repair on the needles of SphereWithNeedles, each apex mirrored across its needle's
 // base edge (the needle folded over): the repair unfolds every one and moves no vertex further
-// than kFoldRepairReachH h.
-TEST(AutoStopTest, FoldRepairUnfoldsNeedlesWithinItsReach) {
+// than fold_repair_reach_h h.
+TEST(DefaultJobTest, FoldRepairUnfoldsNeedlesWithinItsReach) {
   const Mesh clean = testing::SphereWithNeedles();
   const GroundTruth truth(clean);
   const Topology& topo = truth.topology();
@@ -752,7 +756,7 @@ TEST(AutoStopTest, FoldRepairUnfoldsNeedlesWithinItsReach) {
   std::vector<uint8_t> role(clean.num_vertices(), flows::kFree);
   Mesh noisy = clean;
   AddNormalNoise(noisy, 0.1, 1);
-  const flows::AutoStop stop(noisy, topo, role.data(), h, 1, /*noise=*/nullptr, /*measured=*/nullptr);
+  const job::FoldRepair repair(topo, role.data(), h, 1);
 
   Mesh folded = clean;  // each needle's apex as far across its base edge as it was before it
   const size_t sphere_faces = Icosphere(3).triangles.size();  // the needles are faces 0, 5, 10, ...
@@ -764,7 +768,7 @@ TEST(AutoStopTest, FoldRepairUnfoldsNeedlesWithinItsReach) {
     folded.positions[t[2]] = foot * 2.0 - p;
   }
   Mesh repaired = folded;
-  const int64_t left = stop.RepairFolds(repaired.positions.data());
+  const int64_t left = repair.Run(repaired.positions.data());
   double longest = 0.0;
   for (int32_t v = 0; v < clean.num_vertices(); ++v) {
     longest = std::max(longest, Norm(repaired.positions[v] - folded.positions[v]));
@@ -778,15 +782,15 @@ TEST(AutoStopTest, FoldRepairUnfoldsNeedlesWithinItsReach) {
   EXPECT_GE(before, needles);
   EXPECT_EQ(after, 0);
   EXPECT_EQ(left, 0);
-  EXPECT_LE(longest, flows::kFoldRepairReachH * h * (1.0 + 1e-12));
+  EXPECT_LE(longest, job::kPolicy.fold_repair_reach_h * h * (1.0 + 1e-12));
 }
 
 // A rim vertex that a run moved (BoundaryMode::kCurve) and left just across the far edge of one of
-// its faces: the fold repair pulls it back along its loop within kFoldRepairReachH h, and leaves a
+// its faces: the fold repair pulls it back along its loop within fold_repair_reach_h h, and leaves a
 // fixed rim alone (its interior neighbours' repair unfolds the faces then). An icosphere without
 // its polar cap; every other rim vertex is slid a tenth of the face's height across the edge (its
 // face turns over).
-TEST(AutoStopTest, FoldRepairPullsSlidRimVerticesBack) {
+TEST(DefaultJobTest, FoldRepairPullsSlidRimVerticesBack) {
   Mesh clean = Icosphere(3);
   std::vector<Triangle> kept;
   for (const Triangle& t : clean.triangles) {
@@ -818,9 +822,9 @@ TEST(AutoStopTest, FoldRepairPullsSlidRimVerticesBack) {
     for (int32_t v = 0; v < topo.num_vertices(); ++v) {
       if (topo.kind[v] == VertexKind::kBoundary) role[v] = rim_role;
     }
-    const flows::AutoStop stop(clean, topo, role.data(), h, 1, /*noise=*/nullptr, /*measured=*/nullptr);
+    const job::FoldRepair repair(topo, role.data(), h, 1);
     Mesh repaired = slid;
-    stop.RepairFolds(repaired.positions.data());
+    repair.Run(repaired.positions.data());
     double longest = 0.0;
     for (int32_t v = 0; v < clean.num_vertices(); ++v) {
       if (topo.kind[v] == VertexKind::kBoundary) {
@@ -834,7 +838,7 @@ TEST(AutoStopTest, FoldRepairPullsSlidRimVerticesBack) {
     EXPECT_EQ(after, 0);
     if (rim_role == flows::kCurve) {  // the rim vertices themselves went back (0.200 h)
       EXPECT_GT(longest, 0.1 * h);
-      EXPECT_LE(longest, flows::kFoldRepairReachH * h * (1.0 + 1e-12));
+      EXPECT_LE(longest, job::kPolicy.fold_repair_reach_h * h * (1.0 + 1e-12));
     } else {
       EXPECT_EQ(longest, 0.0);
     }
@@ -842,18 +846,18 @@ TEST(AutoStopTest, FoldRepairPullsSlidRimVerticesBack) {
 }
 
 // Interior vertices pushed across their rings within the surface, further than the centroid step
-// may take them back (kFoldRepairReachH): the repair slides each back across its fan
+// may take them back (fold_repair_reach_h): the repair slides each back across its fan
 // (SlideToUnfold), within the plane of its ring, no further from the surface. An icosphere of level
 // 4; every vertex of a spread-out set is moved along the tangent plane 0.6 of the way past one of
 // its neighbours. With the centroid step alone (the repair before the slide) all 334 flipped faces
 // stay.
-TEST(AutoStopTest, FoldRepairSlidesVerticesPushedAcrossTheirRings) {
+TEST(DefaultJobTest, FoldRepairSlidesVerticesPushedAcrossTheirRings) {
   const Mesh clean = Icosphere(4);
   const GroundTruth truth(clean);
   const Topology& topo = truth.topology();
   const double h = MeanEdgeLength(clean, topo);
   std::vector<uint8_t> role(clean.num_vertices(), flows::kFree);
-  const flows::AutoStop stop(clean, topo, role.data(), h, 1, /*noise=*/nullptr, /*measured=*/nullptr);
+  const job::FoldRepair repair(topo, role.data(), h, 1);
   Mesh pushed = clean;
   std::vector<uint8_t> near(clean.num_vertices(), 0);  // a pushed vertex and its two rings
   int moved = 0;
@@ -872,7 +876,7 @@ TEST(AutoStopTest, FoldRepairSlidesVerticesPushedAcrossTheirRings) {
   const int64_t before = truth.Evaluate(pushed)->flipped_faces;
   ASSERT_GE(before, moved);
   Mesh repaired = pushed;
-  const int64_t left = stop.RepairFolds(repaired.positions.data());
+  const int64_t left = repair.Run(repaired.positions.data());
   double longest = 0.0, off_before = 0.0, off_after = 0.0;  // off: from the unit sphere
   for (int32_t v = 0; v < clean.num_vertices(); ++v) {
     longest = std::max(longest, Norm(repaired.positions[v] - pushed.positions[v]));
@@ -887,8 +891,8 @@ TEST(AutoStopTest, FoldRepairSlidesVerticesPushedAcrossTheirRings) {
       off_after / h, off_before / h);
   EXPECT_EQ(after, 0);
   EXPECT_EQ(left, 0);
-  EXPECT_GT(longest, 2.0 * flows::kFoldRepairReachH * h);  // beyond the centroid step's reach
-  EXPECT_LE(longest, flows::kUnfoldSlideH * h * 1.01);
+  EXPECT_GT(longest, 2.0 * job::kPolicy.fold_repair_reach_h * h);  // beyond the centroid step's reach
+  EXPECT_LE(longest, job::kPolicy.unfold_slide_h * h * 1.01);
   EXPECT_LE(off_after, off_before);  // no vertex leaves the surface further than the push did
 }
 
@@ -897,7 +901,7 @@ TEST(AutoStopTest, FoldRepairSlidesVerticesPushedAcrossTheirRings) {
 // across the surface to where its projected fan unfolds, turns its faces further from the
 // surface: 8.651 degrees here, 8.721 sliding every folded vertex, 8.588 with the centroid step
 // alone (docs/decisions.md, "Fold repair, within 0.2 h").
-TEST(AutoStopTest, FoldRepairSlidesOnlyFansFoldedInTheirPlane) {
+TEST(DefaultJobTest, FoldRepairSlidesOnlyFansFoldedInTheirPlane) {
   MESHSMOOTH_REQUIRE_SHARED("meshes");
   NoisyRun run;
   ASSERT_NO_FATAL_FAILURE(
@@ -913,7 +917,7 @@ TEST(AutoStopTest, FoldRepairSlidesOnlyFansFoldedInTheirPlane) {
 // Moving thrown vertices back can leave fans folded; when the noise read after it is below
 // what a run would remove, the job does no iteration but still repairs those folds (camelhead:
 // 66 flipped faces without the repair, 61 with it; the noisy input has 259).
-TEST(AutoStopTest, FoldsLeftByMovingOutliersBackAreRepairedWithoutARun) {
+TEST(DefaultJobTest, FoldsLeftByMovingOutliersBackAreRepairedWithoutARun) {
   MESHSMOOTH_REQUIRE_SHARED("meshes");
   NoisyRun run;
   ASSERT_NO_FATAL_FAILURE(RunOnNoisySharedMesh("camelhead.obj", 1.0, FlowParams{}, &run, SharedNoise::kImpulsive));
@@ -934,8 +938,8 @@ TEST(AutoStopTest, FoldsLeftByMovingOutliersBackAreRepairedWithoutARun) {
 // A CAD part with features thinner than the noise: the turbine's narrow strips between
 // right-angled creases meet at more than kFoldAngleDeg after a run, like folds. Pulling their
 // vertices on to their rings' centroids without bound flattens them (RMS 0.061 h, 72 flipped
-// faces, against 0.052 h and 41 within kFoldRepairReachH; docs/decisions.md).
-TEST(AutoStopTest, FoldRepairLeavesThinFeaturesOfACadPart) {
+// faces, against 0.052 h and 41 within fold_repair_reach_h; docs/decisions.md).
+TEST(DefaultJobTest, FoldRepairLeavesThinFeaturesOfACadPart) {
   MESHSMOOTH_REQUIRE_SHARED("meshes");
   const FlowParams p;  // no flow, iterations or step: the default job
   NoisyRun run;
@@ -948,7 +952,7 @@ TEST(AutoStopTest, FoldRepairLeavesThinFeaturesOfACadPart) {
   EXPECT_LT(after.flipped_faces, 50);
 }
 
-TEST(AutoStopTest, ExplicitIterationsRunExactly) {
+TEST(DefaultJobTest, ExplicitIterationsRunExactly) {
   Mesh m = Icosphere(3);
   AddNormalNoise(m, 0.2, 1);
   FlowParams p;
@@ -962,7 +966,7 @@ TEST(AutoStopTest, ExplicitIterationsRunExactly) {
 
 // A real CAD part with noise: the default job at least halves nothing it should not, keeps the
 // volume within 1% of the clean part's, and turns no face over.
-TEST(AutoStopTest, NoisyFandiskComesBackCloser) {
+TEST(DefaultJobTest, NoisyFandiskComesBackCloser) {
   MESHSMOOTH_REQUIRE_SHARED("meshes");
   absl::StatusOr<Mesh> clean = ReadMesh(testing::SharedData("meshes").append("fandisk.obj").string());
   ASSERT_TRUE(clean.ok()) << clean.status();
@@ -990,7 +994,7 @@ TEST(AutoStopTest, NoisyFandiskComesBackCloser) {
 // bilateral_normal, which keeps the creases: within 1.25 times the best fixed count's distance
 // (0.0523 h at 16 rounds, bench/quality.cc) and a few degrees of normal error next to creases,
 // where the bilaplacian flow at its own best count leaves 22 degrees.
-TEST(AutoStopTest, ChosenFlowKeepsTheCreasesOfANoisyCadPart) {
+TEST(DefaultJobTest, ChosenFlowKeepsTheCreasesOfANoisyCadPart) {
   MESHSMOOTH_REQUIRE_SHARED("meshes");
   const FlowParams p;  // the default job
   NoisyRun run;
@@ -1010,7 +1014,7 @@ TEST(AutoStopTest, ChosenFlowKeepsTheCreasesOfANoisyCadPart) {
 // whole mesh runs once at that count: a 131k-vertex noisy torus still comes back far closer
 // (the 1,456-vertex one: 0.30 times the noisy distance), its volume kept; the clean torus
 // comes back unchanged.
-TEST(AutoStopTest, LargeMeshChoosesOnItsPatches) {
+TEST(DefaultJobTest, LargeMeshChoosesOnItsPatches) {
   const GroundTruth truth(TwoRateTorus(256));
   ASSERT_GT(truth.mesh().num_vertices(), kMaxChoiceVertices);
   {
@@ -1043,7 +1047,7 @@ TEST(AutoStopTest, LargeMeshChoosesOnItsPatches) {
 // sample lie within a few hundredths of sigma^2 of each other: bilaplacian, whose estimate the
 // sample's fixed rims raise, is kept (nefertiti at sigma = 0.1 h, the quality benchmark's input:
 // 0.0516 h with the normal filter the sample preferred without the margin, 0.0466 h with it).
-TEST(AutoStopTest, SampleKeepsBilaplacianUnlessTheFilterIsClearlyBetter) {
+TEST(DefaultJobTest, SampleKeepsBilaplacianUnlessTheFilterIsClearlyBetter) {
   const std::filesystem::path path = testing::SharedData("meshes") / "nefertiti.obj";
   if (!std::filesystem::exists(path)) GTEST_SKIP() << path << " absent";
   const GroundTruth truth(*ReadMesh(path.string()));
@@ -1065,7 +1069,7 @@ TEST(AutoStopTest, SampleKeepsBilaplacianUnlessTheFilterIsClearlyBetter) {
 // beside it): the default job takes its normal error, face for face, from 14.39 to at most 8.0
 // degrees (the literature's TGV filter reaches 6.96; the bilateral filter's reference defaults
 // 12.06), and turns no more faces over than the scan had.
-TEST(AutoStopTest, RealFusedConeLosesItsBumps) {
+TEST(DefaultJobTest, RealFusedConeLosesItsBumps) {
   MESHSMOOTH_REQUIRE_SHARED("real");
   char tmpl[] = "/tmp/meshsmooth-cone-XXXXXX";
   ASSERT_NE(mkdtemp(tmpl), nullptr);

@@ -1,4 +1,4 @@
-#include "core/flows/choice.h"
+#include "core/job/choice.h"
 
 #include <algorithm>
 #include <iterator>
@@ -7,35 +7,30 @@
 #include <vector>
 
 #include "absl/status/status.h"
-#include "core/flows/auto_stop.h"
-#include "core/flows/discrepancy.h"
+#include "core/flows/driver.h"
+#include "core/job/repair.h"
+#include "core/job/rules.h"
 #include "core/measure/noise.h"
 #include "core/measure/normal_turn.h"
 
-namespace meshsmooth::flows {
+namespace meshsmooth::job {
+
+using flows::SmoothOneFlow;
+
 namespace {
 
-// A sample holds one vertex in kSampleShare of the mesh's, at least kMinSample and at most
-// kMaxSample, in patches of at least kMinPatch vertices, at most kMaxPatches of them; the risk is
-// measured in the patches' cores, within kCorePercent of their radius (in rings) from the seed.
-// docs/decisions.md ("The default job chooses on a sample") has the figures behind them.
-constexpr int32_t kSampleShare = 16;
-constexpr int32_t kMinSample = 10000;
-constexpr int32_t kMaxSample = 20000;
-constexpr int32_t kMinPatch = 2500;
-constexpr int32_t kMaxPatches = 8;
-constexpr int32_t kCorePercent = 60;
-// On a sample, a later candidate (bilateral_normal) is chosen only when its estimate is below
-// the first's (bilaplacian's) by more than this share of sigma^2: the patches' fixed rims hold
-// back bilaplacian's wider reach more than the normal filter's, so its estimate on a sample reads
-// high (docs/decisions.md, "The default job chooses on a sample", has the figures).
-constexpr double kSampleBias = 0.025;
+// A sample holds one vertex in sample_share of the mesh's, at least min_sample and at most
+// max_sample, in patches of at least min_patch vertices, at most max_patches of them; the risk is
+// measured in the patches' cores, within core_percent of their radius (in rings) from the seed.
+// On a sample, a later candidate (bilateral_normal) is chosen only when its estimate is below the
+// first's (bilaplacian's) by more than sample_bias of sigma^2: the patches' fixed rims hold back
+// bilaplacian's wider reach more than the normal filter's, so its estimate on a sample reads high.
 
 // The boundary a run of `flow` takes under the job's `requested` mode (q.boundary and
 // q.small_hole_edges): BoundaryMode::kAuto moves the rims with the normal filters' vertex update
 // (the planes of their faces: a rim does not shrink) and keeps them fixed with the umbrella
 // flows, whose boundary curve umbrella would shrink small holes; there the vertices of holes at
-// most kSmallHoleEdges edges around move as interior ones.
+// most kSmallHoleEdges (core/flows/catalogue.h) edges around move as interior ones.
 void SetBoundary(FlowParams& q, FlowId flow, BoundaryMode requested) {
   q.boundary = requested;
   if (requested != BoundaryMode::kAuto) return;
@@ -58,7 +53,9 @@ FlowParams ForFlow(const FlowParams& p, FlowId flow) {
   return q;
 }
 
-void Report(const RunControl& control, Phase phase, FlowId flow) {
+}  // namespace
+
+void ReportPhase(const RunControl& control, Phase phase, FlowId flow) {
   if (!control.on_progress) return;
   Progress progress;
   progress.phase = phase;
@@ -66,10 +63,12 @@ void Report(const RunControl& control, Phase phase, FlowId flow) {
   control.on_progress(progress);
 }
 
+namespace {
+
 // Every candidate (p.flow when set, else kChoiceFlows) on a copy of `mesh` with automatic
 // stopping; the least estimated error gives the result, a later candidate's less `margin_h2`
 // (the first candidate's estimate decides whether there is anything to do). Progress: one
-// kChoosing report per candidate. `repair_idle`: AutoPlan's.
+// kChoosing report per candidate. `repair_idle`: JobRule's.
 absl::StatusOr<FlowResult> Choose(Mesh& mesh, const Topology& topo, const FlowParams& p, const RunControl& control,
                                   double h, const NoiseEstimate& noise, const std::vector<uint8_t>* measured = nullptr,
                                   double margin_h2 = 0.0, bool repair_idle = false) {
@@ -81,12 +80,12 @@ absl::StatusOr<FlowResult> Choose(Mesh& mesh, const Topology& topo, const FlowPa
   std::optional<Roughness> input_roughness;
   std::optional<FlowResult> rejected;  // the first candidate that left the input rougher
   for (FlowId flow : candidates) {
-    Report(control, Phase::kChoosing, flow);
+    ReportPhase(control, Phase::kChoosing, flow);
     Mesh copy = mesh;
     const FlowParams q = ForFlow(p, flow);
-    AutoPlan plan{0, &noise, measured, std::nullopt, p.boundary != BoundaryMode::kFixed, repair_idle};
-    if (best && best->auto_stop && best->iterations_run > 0) plan.rival_risk_h2 = best->auto_stop->risk_h2 - margin_h2;
-    absl::StatusOr<FlowResult> r = SmoothOneFlow(copy, topo, q, quiet, h, plan);
+    RiskStop rule(h, noise, measured, p.boundary != BoundaryMode::kFixed, repair_idle);
+    if (best && best->auto_stop && best->iterations_run > 0) rule.SetRival(best->auto_stop->risk_h2 - margin_h2);
+    absl::StatusOr<FlowResult> r = SmoothOneFlow(copy, topo, q, quiet, h, {0, &rule});
     if (!r.ok()) {
       // A candidate that diverges is not chosen (unless it is the only one); cancellation and
       // the like end the job.
@@ -125,7 +124,7 @@ absl::StatusOr<FlowResult> Choose(Mesh& mesh, const Topology& topo, const FlowPa
 
 struct Sample {
   Mesh mesh;
-  // Per sample vertex: in a patch's core (at most kCorePercent of the patch's radius, in rings,
+  // Per sample vertex: in a patch's core (at most core_percent of the patch's radius, in rings,
   // from its seed), where the patch's fixed rim hardly reaches.
   std::vector<uint8_t> core;
   // Per sample vertex: its vertex in the mesh.
@@ -135,7 +134,7 @@ struct Sample {
 // About `size` vertices of `mesh` in patches grown breadth-first from seeds spread over the
 // vertex order, and the faces among them. The patches' rims are boundaries (fixed in the runs).
 Sample SamplePatches(const Mesh& mesh, const Topology& topo, int32_t size) {
-  const int patches = std::clamp(size / kMinPatch, 1, kMaxPatches);
+  const int patches = std::clamp(size / kPolicy.min_patch, 1, kPolicy.max_patches);
   const int32_t n = topo.num_vertices();
   std::vector<int32_t> index(n, -1);  // vertex -> sample vertex
   Sample out;
@@ -164,7 +163,7 @@ Sample SamplePatches(const Mesh& mesh, const Topology& topo, int32_t size) {
       }
     }
     const int32_t radius = depth.back();
-    for (size_t s = first; s < depth.size(); ++s) out.core.push_back(depth[s] * 100 <= radius * kCorePercent);
+    for (size_t s = first; s < depth.size(); ++s) out.core.push_back(depth[s] * 100 <= radius * kPolicy.core_percent);
   }
   for (int32_t f : topo.faces) {
     const Triangle& t = mesh.triangles[f];
@@ -177,32 +176,9 @@ Sample SamplePatches(const Mesh& mesh, const Topology& topo, int32_t size) {
 
 }  // namespace
 
-Roughness RoughnessOf(const std::vector<Vec3>& pos, const Mesh& mesh, const Topology& topo) {
-  Roughness r;
-  for (int32_t f : topo.faces) {
-    const Triangle& t = mesh.triangles[f];
-    r.area += 0.5 * Norm(Cross(pos[t[1]] - pos[t[0]], pos[t[2]] - pos[t[0]]));
-  }
-  const double cos_fold = FoldCosine();
-  for (int32_t v = 0; v < topo.num_vertices(); ++v) {
-    if (topo.kind[v] != VertexKind::kInterior) continue;
-    // Each folded edge once: from its lower interior end.
-    ForFoldedEdges(pos.data(), topo, v, cos_fold, [&](int32_t w) {
-      r.folds += topo.kind[w] != VertexKind::kInterior || v < w;
-      return false;
-    });
-  }
-  return r;
-}
-
-bool Rougher(const Roughness& after, const Roughness& before, size_t faces) {
-  return after.area > before.area ||
-         static_cast<double>(after.folds - before.folds) > kNoGainFoldShare * static_cast<double>(faces);
-}
-
 int32_t SampleSize(int32_t n) {
   if (n <= kMaxChoiceVertices) return n;
-  return std::min(n, std::clamp(n / kSampleShare, kMinSample, kMaxSample));
+  return std::min(n, std::clamp(n / kPolicy.sample_share, kPolicy.min_sample, kPolicy.max_sample));
 }
 
 bool ChoosesFlow(const FlowParams& p) {
@@ -226,11 +202,11 @@ std::vector<uint8_t> SampleLocks(Sample& sample, const Topology& sample_topo, co
   return locked;
 }
 
-// SmoothAutomatic once the noise is read: `q` has its flow set unless the job chooses it;
-// `repair_idle` when outliers were moved (AutoPlan).
-absl::StatusOr<FlowResult> SmoothWithEstimate(Mesh& mesh, const Topology& topo, const FlowParams& q,
-                                              const RunControl& control, double h, const NoiseEstimate& noise,
-                                              bool repair_idle) {
+}  // namespace
+
+absl::StatusOr<FlowResult> SmoothByRisk(Mesh& mesh, const Topology& topo, const FlowParams& q,
+                                        const RunControl& control, double h, const NoiseEstimate& noise,
+                                        bool repair_idle) {
   const int32_t n = mesh.num_vertices();
   const int32_t size = SampleSize(n);
   if (size >= n) return Choose(mesh, topo, q, control, h, noise, nullptr, 0.0, repair_idle);
@@ -245,8 +221,8 @@ absl::StatusOr<FlowResult> SmoothWithEstimate(Mesh& mesh, const Topology& topo, 
   // The sample runs with the mesh's h (the step of a curvature flow scales with it): its count
   // is then a count of the same iterations.
   const double sigma_h = RiskSigmaH(noise);
-  absl::StatusOr<FlowResult> chosen =
-      Choose(sample.mesh, sample_topo, on_sample, control, h, noise, &sample.core, kSampleBias * sigma_h * sigma_h);
+  absl::StatusOr<FlowResult> chosen = Choose(sample.mesh, sample_topo, on_sample, control, h, noise, &sample.core,
+                                             kPolicy.sample_bias * sigma_h * sigma_h);
   if (!chosen.ok()) return chosen.status();
   // Every candidate left the sample rougher: the whole mesh comes back as it came.
   if (chosen->stop_reason == StopReason::kNoGain) return chosen;
@@ -256,9 +232,8 @@ absl::StatusOr<FlowResult> SmoothWithEstimate(Mesh& mesh, const Topology& topo, 
     // own estimate and stopping (nothing to do on a clean mesh: as cheap as the sample).
     return Choose(mesh, topo, whole, control, h, noise, nullptr, 0.0, repair_idle);
   }
-  absl::StatusOr<FlowResult> result = SmoothOneFlow(
-      mesh, topo, whole, control, h,
-      AutoPlan{chosen->iterations_run, &noise, nullptr, std::nullopt, q.boundary != BoundaryMode::kFixed});
+  JobRule rule(h, noise, nullptr, q.boundary != BoundaryMode::kFixed);
+  absl::StatusOr<FlowResult> result = SmoothOneFlow(mesh, topo, whole, control, h, {chosen->iterations_run, &rule});
   if (result.ok() && result->iterations_run > 0) {
     result->stop_reason = chosen->stop_reason;
     if (result->auto_stop && chosen->auto_stop) result->auto_stop->risk_h2 = chosen->auto_stop->risk_h2;
@@ -266,8 +241,10 @@ absl::StatusOr<FlowResult> SmoothWithEstimate(Mesh& mesh, const Topology& topo, 
   return result;
 }
 
+namespace {
+
 // Every candidate (p.flow when set, else kChoiceFlows) on a copy of `mesh`, stopped once its
-// faces turned by `target` (DiscrepancyStop); the result whose face normals vary least
+// faces turned by `target` (TurnStop); the result whose face normals vary least
 // (NormalVariation) wins, none when every result varies more than the input.
 absl::StatusOr<std::optional<FlowResult>> ChooseByTurn(Mesh& mesh, const Topology& topo, const FlowParams& p,
                                                        const RunControl& control, double h, const NoiseEstimate& noise,
@@ -280,12 +257,11 @@ absl::StatusOr<std::optional<FlowResult>> ChooseByTurn(Mesh& mesh, const Topolog
   std::vector<Vec3> best_positions;
   double best_variation = input_variation;
   for (FlowId flow : candidates) {
-    Report(control, Phase::kChoosing, flow);
+    ReportPhase(control, Phase::kChoosing, flow);
     Mesh copy = mesh;
     const FlowParams q = ForFlow(p, flow);
-    DiscrepancyStop rule(target);
-    AutoPlan plan{0, &noise, nullptr, std::nullopt, p.boundary != BoundaryMode::kFixed, false, &rule};
-    absl::StatusOr<FlowResult> r = SmoothOneFlow(copy, topo, q, quiet, h, plan);
+    TurnStop rule(h, noise, target, p.boundary != BoundaryMode::kFixed);
+    absl::StatusOr<FlowResult> r = SmoothOneFlow(copy, topo, q, quiet, h, {0, &rule});
     if (!r.ok()) {
       if (r.status().code() == absl::StatusCode::kFailedPrecondition && candidates.size() > 1) continue;
       return r.status();
@@ -300,15 +276,14 @@ absl::StatusOr<std::optional<FlowResult>> ChooseByTurn(Mesh& mesh, const Topolog
   return best;
 }
 
-// SmoothAutomatic for noise the risk estimate cannot read: the candidates run to the discrepancy
-// target, on the mesh itself or on its sample (then the whole mesh at the chosen count). The
-// mesh keeps its positions when no candidate wins.
-absl::StatusOr<std::optional<FlowResult>> SmoothToTurn(Mesh& mesh, const Topology& topo, const FlowParams& q,
+}  // namespace
+
+absl::StatusOr<std::optional<FlowResult>> SmoothByTurn(Mesh& mesh, const Topology& topo, const FlowParams& q,
                                                        const RunControl& control, double h,
                                                        const NoiseEstimate& noise) {
-  const double target = kJobPolicy.discrepancy_turn_share * noise.normal_turn;
+  const double target = kPolicy.discrepancy_turn_share * noise.normal_turn;
   const int32_t n = mesh.num_vertices();
-  if (n <= kJobPolicy.max_whole_turn_vertices) return ChooseByTurn(mesh, topo, q, control, h, noise, target);
+  if (n <= kPolicy.max_whole_turn_vertices) return ChooseByTurn(mesh, topo, q, control, h, noise, target);
   const int32_t size = SampleSize(n);
   Sample sample = SamplePatches(mesh, topo, size);
   const Topology sample_topo = BuildTopology(sample.mesh);
@@ -319,62 +294,12 @@ absl::StatusOr<std::optional<FlowResult>> SmoothToTurn(Mesh& mesh, const Topolog
       ChooseByTurn(sample.mesh, sample_topo, on_sample, control, h, noise, target);
   if (!chosen.ok() || !chosen->has_value()) return chosen;
   const FlowParams whole = ForFlow(q, (*chosen)->flow);
-  absl::StatusOr<FlowResult> result = SmoothOneFlow(mesh, topo, whole, control, h,
-                                                    AutoPlan{std::max((*chosen)->iterations_run, 1), &noise, nullptr,
-                                                             std::nullopt, q.boundary != BoundaryMode::kFixed});
+  JobRule rule(h, noise, nullptr, q.boundary != BoundaryMode::kFixed);
+  absl::StatusOr<FlowResult> result =
+      SmoothOneFlow(mesh, topo, whole, control, h, {std::max((*chosen)->iterations_run, 1), &rule});
   if (!result.ok()) return result.status();
   result->stop_reason = (*chosen)->stop_reason;
   return std::optional<FlowResult>(*std::move(result));
 }
 
-}  // namespace
-
-absl::StatusOr<FlowResult> SmoothAutomatic(Mesh& mesh, const Topology& topo, const FlowParams& p,
-                                           const RunControl& control, double h) {
-  FlowParams q = p;
-  if (!ChoosesFlow(p)) q.flow = p.flow.value_or(kDefaultFlow);
-  Report(control, Phase::kNoiseEstimate, q.flow.value_or(kDefaultFlow));
-  // Every thread the job may use, whatever the mesh's size: the fits are independent and costly.
-  NoiseEstimate noise = EstimateNoise(mesh, topo, h, p.threads, control.stop);
-  int64_t outliers = 0;
-  if (ChoosesFlow(p) && noise.reliable && noise.outlier_share > kImpulsiveShare) {
-    // Twice, the second time at the threshold of the noise read without the first pass's
-    // outliers, which had pulled their neighbours' fits and raised it.
-    std::vector<uint8_t> moved(mesh.positions.size(), 0);
-    for (int pass = 0; pass < 2 && noise.reliable; ++pass) {
-      RemoveOutliers(mesh, topo, h, OutlierThresholdH(noise), kOutlierRounds, moved, p.threads, control.stop,
-                     q.locked.empty() ? nullptr : q.locked.data());
-      noise = EstimateNoise(mesh, topo, h, p.threads, control.stop);
-    }
-    for (uint8_t m : moved) outliers += m;
-  }
-  if (absl::Status s = control.stop.Check(); !s.ok()) return s;
-  // The input, kept only where the discrepancy rule may take over (24 bytes a vertex).
-  const bool visible = TurnsFacesVisibly(noise);
-  const std::vector<Vec3> input = visible ? mesh.positions : std::vector<Vec3>{};
-  absl::StatusOr<FlowResult> result = SmoothWithEstimate(mesh, topo, q, control, h, noise, outliers > 0);
-  if (!result.ok()) return result;
-  // The risk estimate assumes noise independent from vertex to vertex. When its best iteration
-  // turned the faces by less than JobPolicy::risk_turn_share of the turn the noise gives them, the noise is
-  // not that (a fused scan's is correlated over many edges, and the estimate reads it as shape):
-  // the job starts again from its input with the discrepancy rule (discrepancy.h).
-  const bool ran = result->iterations_run > 0 || result->stop_reason == StopReason::kNoGain;
-  if (ran && visible) {
-    const double turned = NormalTurn(input.data(), mesh.triangles, topo).Of(mesh.positions.data());
-    if (turned < kJobPolicy.risk_turn_share * noise.normal_turn) {
-      std::vector<Vec3> by_risk = std::move(mesh.positions);
-      mesh.positions = input;
-      absl::StatusOr<std::optional<FlowResult>> by_turn = SmoothToTurn(mesh, topo, q, control, h, noise);
-      if (!by_turn.ok()) return by_turn.status();
-      if (by_turn->has_value()) {
-        result = **std::move(by_turn);
-      } else {
-        mesh.positions = std::move(by_risk);
-      }
-    }
-  }
-  result->outliers_moved = outliers;
-  return result;
-}
-
-}  // namespace meshsmooth::flows
+}  // namespace meshsmooth::job

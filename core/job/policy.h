@@ -1,0 +1,80 @@
+// Every number the default job was tuned with, one line each; the section of docs/decisions.md
+// named beside a group has the figures that chose them and the ablations. docs/quality-method.md
+// says why the method is the one it is. The noise estimator's own constants are measure's
+// (core/measure/noise.h); the candidates' list, the sample's threshold and the small holes'
+// size are the catalogue's (core/flows/catalogue.h), which the help texts quote.
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+#include <numbers>
+
+#include "core/flows/catalogue.h"
+#include "core/measure/noise.h"
+
+namespace meshsmooth::job {
+
+struct JobPolicy {
+  // Reading the noise ("Automatic stopping: Stein's unbiased risk estimate", "Detail read as
+  // noise: a second, wider fit").
+  double estimator_floor_h = 0.04;  // the estimator's misfit on clean meshes, taken off in quadrature
+  double no_noise_h = 0.02;         // below this much noise to remove (in h) the run does nothing
+  double detail_only_h = 0.03;      // ... nor below this detail-free estimate (in h)
+
+  // Outliers ("Outliers").
+  double impulsive_share = 0.04;  // above this share of outlying fits the outliers move back first
+  int outlier_rounds = 3;         // at most this many rounds of moving them
+  int unfold_rounds = 6;          // ... then at most this many rounds of unfolding their fans
+
+  // The risk estimate's stop ("Automatic stopping: Stein's unbiased risk estimate").
+  int patience = 8;                // no better iteration for this many (and half the best's count)
+  double converged_share = 1e-2;   // ... or a gain below this share of sigma^2 a vertex over that stretch
+  double risk_sigma_margin = 1.1;  // the deviation is taken this much high
+  double probe_step = 0.05;        // the probe moves by +-this many sigma along the normals
+  int32_t max_measured = 50000;    // the estimate is summed over at most about this many vertices
+
+  // The choice between candidates ("The default job chooses on a sample").
+  int rival_window = 4;        // a losing candidate's decrease is extrapolated over this many
+  double rival_reach = 2.0;    // ... times this much of what it would still fall
+  int32_t sample_share = 16;   // a sample holds one vertex in this many of the mesh's...
+  int32_t min_sample = 10000;  // ... at least this many
+  int32_t max_sample = 20000;  // ... at most this many
+  int32_t min_patch = 2500;    // in patches of at least this many vertices
+  int32_t max_patches = 8;     // ... at most this many patches
+  int32_t core_percent = 60;   // measured within this percent of a patch's radius, in rings
+  double sample_bias = 0.025;  // a later candidate wins on a sample by this share of sigma^2
+
+  // A run that leaves its input rougher ("A run that leaves its input rougher is not taken").
+  double no_gain_fold_share = 2e-4;  // more new folded edges than this share of the faces: not taken
+
+  // Fold repair ("Fold repair, within 0.2 h").
+  double fold_angle_deg = 120.0;        // two faces across an edge further apart than this are folded
+  double rim_needle_angle_deg = 160.0;  // a rim vertex with a face angle above this is folded
+  int fold_repair_rounds = 20;          // at most this many rounds of repair
+  double fold_repair_reach_h = 0.2;     // no vertex moves further than this (in h)
+  double unfold_height = 0.05;          // a slid vertex leaves each face this height over its far edge
+  int unfold_sweeps = 30;               // ... found in at most this many sweeps over its fan
+  double unfold_slide_h = 1.0;          // ... no further than this (in h) within its ring's plane
+
+  // Noise the risk estimate cannot read ("Noise the risk estimate cannot read").
+  double visible_turn_deg = 6.5;             // noise turning the faces this far (degrees) is noise...
+  double visible_crease_share = 0.2;         // ... on a mesh with at most this share of crease vertices
+  double risk_turn_share = 0.75;             // the risk's result turned less than this share: the turn rule runs
+  double discrepancy_turn_share = 1.25;      // the turn rule's target, times the predicted turn
+  int32_t max_whole_turn_vertices = 200000;  // the turn rule chooses on the whole mesh up to this size
+};
+
+inline constexpr JobPolicy kPolicy{};
+
+// The sigma the risk estimate works with, in h: the noise's deviation taken risk_sigma_margin high.
+inline double RiskSigmaH(const NoiseEstimate& noise) { return kPolicy.risk_sigma_margin * noise.deviation_h; }
+
+// True when the noise `noise` reads turns its mesh's faces visibly: the turn rule may take over
+// (a fused scan's thin triangles turn far under small offsets; a CAD part of slivers turns them
+// far under any offset, and a run only slides vertices along them).
+inline bool TurnsFacesVisibly(const NoiseEstimate& noise) {
+  return noise.normal_turn * 180.0 / std::numbers::pi >= kPolicy.visible_turn_deg &&
+         noise.crease_share <= kPolicy.visible_crease_share;
+}
+
+}  // namespace meshsmooth::job
