@@ -27,9 +27,11 @@
 #include <fstream>
 #include <string>
 #include <thread>
+#include <type_traits>
 #include <vector>
 
 #include "absl/strings/ascii.h"
+#include "absl/strings/numbers.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_join.h"
@@ -44,6 +46,7 @@
 #include "bench/quality_tables.h"
 #include "core/flows/flow.h"
 #include "core/io/mesh_io.h"
+#include "core/job/policy.h"
 #include "core/measure/evaluation.h"
 
 namespace meshsmooth::bench {
@@ -67,6 +70,7 @@ struct Options {
   bool scans = true;
   bool scan_oracles = true;  // the oracle rows of bilateral_normal and guided_normal on the scans
   ScanOptions scan;
+  bool policy_changed = false;  // --policy: an ablation
 };
 
 // The synthetic cases' first held-out seed (--held-out); the tuning seeds are 1, 2, ...
@@ -92,6 +96,31 @@ std::vector<double> ParseDoubles(const std::string& s) {
   return v;
 }
 
+// Today's policy (job::kPolicy) with the fields `spec` names ("name=value,name=value") set, or
+// InvalidArgument naming an unknown field or a value that is not a number.
+absl::StatusOr<job::JobPolicy> ParsePolicy(const std::string& spec) {
+  job::JobPolicy policy = job::kPolicy;
+  for (absl::string_view item : absl::StrSplit(spec, ',', absl::SkipEmpty())) {
+    const std::vector<std::string> kv = absl::StrSplit(item, absl::MaxSplits('=', 1));
+    bool found = false, parsed = false;
+    if (kv.size() == 2) {
+      job::VisitPolicy(policy, [&](const char* name, auto& value) {
+        if (kv[0] != name) return;
+        found = true;
+        double number = 0.0;
+        parsed = absl::SimpleAtod(kv[1], &number) && std::isfinite(number);
+        if (parsed) value = static_cast<std::remove_reference_t<decltype(value)>>(number);
+      });
+    }
+    if (!found || !parsed) {
+      return absl::InvalidArgumentError(absl::StrCat("--policy: '", item,
+                                                     "' is not NAME=NUMBER with a field of JobPolicy "
+                                                     "(--list-policy lists them)"));
+    }
+  }
+  return policy;
+}
+
 // The line under the header: the method is hand-written, not generated.
 constexpr char kMethodPointer[] =
     "\nHow the inputs, noise, measures, rows and targets are defined, and how the defaults were chosen: "
@@ -103,6 +132,7 @@ constexpr char kUsage[] =
     "                          [--shared DIR] [--paper-iterations 20] [--no-paper] [--quick]\n"
     "                          [--scan-meshes a,b,...] [--scan-kinds tof,sl,fused] [--scan-seeds 2]\n"
     "                          [--held-out] [--scan-set held-out|tuning] [--no-scans] [--no-real] [--scan-quick]\n"
+    "                          [--policy NAME=VALUE,...] [--list-policy]\n"
     "  --meshes         real meshes by file name without extension, and `sphere`, `two-rate-torus`,\n"
     "                   `mt-torus`, `mt-cylinder`, `holey-sphere`,\n"
     "                   `perforated-sphere`\n"
@@ -131,6 +161,9 @@ constexpr char kUsage[] =
     "  --no-scans       skip the scan cases; --no-real skips the real cone of DIR/data/real\n"
     "  --scan-quick     only the scan cases and the real cone, one seed each, without the oracle rows:\n"
     "                   the default job against BNF and GNF on scanner noise in a few minutes\n"
+    "  --policy NAME=VALUE,...  the default job with these numbers of its policy changed (core/job/policy.h):\n"
+    "                   an ablation; the header says so\n"
+    "  --list-policy    print the policy's numbers, NAME=VALUE a line, and exit\n"
     "  --write-scan MESH KIND INDEX OUT  only write scan INDEX (0, 1, ...) of MESH of KIND (tof, sl,\n"
     "                   fused) as the scan cases make it (after --scan-set, if given; metres) to OUT, and exit\n"
     "  --write-noisy MESH SIGMA SEED OUT [random|impulsive]  only write the benchmark's input for MESH\n"
@@ -230,6 +263,19 @@ int main(int argc, char** argv) {
       return 0;
     } else if (a == "--held-out") {
       opt.first_seed = kHeldOutFirstSeed;
+    } else if (a == "--policy") {
+      absl::StatusOr<job::JobPolicy> policy = ParsePolicy(next());
+      if (!policy.ok()) {
+        std::fprintf(stderr, "meshsmooth_quality: %s\n", policy.status().ToString().c_str());
+        return 2;
+      }
+      SetJobPolicy(*policy);
+      opt.policy_changed = true;
+    } else if (a == "--list-policy") {
+      job::JobPolicy policy = job::kPolicy;
+      job::VisitPolicy(
+          policy, [](const char* name, auto& value) { std::printf("%s=%s\n", name, absl::StrCat(value).c_str()); });
+      return 0;
     } else if (a == "--scan-meshes") {
       opt.scan.meshes = absl::StrSplit(next(), ',', absl::SkipEmpty());
     } else if (a == "--scan-kinds") {
@@ -338,6 +384,11 @@ int main(int argc, char** argv) {
       scans_only ? "quality-scans.md" : "quality.md", CpuModel().c_str(), std::thread::hardware_concurrency(),
       wall / 60.0, load);
   std::fputs(kMethodPointer, stdout);
+  if (opt.policy_changed) {
+    std::printf(
+        "\n**An ablation**: the default job ran with `--policy` above, not with today's policy "
+        "(core/job/policy.h).\n");
+  }
   std::fputs(body.c_str(), stdout);
   return 0;
 }

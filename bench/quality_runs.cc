@@ -9,17 +9,20 @@
 #include "absl/strings/str_cat.h"
 #include "bench/bench_common.h"
 #include "core/flows/flow_table.h"
+#include "core/job/default_job.h"
 #include "google/protobuf/text_format.h"
 #include "server/convert.h"
 
 namespace meshsmooth::bench {
 namespace {
 
+job::JobPolicy job_policy = job::kPolicy;
+
 Run RunJob(const Input& input, const FlowParams& p) {
   Run run;
   Mesh m = *input.mesh;
   const Clock::time_point t0 = Clock::now();
-  absl::StatusOr<FlowResult> r = Smooth(m, *input.topology, p);
+  absl::StatusOr<FlowResult> r = job::SmoothWithPolicy(m, *input.topology, p, {}, job_policy);
   run.seconds = Seconds(t0, Clock::now());
   if (!r.ok()) {
     run.status = r.status();
@@ -35,6 +38,8 @@ Run RunJob(const Input& input, const FlowParams& p) {
 }
 
 }  // namespace
+
+void SetJobPolicy(const job::JobPolicy& policy) { job_policy = policy; }
 
 std::vector<Input> CopiesOf(const GroundTruth& truth, const std::vector<Mesh>& noisy) {
   std::vector<Input> inputs;

@@ -9,6 +9,7 @@
 
 #include "absl/status/status.h"
 #include "core/flows/flow.h"
+#include "core/job/policy.h"
 #include "core/measure/evaluation.h"
 #include "core/mesh.h"
 #include "meshsmooth/v1/smoothing.pb.h"
@@ -60,6 +61,10 @@ struct Input {
 
 // The noisy copies `noisy` of `truth`'s mesh as inputs (both must outlive them).
 std::vector<Input> CopiesOf(const GroundTruth& truth, const std::vector<Mesh>& noisy);
+
+// The policy every run of this process's default job takes (job::kPolicy unless --policy
+// changed it: an ablation).
+void SetJobPolicy(const job::JobPolicy& policy);
 
 // The rows of the two normal filters as their authors' reference code runs by default, the
 // figures the denoising literature's tables report: one iteration of 20 filter passes (sigma_s

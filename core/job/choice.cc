@@ -70,8 +70,9 @@ namespace {
 // (the first candidate's estimate decides whether there is anything to do). Progress: one
 // kChoosing report per candidate. `repair_idle`: JobRule's.
 absl::StatusOr<FlowResult> Choose(Mesh& mesh, const Topology& topo, const FlowParams& p, const RunControl& control,
-                                  double h, const NoiseEstimate& noise, const std::vector<uint8_t>* measured = nullptr,
-                                  double margin_h2 = 0.0, bool repair_idle = false) {
+                                  double h, const NoiseEstimate& noise, const JobPolicy& policy,
+                                  const std::vector<uint8_t>* measured = nullptr, double margin_h2 = 0.0,
+                                  bool repair_idle = false) {
   const std::vector<FlowId> candidates = CandidatesOf(p);
   RunControl quiet = control;
   quiet.on_progress = nullptr;
@@ -83,7 +84,7 @@ absl::StatusOr<FlowResult> Choose(Mesh& mesh, const Topology& topo, const FlowPa
     ReportPhase(control, Phase::kChoosing, flow);
     Mesh copy = mesh;
     const FlowParams q = ForFlow(p, flow);
-    RiskStop rule(h, noise, measured, p.boundary != BoundaryMode::kFixed, repair_idle);
+    RiskStop rule(h, noise, policy, measured, p.boundary != BoundaryMode::kFixed, repair_idle);
     if (best && best->auto_stop && best->iterations_run > 0) rule.SetRival(best->auto_stop->risk_h2 - margin_h2);
     absl::StatusOr<FlowResult> r = SmoothOneFlow(copy, topo, q, quiet, h, {0, &rule});
     if (!r.ok()) {
@@ -97,8 +98,8 @@ absl::StatusOr<FlowResult> Choose(Mesh& mesh, const Topology& topo, const FlowPa
       // A run that left its input rougher did not remove noise, whatever its estimate says
       // (slivers: the estimate reads offsets along the normals, and a sliver's normal turns
       // under an offset far below h): it is not chosen.
-      if (!input_roughness) input_roughness = RoughnessOf(mesh.positions, mesh, topo);
-      if (Rougher(RoughnessOf(copy.positions, mesh, topo), *input_roughness, topo.faces.size())) {
+      if (!input_roughness) input_roughness = RoughnessOf(mesh.positions, mesh, topo, policy);
+      if (Rougher(RoughnessOf(copy.positions, mesh, topo, policy), *input_roughness, topo.faces.size(), policy)) {
         if (!rejected) rejected = *std::move(r);
         continue;
       }
@@ -133,8 +134,8 @@ struct Sample {
 
 // About `size` vertices of `mesh` in patches grown breadth-first from seeds spread over the
 // vertex order, and the faces among them. The patches' rims are boundaries (fixed in the runs).
-Sample SamplePatches(const Mesh& mesh, const Topology& topo, int32_t size) {
-  const int patches = std::clamp(size / kPolicy.min_patch, 1, kPolicy.max_patches);
+Sample SamplePatches(const Mesh& mesh, const Topology& topo, int32_t size, const JobPolicy& policy) {
+  const int patches = std::clamp(size / policy.min_patch, 1, policy.max_patches);
   const int32_t n = topo.num_vertices();
   std::vector<int32_t> index(n, -1);  // vertex -> sample vertex
   Sample out;
@@ -163,7 +164,7 @@ Sample SamplePatches(const Mesh& mesh, const Topology& topo, int32_t size) {
       }
     }
     const int32_t radius = depth.back();
-    for (size_t s = first; s < depth.size(); ++s) out.core.push_back(depth[s] * 100 <= radius * kPolicy.core_percent);
+    for (size_t s = first; s < depth.size(); ++s) out.core.push_back(depth[s] * 100 <= radius * policy.core_percent);
   }
   for (int32_t f : topo.faces) {
     const Triangle& t = mesh.triangles[f];
@@ -176,9 +177,9 @@ Sample SamplePatches(const Mesh& mesh, const Topology& topo, int32_t size) {
 
 }  // namespace
 
-int32_t SampleSize(int32_t n) {
+int32_t SampleSize(int32_t n, const JobPolicy& policy) {
   if (n <= kMaxChoiceVertices) return n;
-  return std::min(n, std::clamp(n / kPolicy.sample_share, kPolicy.min_sample, kPolicy.max_sample));
+  return std::min(n, std::clamp(n / policy.sample_share, policy.min_sample, policy.max_sample));
 }
 
 bool ChoosesFlow(const FlowParams& p) {
@@ -206,12 +207,12 @@ std::vector<uint8_t> SampleLocks(Sample& sample, const Topology& sample_topo, co
 
 absl::StatusOr<FlowResult> SmoothByRisk(Mesh& mesh, const Topology& topo, const FlowParams& q,
                                         const RunControl& control, double h, const NoiseEstimate& noise,
-                                        bool repair_idle) {
+                                        const JobPolicy& policy, bool repair_idle) {
   const int32_t n = mesh.num_vertices();
-  const int32_t size = SampleSize(n);
-  if (size >= n) return Choose(mesh, topo, q, control, h, noise, nullptr, 0.0, repair_idle);
+  const int32_t size = SampleSize(n, policy);
+  if (size >= n) return Choose(mesh, topo, q, control, h, noise, policy, nullptr, 0.0, repair_idle);
 
-  Sample sample = SamplePatches(mesh, topo, size);
+  Sample sample = SamplePatches(mesh, topo, size, policy);
   const Topology sample_topo = BuildTopology(sample.mesh);
   FlowParams on_sample = q;
   on_sample.reorder = ReorderMode::kNever;  // `core` is in the sample's order
@@ -220,9 +221,9 @@ absl::StatusOr<FlowResult> SmoothByRisk(Mesh& mesh, const Topology& topo, const 
   on_sample.locked = SampleLocks(sample, sample_topo, topo, q);
   // The sample runs with the mesh's h (the step of a curvature flow scales with it): its count
   // is then a count of the same iterations.
-  const double sigma_h = RiskSigmaH(noise);
-  absl::StatusOr<FlowResult> chosen = Choose(sample.mesh, sample_topo, on_sample, control, h, noise, &sample.core,
-                                             kPolicy.sample_bias * sigma_h * sigma_h);
+  const double sigma_h = RiskSigmaH(noise, policy);
+  absl::StatusOr<FlowResult> chosen = Choose(sample.mesh, sample_topo, on_sample, control, h, noise, policy,
+                                             &sample.core, policy.sample_bias * sigma_h * sigma_h);
   if (!chosen.ok()) return chosen.status();
   // Every candidate left the sample rougher: the whole mesh comes back as it came.
   if (chosen->stop_reason == StopReason::kNoGain) return chosen;
@@ -230,9 +231,9 @@ absl::StatusOr<FlowResult> SmoothByRisk(Mesh& mesh, const Topology& topo, const 
   if (chosen->iterations_run == 0) {
     // An idle sample (no noise, or no estimate on it) leaves the decision to the whole mesh's
     // own estimate and stopping (nothing to do on a clean mesh: as cheap as the sample).
-    return Choose(mesh, topo, whole, control, h, noise, nullptr, 0.0, repair_idle);
+    return Choose(mesh, topo, whole, control, h, noise, policy, nullptr, 0.0, repair_idle);
   }
-  JobRule rule(h, noise, nullptr, q.boundary != BoundaryMode::kFixed);
+  JobRule rule(h, noise, policy, nullptr, q.boundary != BoundaryMode::kFixed);
   absl::StatusOr<FlowResult> result = SmoothOneFlow(mesh, topo, whole, control, h, {chosen->iterations_run, &rule});
   if (result.ok() && result->iterations_run > 0) {
     result->stop_reason = chosen->stop_reason;
@@ -248,7 +249,7 @@ namespace {
 // (NormalVariation) wins, none when every result varies more than the input.
 absl::StatusOr<std::optional<FlowResult>> ChooseByTurn(Mesh& mesh, const Topology& topo, const FlowParams& p,
                                                        const RunControl& control, double h, const NoiseEstimate& noise,
-                                                       double target) {
+                                                       const JobPolicy& policy, double target) {
   const std::vector<FlowId> candidates = CandidatesOf(p);
   RunControl quiet = control;
   quiet.on_progress = nullptr;
@@ -260,7 +261,7 @@ absl::StatusOr<std::optional<FlowResult>> ChooseByTurn(Mesh& mesh, const Topolog
     ReportPhase(control, Phase::kChoosing, flow);
     Mesh copy = mesh;
     const FlowParams q = ForFlow(p, flow);
-    TurnStop rule(h, noise, target, p.boundary != BoundaryMode::kFixed);
+    TurnStop rule(h, noise, policy, target, p.boundary != BoundaryMode::kFixed);
     absl::StatusOr<FlowResult> r = SmoothOneFlow(copy, topo, q, quiet, h, {0, &rule});
     if (!r.ok()) {
       if (r.status().code() == absl::StatusCode::kFailedPrecondition && candidates.size() > 1) continue;
@@ -279,22 +280,22 @@ absl::StatusOr<std::optional<FlowResult>> ChooseByTurn(Mesh& mesh, const Topolog
 }  // namespace
 
 absl::StatusOr<std::optional<FlowResult>> SmoothByTurn(Mesh& mesh, const Topology& topo, const FlowParams& q,
-                                                       const RunControl& control, double h,
-                                                       const NoiseEstimate& noise) {
-  const double target = kPolicy.discrepancy_turn_share * noise.normal_turn;
+                                                       const RunControl& control, double h, const NoiseEstimate& noise,
+                                                       const JobPolicy& policy) {
+  const double target = policy.discrepancy_turn_share * noise.normal_turn;
   const int32_t n = mesh.num_vertices();
-  if (n <= kPolicy.max_whole_turn_vertices) return ChooseByTurn(mesh, topo, q, control, h, noise, target);
-  const int32_t size = SampleSize(n);
-  Sample sample = SamplePatches(mesh, topo, size);
+  if (n <= policy.max_whole_turn_vertices) return ChooseByTurn(mesh, topo, q, control, h, noise, policy, target);
+  const int32_t size = SampleSize(n, policy);
+  Sample sample = SamplePatches(mesh, topo, size, policy);
   const Topology sample_topo = BuildTopology(sample.mesh);
   FlowParams on_sample = q;
   on_sample.reorder = ReorderMode::kNever;
   on_sample.locked = SampleLocks(sample, sample_topo, topo, q);
   absl::StatusOr<std::optional<FlowResult>> chosen =
-      ChooseByTurn(sample.mesh, sample_topo, on_sample, control, h, noise, target);
+      ChooseByTurn(sample.mesh, sample_topo, on_sample, control, h, noise, policy, target);
   if (!chosen.ok() || !chosen->has_value()) return chosen;
   const FlowParams whole = ForFlow(q, (*chosen)->flow);
-  JobRule rule(h, noise, nullptr, q.boundary != BoundaryMode::kFixed);
+  JobRule rule(h, noise, policy, nullptr, q.boundary != BoundaryMode::kFixed);
   absl::StatusOr<FlowResult> result =
       SmoothOneFlow(mesh, topo, whole, control, h, {std::max((*chosen)->iterations_run, 1), &rule});
   if (!result.ok()) return result.status();

@@ -19,12 +19,13 @@
 
 #include "absl/status/statusor.h"
 #include "core/flows/flow.h"
+#include "core/job/policy.h"
 #include "core/measure/noise.h"
 
 namespace meshsmooth::job {
 
 // The vertices of the sample a mesh of n vertices chooses on (n when it chooses on itself).
-int32_t SampleSize(int32_t n);
+int32_t SampleSize(int32_t n, const JobPolicy& policy);
 
 // True when `p` leaves the flow to the job: no flow named, automatic iterations, no step.
 bool ChoosesFlow(const FlowParams& p);
@@ -36,11 +37,12 @@ void ReportPhase(const RunControl& control, Phase phase, FlowId flow);
 // estimate; `repair_idle` when outliers were moved (JobRule).
 absl::StatusOr<FlowResult> SmoothByRisk(Mesh& mesh, const Topology& topo, const FlowParams& q,
                                         const RunControl& control, double h, const NoiseEstimate& noise,
-                                        bool repair_idle);
+                                        const JobPolicy& policy, bool repair_idle);
 
 // As SmoothByRisk, by the turn; none (the mesh as it was) when every result's normals vary more
 // than the input's.
 absl::StatusOr<std::optional<FlowResult>> SmoothByTurn(Mesh& mesh, const Topology& topo, const FlowParams& q,
-                                                       const RunControl& control, double h, const NoiseEstimate& noise);
+                                                       const RunControl& control, double h, const NoiseEstimate& noise,
+                                                       const JobPolicy& policy);
 
 }  // namespace meshsmooth::job

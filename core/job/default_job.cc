@@ -12,9 +12,11 @@
 //      turned as far as the noise turns them (SmoothByTurn, TurnStop).
 //   5. Finish (in every run, JobRule): repair folds, give a closed mesh its volume back.
 //
-// kPolicy (policy.h) holds every number; docs/quality-method.md says why the method is this one.
+// A JobPolicy (policy.h) holds every number; docs/quality-method.md says why the method is this one.
 #include <utility>
 #include <vector>
+
+#include "core/job/default_job.h"
 
 #include "core/flows/driver.h"
 #include "core/flows/flow.h"
@@ -33,12 +35,12 @@ namespace {
 // reads `noise` again. Twice, the second time at the threshold of the noise read without the
 // first pass's outliers, which had pulled their neighbours' fits and raised it.
 int64_t MoveOutliersBack(Mesh& mesh, const Topology& topo, const FlowParams& p, const RunControl& control, double h,
-                         NoiseEstimate& noise) {
-  if (!ChoosesFlow(p) || !noise.reliable || noise.outlier_share <= kPolicy.impulsive_share) return 0;
+                         const JobPolicy& policy, NoiseEstimate& noise) {
+  if (!ChoosesFlow(p) || !noise.reliable || noise.outlier_share <= policy.impulsive_share) return 0;
   std::vector<uint8_t> moved(mesh.positions.size(), 0);
   for (int pass = 0; pass < 2 && noise.reliable; ++pass) {
-    RemoveOutliers(mesh, topo, h, OutlierThresholdH(noise), kPolicy.outlier_rounds, moved, p.threads, control.stop,
-                   p.locked.empty() ? nullptr : p.locked.data());
+    RemoveOutliers(mesh, topo, h, OutlierThresholdH(noise), policy.outlier_rounds, moved, p.threads, control.stop,
+                   p.locked.empty() ? nullptr : p.locked.data(), policy.unfold_rounds);
     noise = EstimateNoise(mesh, topo, h, p.threads, control.stop);
   }
   int64_t outliers = 0;
@@ -47,28 +49,28 @@ int64_t MoveOutliersBack(Mesh& mesh, const Topology& topo, const FlowParams& p, 
 }
 
 absl::StatusOr<FlowResult> SmoothAutomatic(Mesh& mesh, const Topology& topo, const FlowParams& p,
-                                           const RunControl& control, double h) {
+                                           const RunControl& control, double h, const JobPolicy& policy) {
   FlowParams q = p;
   if (!ChoosesFlow(p)) q.flow = p.flow.value_or(kDefaultFlow);
   // 1. Every thread the job may use, whatever the mesh's size: the fits are independent and costly.
   ReportPhase(control, Phase::kNoiseEstimate, q.flow.value_or(kDefaultFlow));
   NoiseEstimate noise = EstimateNoise(mesh, topo, h, p.threads, control.stop);
   // 2.
-  const int64_t outliers = MoveOutliersBack(mesh, topo, q, control, h, noise);
+  const int64_t outliers = MoveOutliersBack(mesh, topo, q, control, h, policy, noise);
   if (absl::Status s = control.stop.Check(); !s.ok()) return s;
   // 3. The input is kept only where step 4 may take over (24 bytes a vertex).
-  const bool visible = TurnsFacesVisibly(noise);
+  const bool visible = TurnsFacesVisibly(noise, policy);
   const std::vector<Vec3> input = visible ? mesh.positions : std::vector<Vec3>{};
-  absl::StatusOr<FlowResult> result = SmoothByRisk(mesh, topo, q, control, h, noise, outliers > 0);
+  absl::StatusOr<FlowResult> result = SmoothByRisk(mesh, topo, q, control, h, noise, policy, outliers > 0);
   if (!result.ok()) return result;
   // 4.
   const bool ran = result->iterations_run > 0 || result->stop_reason == StopReason::kNoGain;
   if (ran && visible) {
     const double turned = NormalTurn(input.data(), mesh.triangles, topo).Of(mesh.positions.data());
-    if (turned < kPolicy.risk_turn_share * noise.normal_turn) {
+    if (turned < policy.risk_turn_share * noise.normal_turn) {
       std::vector<Vec3> by_risk = std::move(mesh.positions);
       mesh.positions = input;
-      absl::StatusOr<std::optional<FlowResult>> by_turn = SmoothByTurn(mesh, topo, q, control, h, noise);
+      absl::StatusOr<std::optional<FlowResult>> by_turn = SmoothByTurn(mesh, topo, q, control, h, noise, policy);
       if (!by_turn.ok()) return by_turn.status();
       if (by_turn->has_value()) {
         result = **std::move(by_turn);
@@ -82,16 +84,11 @@ absl::StatusOr<FlowResult> SmoothAutomatic(Mesh& mesh, const Topology& topo, con
 }
 
 }  // namespace
-}  // namespace job
-
-absl::StatusOr<FlowResult> Smooth(Mesh& mesh, const FlowParams& p, const RunControl& control) {
-  const Topology topo = BuildTopology(mesh);
-  return Smooth(mesh, topo, p, control);
-}
 
 // Large meshes whose order scatters neighbours run on a Morton-ordered copy (reorder.h); h is
 // taken in the caller's order, so it is the same value whatever the order the run uses.
-absl::StatusOr<FlowResult> Smooth(Mesh& mesh, const Topology& topo, const FlowParams& p, const RunControl& control) {
+absl::StatusOr<FlowResult> SmoothWithPolicy(Mesh& mesh, const Topology& topo, const FlowParams& p,
+                                            const RunControl& control, const JobPolicy& policy) {
   const int32_t n = mesh.num_vertices();
   if (absl::Status s = ValidateFlowParams(p, n); !s.ok()) return s;
   if (topo.num_vertices() != n) {
@@ -100,10 +97,21 @@ absl::StatusOr<FlowResult> Smooth(Mesh& mesh, const Topology& topo, const FlowPa
   const double h = MeanEdgeLength(mesh, topo);
   FlowParams q = p;
   // Only the default job moves rims of its own accord (BoundaryMode::kAuto).
-  if (q.boundary == BoundaryMode::kAuto && !job::ChoosesFlow(p)) q.boundary = BoundaryMode::kFixed;
-  if (p.iterations == kAutoIterations) return job::SmoothAutomatic(mesh, topo, q, control, h);
+  if (q.boundary == BoundaryMode::kAuto && !ChoosesFlow(p)) q.boundary = BoundaryMode::kFixed;
+  if (p.iterations == kAutoIterations) return SmoothAutomatic(mesh, topo, q, control, h, policy);
   q.flow = p.flow.value_or(kDefaultFlow);
   return flows::SmoothOneFlow(mesh, topo, q, control, h);
+}
+
+}  // namespace job
+
+absl::StatusOr<FlowResult> Smooth(Mesh& mesh, const FlowParams& p, const RunControl& control) {
+  const Topology topo = BuildTopology(mesh);
+  return Smooth(mesh, topo, p, control);
+}
+
+absl::StatusOr<FlowResult> Smooth(Mesh& mesh, const Topology& topo, const FlowParams& p, const RunControl& control) {
+  return job::SmoothWithPolicy(mesh, topo, p, control, job::kPolicy);
 }
 
 }  // namespace meshsmooth

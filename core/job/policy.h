@@ -64,17 +64,60 @@ struct JobPolicy {
   int32_t max_whole_turn_vertices = 200000;  // the turn rule chooses on the whole mesh up to this size
 };
 
+// Today's policy: the one every job runs with. A benchmark's ablation runs another
+// (job::SmoothWithPolicy, default_job.h).
 inline constexpr JobPolicy kPolicy{};
 
+// Calls visit(name, field) for every field of `policy`, in the order above (`field` a double& or
+// an int32_t&): for listing the numbers and setting them by name.
+template <typename Visit>
+void VisitPolicy(JobPolicy& policy, Visit visit) {
+  visit("estimator_floor_h", policy.estimator_floor_h);
+  visit("no_noise_h", policy.no_noise_h);
+  visit("detail_only_h", policy.detail_only_h);
+  visit("impulsive_share", policy.impulsive_share);
+  visit("outlier_rounds", policy.outlier_rounds);
+  visit("unfold_rounds", policy.unfold_rounds);
+  visit("patience", policy.patience);
+  visit("converged_share", policy.converged_share);
+  visit("risk_sigma_margin", policy.risk_sigma_margin);
+  visit("probe_step", policy.probe_step);
+  visit("max_measured", policy.max_measured);
+  visit("rival_window", policy.rival_window);
+  visit("rival_reach", policy.rival_reach);
+  visit("sample_share", policy.sample_share);
+  visit("min_sample", policy.min_sample);
+  visit("max_sample", policy.max_sample);
+  visit("min_patch", policy.min_patch);
+  visit("max_patches", policy.max_patches);
+  visit("core_percent", policy.core_percent);
+  visit("sample_bias", policy.sample_bias);
+  visit("no_gain_fold_share", policy.no_gain_fold_share);
+  visit("fold_angle_deg", policy.fold_angle_deg);
+  visit("rim_needle_angle_deg", policy.rim_needle_angle_deg);
+  visit("fold_repair_rounds", policy.fold_repair_rounds);
+  visit("fold_repair_reach_h", policy.fold_repair_reach_h);
+  visit("unfold_height", policy.unfold_height);
+  visit("unfold_sweeps", policy.unfold_sweeps);
+  visit("unfold_slide_h", policy.unfold_slide_h);
+  visit("visible_turn_deg", policy.visible_turn_deg);
+  visit("visible_crease_share", policy.visible_crease_share);
+  visit("risk_turn_share", policy.risk_turn_share);
+  visit("discrepancy_turn_share", policy.discrepancy_turn_share);
+  visit("max_whole_turn_vertices", policy.max_whole_turn_vertices);
+}
+
 // The sigma the risk estimate works with, in h: the noise's deviation taken risk_sigma_margin high.
-inline double RiskSigmaH(const NoiseEstimate& noise) { return kPolicy.risk_sigma_margin * noise.deviation_h; }
+inline double RiskSigmaH(const NoiseEstimate& noise, const JobPolicy& policy) {
+  return policy.risk_sigma_margin * noise.deviation_h;
+}
 
 // True when the noise `noise` reads turns its mesh's faces visibly: the turn rule may take over
 // (a fused scan's thin triangles turn far under small offsets; a CAD part of slivers turns them
 // far under any offset, and a run only slides vertices along them).
-inline bool TurnsFacesVisibly(const NoiseEstimate& noise) {
-  return noise.normal_turn * 180.0 / std::numbers::pi >= kPolicy.visible_turn_deg &&
-         noise.crease_share <= kPolicy.visible_crease_share;
+inline bool TurnsFacesVisibly(const NoiseEstimate& noise, const JobPolicy& policy) {
+  return noise.normal_turn * 180.0 / std::numbers::pi >= policy.visible_turn_deg &&
+         noise.crease_share <= policy.visible_crease_share;
 }
 
 }  // namespace meshsmooth::job

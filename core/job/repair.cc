@@ -16,8 +16,14 @@ using flows::kBlock;
 using flows::kCurve;
 using flows::kFree;
 
-FoldRepair::FoldRepair(const Topology& topo, const uint8_t* role, double h, int threads)
-    : topo_(topo), role_(role), h_(h), threads_(threads) {}
+FoldRepair::FoldRepair(const Topology& topo, const uint8_t* role, double h, int threads, const JobPolicy& policy)
+    : topo_(topo),
+      role_(role),
+      h_(h),
+      threads_(threads),
+      policy_(policy),
+      cos_fold_(FoldCosine(policy)),
+      cos_rim_needle_(std::cos(policy.rim_needle_angle_deg * std::numbers::pi / 180.0)) {}
 
 FoldRepair::Fold FoldRepair::Folded(const Vec3* pos, int32_t v) const {
   if (role_[v] == kCurve) return RimFolded(pos, v) ? kFolded : kNotFolded;
@@ -29,18 +35,18 @@ FoldRepair::Fold FoldRepair::Folded(const Vec3* pos, int32_t v) const {
 bool FoldRepair::SlideToUnfold(const Vec3* pos, int32_t v, const Vec3& normal, Vec3& to) const {
   const int32_t first = topo_.ring_offsets[v], last = topo_.ring_offsets[v + 1];
   to = pos[v];
-  for (int sweep = 0; sweep < kPolicy.unfold_sweeps; ++sweep) {
+  for (int sweep = 0; sweep < policy_.unfold_sweeps; ++sweep) {
     bool unfolded = true;
     for (int32_t k = first; k < last; ++k) {
       const Vec3 a = pos[topo_.ring[k]], b = pos[topo_.ring[k + 1 < last ? k + 1 : first]];
       // Twice the projected area of face (to, a, b), Dot(Cross(a - to, b - to), normal), is
       // linear in `to` and grows along `rise` = normal x (b - a), whose squared length is that
-      // of the far edge: a height of kPolicy.unfold_height |b - a| is twice the area kPolicy.unfold_height |rise|^2.
+      // of the far edge: a height of unfold_height |b - a| is twice the area unfold_height |rise|^2.
       const Vec3 rise = Cross(normal, b - a);
       const double edge2 = Dot(rise, rise);
       if (!(edge2 > 0.0)) continue;
       const double twice_area = Dot(Cross(a - to, b - to), normal);
-      const double wanted = kPolicy.unfold_height * edge2;
+      const double wanted = policy_.unfold_height * edge2;
       if (twice_area >= 0.5 * wanted) continue;
       unfolded = false;
       to += rise * ((wanted - twice_area) / edge2);
@@ -81,11 +87,11 @@ int64_t FoldRepair::Run(Vec3* pos) const {
     fold.push_back(folded[v]);
   }
   // Each vertex's position before the repair: no round takes it further than
-  // kPolicy.fold_repair_reach_h h from there.
+  // fold_repair_reach_h h from there.
   std::vector<Vec3> origin(list.size()), moved(list.size());
   for (size_t i = 0; i < list.size(); ++i) origin[i] = pos[list[i]];
-  const double reach = kPolicy.fold_repair_reach_h * h_, slide_reach = kPolicy.unfold_slide_h * h_;
-  for (int round = 0; round < kPolicy.fold_repair_rounds && !list.empty(); ++round) {
+  const double reach = policy_.fold_repair_reach_h * h_, slide_reach = policy_.unfold_slide_h * h_;
+  for (int round = 0; round < policy_.fold_repair_rounds && !list.empty(); ++round) {
     for (size_t i = 0; i < list.size(); ++i) {  // Jacobi: every move reads the round's start
       const int32_t v = list[i];
       const int32_t first = topo_.ring_offsets[v], last = topo_.ring_offsets[v + 1];
@@ -183,13 +189,13 @@ void RestoreVolume(Vec3* pos, const Topology& topo, const uint8_t* role, double 
   }
 }
 
-Roughness RoughnessOf(const std::vector<Vec3>& pos, const Mesh& mesh, const Topology& topo) {
+Roughness RoughnessOf(const std::vector<Vec3>& pos, const Mesh& mesh, const Topology& topo, const JobPolicy& policy) {
   Roughness r;
   for (int32_t f : topo.faces) {
     const Triangle& t = mesh.triangles[f];
     r.area += 0.5 * Norm(Cross(pos[t[1]] - pos[t[0]], pos[t[2]] - pos[t[0]]));
   }
-  const double cos_fold = FoldCosine();
+  const double cos_fold = FoldCosine(policy);
   for (int32_t v = 0; v < topo.num_vertices(); ++v) {
     if (topo.kind[v] != VertexKind::kInterior) continue;
     // Each folded edge once: from its lower interior end.
@@ -201,13 +207,14 @@ Roughness RoughnessOf(const std::vector<Vec3>& pos, const Mesh& mesh, const Topo
   return r;
 }
 
-bool Rougher(const Roughness& after, const Roughness& before, size_t faces) {
+bool Rougher(const Roughness& after, const Roughness& before, size_t faces, const JobPolicy& policy) {
   return after.area > before.area ||
-         static_cast<double>(after.folds - before.folds) > kPolicy.no_gain_fold_share * static_cast<double>(faces);
+         static_cast<double>(after.folds - before.folds) > policy.no_gain_fold_share * static_cast<double>(faces);
 }
 
 void RemoveOutliers(Mesh& mesh, const Topology& topo, double h, double threshold_h, int rounds,
-                    std::vector<uint8_t>& moved, int threads, const StopToken& stop, const uint8_t* keep) {
+                    std::vector<uint8_t>& moved, int threads, const StopToken& stop, const uint8_t* keep,
+                    int unfold_rounds) {
   const int32_t n = topo.num_vertices();
   moved.resize(n, 0);
   if (!(h > 0.0) || !std::isfinite(h) || n == 0) return;
@@ -270,7 +277,7 @@ void RemoveOutliers(Mesh& mesh, const Topology& topo, double h, double threshold
     }
     if (!any) break;
   }
-  UnfoldFans(mesh, topo, kPolicy.unfold_rounds, moved, threads, stop, keep);
+  UnfoldFans(mesh, topo, unfold_rounds, moved, threads, stop, keep);
 }
 
 bool FanFolds(const Vec3* pos, const Topology& topo, int32_t v) {

@@ -29,12 +29,12 @@
 
 namespace meshsmooth::job {
 
-// The cosine of policy's fold_angle_deg.
-inline double FoldCosine() { return std::cos(kPolicy.fold_angle_deg * std::numbers::pi / 180.0); }
+// The cosine of `policy`'s fold_angle_deg.
+inline double FoldCosine(const JobPolicy& policy) { return std::cos(policy.fold_angle_deg * std::numbers::pi / 180.0); }
 
 // Walks the fan of interior vertex v (positions `pos`) and calls on_fold(w) for each ring entry
 // w whose edge (v, w) is folded: its two faces' normals more than fold_angle_deg apart
-// (`cos_fold` = FoldCosine()). Stops, returning true, as soon as on_fold returns true.
+// (`cos_fold` = FoldCosine(policy)). Stops, returning true, as soon as on_fold returns true.
 template <typename OnFold>
 bool ForFoldedEdges(const Vec3* pos, const Topology& topo, int32_t v, double cos_fold, OnFold on_fold) {
   const int32_t first = topo.ring_offsets[v], last = topo.ring_offsets[v + 1];
@@ -57,7 +57,7 @@ bool ForFoldedEdges(const Vec3* pos, const Topology& topo, int32_t v, double cos
 // The fold repair (above) of a run whose vertices have roles `role` (core/flows/flow_kernel.h).
 class FoldRepair {
  public:
-  FoldRepair(const Topology& topo, const uint8_t* role, double h, int threads);
+  FoldRepair(const Topology& topo, const uint8_t* role, double h, int threads, const JobPolicy& policy);
   // Repairs `pos` until no vertex is folded (at most fold_repair_rounds rounds); returns the
   // folded vertices left.
   int64_t Run(Vec3* pos) const;
@@ -83,8 +83,8 @@ class FoldRepair {
   const uint8_t* role_;
   double h_;
   int threads_;
-  double cos_fold_ = FoldCosine();
-  double cos_rim_needle_ = std::cos(kPolicy.rim_needle_angle_deg * std::numbers::pi / 180.0);
+  const JobPolicy& policy_;
+  double cos_fold_, cos_rim_needle_;
 };
 
 // Enclosed volume of a closed mesh from its vertices' rings.
@@ -101,11 +101,12 @@ struct Roughness {
   double area = 0.0;
   int64_t folds = 0;
 };
-Roughness RoughnessOf(const std::vector<Vec3>& pos, const Mesh& mesh, const Topology& topo);
+Roughness RoughnessOf(const std::vector<Vec3>& pos, const Mesh& mesh, const Topology& topo,
+                      const JobPolicy& policy = kPolicy);
 
 // True when `after` is rougher than `before` (the same mesh's): more area, or more folded edges
 // than no_gain_fold_share of the faces allows. The job does not take such a run.
-bool Rougher(const Roughness& after, const Roughness& before, size_t faces);
+bool Rougher(const Roughness& after, const Roughness& before, size_t faces, const JobPolicy& policy = kPolicy);
 
 // True when a face of v's fan turns against the fan's orientation (an interior vertex's: the
 // vector area of its ring polygon, which does not depend on where the vertex is; a boundary
@@ -128,11 +129,11 @@ int64_t UnfoldFans(Mesh& mesh, const Topology& topo, int rounds, std::vector<uin
 // outliers around, can reach far, and a thrown vertex's faces tilt its own normal. A round flags
 // the outliers, then moves them all from the same positions; at most `rounds` rounds, until none
 // is left (a thrown vertex pulls its neighbours' fits, so the first round can leave some). Then
-// the folds the throws leave (UnfoldFans, unfold_rounds rounds at most). Vertices where `keep`
+// the folds the throws leave (UnfoldFans, `unfold_rounds` rounds at most). Vertices where `keep`
 // (per vertex) is non-zero stay; `moved` (one entry per vertex) is set where a vertex moved.
 // Deterministic for any thread count; stops early once `stop` fires.
 void RemoveOutliers(Mesh& mesh, const Topology& topo, double h, double threshold_h, int rounds,
                     std::vector<uint8_t>& moved, int threads = 0, const StopToken& stop = {},
-                    const uint8_t* keep = nullptr);
+                    const uint8_t* keep = nullptr, int unfold_rounds = kPolicy.unfold_rounds);
 
 }  // namespace meshsmooth::job

@@ -12,20 +12,20 @@ namespace meshsmooth::job {
 using flows::kBlock;
 using flows::kFree;
 
-JobRule::JobRule(double h, const NoiseEstimate& noise, const std::vector<uint8_t>* measured, bool rims,
-                 bool repair_idle)
-    : noise_(noise), measured_(measured), rims_(rims), repair_idle_(repair_idle), h_(h) {
+JobRule::JobRule(double h, const NoiseEstimate& noise, const JobPolicy& policy, const std::vector<uint8_t>* measured,
+                 bool rims, bool repair_idle)
+    : noise_(noise), policy_(policy), measured_(measured), rims_(rims), repair_idle_(repair_idle), h_(h) {
   estimated_ = noise.reliable;
-  const double floor2 = kPolicy.estimator_floor_h * kPolicy.estimator_floor_h;
+  const double floor2 = policy_.estimator_floor_h * policy_.estimator_floor_h;
   report_.noise_sigma_h = noise.sigma_h;
   report_.detail_free_h = noise.detail_free_h;
   report_.noise_to_remove_h = std::sqrt(std::max(0.0, noise.sigma_h * noise.sigma_h - floor2));
   // Fine detail, not noise: the run has nothing to remove.
-  if (noise.detail_free_h < kPolicy.detail_only_h) report_.noise_to_remove_h = 0.0;
-  if (TurnsFacesVisibly(noise)) report_.noise_to_remove_h = noise.sigma_h;
+  if (noise.detail_free_h < policy_.detail_only_h) report_.noise_to_remove_h = 0.0;
+  if (TurnsFacesVisibly(noise, policy)) report_.noise_to_remove_h = noise.sigma_h;
   // Not less the floor: SURE weighs the fidelity to the input against the noise, and a floor
   // taken off small noise (0.06 h) makes it stop after an iteration or two.
-  sigma_ = RiskSigmaH(noise) * h;
+  sigma_ = RiskSigmaH(noise, policy) * h;
 }
 
 std::optional<StopReason> JobRule::Start(const Mesh& input, const Topology& topo, const uint8_t* role, int threads) {
@@ -34,7 +34,7 @@ std::optional<StopReason> JobRule::Start(const Mesh& input, const Topology& topo
   threads_ = threads;
   const Vec3* const start = input.positions.data();
   const int32_t n = topo.num_vertices();
-  stride_ = std::max<int32_t>(1, (n + kPolicy.max_measured - 1) / kPolicy.max_measured);
+  stride_ = std::max<int32_t>(1, (n + policy_.max_measured - 1) / policy_.max_measured);
   has_normal_.assign(n, 0);
   closed_ = true;
   counted_ = 0;
@@ -85,7 +85,7 @@ double JobRule::RmsNormalDisplacement(const Vec3* pos) const {
 
 void JobRule::Finish(Vec3* pos, FlowResult& result) {
   result.auto_stop = report_;
-  const FoldRepair repair(*topo_, role_, h_, threads_);
+  const FoldRepair repair(*topo_, role_, h_, threads_, policy_);
   if (idle_) {
     if (!repair_idle_) return;
     // What moving the outliers left folded: the displacement is the repair's.
@@ -106,7 +106,7 @@ std::vector<Vec3> RiskStop::ProbeStart(const std::vector<Vec3>& start) {
     if (has_normal_[v]) normal_[v] = *UnitNormal(start.data(), static_cast<int32_t>(v));
   }
   std::vector<Vec3> probe = start;
-  const double eps = kPolicy.probe_step * sigma_;
+  const double eps = policy_.probe_step * sigma_;
   for (size_t v = 0; v < probe.size(); ++v) probe[v] += normal_[v] * (eps * Sign(static_cast<int32_t>(v)));
   return probe;
 }
@@ -121,7 +121,7 @@ double RiskStop::Sign(int32_t v) {
 
 double RiskStop::Risk(const Vec3* pos, const Vec3* probe) const {
   const int32_t n = topo_->num_vertices();
-  const double eps = kPolicy.probe_step * sigma_;
+  const double eps = policy_.probe_step * sigma_;
   const double weight = 2.0 * sigma_ * sigma_ / eps;
   std::vector<double> block_sum((n + kBlock - 1) / kBlock, 0.0);
   flows::ForBlocks(n, threads_, [&](int32_t b, int32_t begin, int32_t end) {
@@ -147,19 +147,19 @@ std::optional<StopReason> RiskStop::After(int it, const Vec3* pos, const Vec3* p
     best_it_ = it;
     report_.risk_h2 = (risk - sigma_ * sigma_) / (h_ * h_);
   }
-  const int window = kPolicy.rival_window;
+  const int window = policy_.rival_window;
   if (rival_h2_ && it > 2 * window) {  // two full windows of decreases
     const double rival = *rival_h2_ * h_ * h_ + sigma_ * sigma_;
     const double last = risks_[it - 1 - window] - risk;
     const double before = risks_[it - 1 - 2 * window] - risks_[it - 1 - window];
     if (last > 0.0 && before > last) {
       const double rate = last / before;  // the geometric series of the decreases to come
-      if (risk - kPolicy.rival_reach * last * rate / (1.0 - rate) > rival) return StopReason::kNoiseRemoved;
+      if (risk - policy_.rival_reach * last * rate / (1.0 - rate) > rival) return StopReason::kNoiseRemoved;
     }
   }
-  const int stretch = std::max(kPolicy.patience, it / 2);
-  if (it - best_it_ >= std::max(kPolicy.patience, best_it_ / 2)) return StopReason::kNoiseRemoved;
-  if (it > stretch && risks_[it - 1 - stretch] - best_risk_ < kPolicy.converged_share * sigma_ * sigma_) {
+  const int stretch = std::max(policy_.patience, it / 2);
+  if (it - best_it_ >= std::max(policy_.patience, best_it_ / 2)) return StopReason::kNoiseRemoved;
+  if (it > stretch && risks_[it - 1 - stretch] - best_risk_ < policy_.converged_share * sigma_ * sigma_) {
     return StopReason::kConverged;
   }
   return std::nullopt;
@@ -176,7 +176,7 @@ std::optional<StopReason> TurnStop::Start(const Mesh& input, const Topology& top
 std::optional<StopReason> TurnStop::After(int it, const Vec3* pos, const Vec3*) {
   turns_.push_back(turn_->Of(pos));
   if (turns_.back() >= target_) return StopReason::kNoiseRemoved;
-  if (it >= 2 * kPolicy.patience && turns_.back() - turns_[it / 2 - 1] < kPolicy.converged_share * target_) {
+  if (it >= 2 * policy_.patience && turns_.back() - turns_[it / 2 - 1] < policy_.converged_share * target_) {
     return StopReason::kConverged;
   }
   return std::nullopt;

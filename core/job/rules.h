@@ -1,6 +1,6 @@
 // How the default job's runs stop, and what they do with their result: the stop rules it gives
-// the driver (core/flows/driver.h). kPolicy (policy.h) holds their numbers; docs/decisions.md has
-// the figures that chose them.
+// the driver (core/flows/driver.h). A JobPolicy (policy.h) holds their numbers; docs/decisions.md
+// has the figures that chose them.
 //
 // Every run (JobRule) reads the input's noise (NoiseEstimate, core/measure/noise.h). Part of
 // that reading is the estimator's own misfit on clean, coarse meshes: it is taken off in
@@ -52,8 +52,8 @@ class JobRule : public flows::StopRule {
   // their role (a fixed rim keeps its noise: the estimate counts it). `repair_idle`: the input
   // was changed before the run (outliers moved): a run with nothing to do still repairs the
   // folds the change left.
-  JobRule(double h, const NoiseEstimate& noise, const std::vector<uint8_t>* measured = nullptr, bool rims = false,
-          bool repair_idle = false);
+  JobRule(double h, const NoiseEstimate& noise, const JobPolicy& policy, const std::vector<uint8_t>* measured = nullptr,
+          bool rims = false, bool repair_idle = false);
 
   std::optional<StopReason> Start(const Mesh& input, const Topology& topo, const uint8_t* role, int threads) override;
   std::optional<StopReason> After(int, const Vec3*, const Vec3*) override { return std::nullopt; }
@@ -61,12 +61,13 @@ class JobRule : public flows::StopRule {
 
  protected:
   // True when the input has no noise to remove (Start's answer unless a rule overrides it).
-  bool nothing_to_do() const { return !estimated_ || report_.noise_to_remove_h < kPolicy.no_noise_h; }
+  bool nothing_to_do() const { return !estimated_ || report_.noise_to_remove_h < policy_.no_noise_h; }
   double RmsNormalDisplacement(const Vec3* pos) const;
   // The unit normal of the ring at v in `pos`, or none where the ring has no area.
   std::optional<Vec3> UnitNormal(const Vec3* pos, int32_t v) const;
 
   const NoiseEstimate& noise_;
+  const JobPolicy& policy_;
   const std::vector<uint8_t>* measured_;
   const bool rims_, repair_idle_;
   const double h_;
@@ -122,8 +123,8 @@ class RiskStop final : public JobRule {
 // has read.
 class TurnStop final : public JobRule {
  public:
-  TurnStop(double h, const NoiseEstimate& noise, double target, bool rims)
-      : JobRule(h, noise, nullptr, rims), target_(target) {}
+  TurnStop(double h, const NoiseEstimate& noise, const JobPolicy& policy, double target, bool rims)
+      : JobRule(h, noise, policy, nullptr, rims), target_(target) {}
 
   std::optional<StopReason> Start(const Mesh& input, const Topology& topo, const uint8_t* role, int threads) override;
   std::optional<StopReason> After(int it, const Vec3* pos, const Vec3* probe) override;

@@ -79,6 +79,13 @@ def main() -> int:
             for line in f.read_text(errors="replace").splitlines():
                 if re.match(r"\s*(static\s+|inline\s+)*constexpr\s", line):
                     bad.append(f"{f.relative_to(args.root).as_posix()}: a constant outside JobPolicy: {line.strip()}")
+    # ... and VisitPolicy (the benchmark's --policy and --list-policy) visits every one, in order.
+    policy_h = (args.root / "core" / "job" / "policy.h").read_text(errors="replace")
+    struct = re.search(r"struct JobPolicy \{(.*?)\n\};", policy_h, re.S)
+    fields = re.findall(r"^\s+(?:double|int|int32_t)\s+(\w+)\s*=", struct.group(1), re.M) if struct else []
+    visited = re.findall(r'visit\("(\w+)",\s*policy\.(\w+)\)', policy_h)
+    if not fields or [name for name, _ in visited] != fields or any(n != m for n, m in visited):
+        bad.append(f"core/job/policy.h: VisitPolicy visits {[n for n, _ in visited]}, JobPolicy has {fields}")
     for line in bad:
         print(line)
     print(f"check_layers: {len(bad)} problem(s)")

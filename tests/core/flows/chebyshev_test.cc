@@ -73,7 +73,7 @@ TEST(ChebyshevTest, CountChosenOnASampleRunsAsItsIterations) {
     const Topology topo = BuildTopology(noisy);
     const double h = MeanEdgeLength(noisy, topo);
     const NoiseEstimate noise = EstimateNoise(noisy, topo, h);
-    job::JobRule rule(h, noise);
+    job::JobRule rule(h, noise, job::kPolicy);
     FlowParams p;
     p.flow = FlowId::kBilaplacian;  // automatic iterations, the count given by the plan
     auto run = [&](bool chebyshev, Mesh& m, std::vector<int>& seen) {
@@ -122,7 +122,7 @@ TEST(ChebyshevTest, SameBitsForAnyThreadCount) {
     FlowParams p;
     p.flow = FlowId::kBilaplacian;
     p.threads = threads;
-    job::JobRule rule(h, noise);
+    job::JobRule rule(h, noise, job::kPolicy);
     Mesh m = noisy;
     int terms = 0;
     RunControl control;

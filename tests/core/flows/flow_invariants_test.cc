@@ -134,7 +134,7 @@ TEST(FlowInvariantsTest, ProbeBesideTheRunChangesNoPosition) {
     p.threads = threads;
     Mesh m = large;
     const NoiseEstimate noise = EstimateNoise(large, topo, h);
-    job::RiskStop rule(h, noise);
+    job::RiskStop rule(h, noise, job::kPolicy);
     absl::StatusOr<FlowResult> r = flows::RunIterations(m, topo, p, {}, h, {0, &rule});
     ASSERT_TRUE(r.ok()) << r.status();
     EXPECT_GT(r->iterations_run, 0);

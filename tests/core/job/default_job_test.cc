@@ -725,7 +725,7 @@ TEST(DefaultJobTest, RunGivesUpOnceItCannotBeatItsRival) {
   auto run = [&](std::optional<double> rival, Mesh& m) {
     m = noisy;
     const NoiseEstimate noise = EstimateNoise(noisy, topo, h);
-    job::RiskStop rule(h, noise);
+    job::RiskStop rule(h, noise, job::kPolicy);
     if (rival) rule.SetRival(*rival);
     return flows::RunIterations(m, topo, p, {}, h, {0, &rule});
   };
@@ -756,7 +756,7 @@ TEST(DefaultJobTest, FoldRepairUnfoldsNeedlesWithinItsReach) {
   std::vector<uint8_t> role(clean.num_vertices(), flows::kFree);
   Mesh noisy = clean;
   AddNormalNoise(noisy, 0.1, 1);
-  const job::FoldRepair repair(topo, role.data(), h, 1);
+  const job::FoldRepair repair(topo, role.data(), h, 1, job::kPolicy);
 
   Mesh folded = clean;  // each needle's apex as far across its base edge as it was before it
   const size_t sphere_faces = Icosphere(3).triangles.size();  // the needles are faces 0, 5, 10, ...
@@ -822,7 +822,7 @@ TEST(DefaultJobTest, FoldRepairPullsSlidRimVerticesBack) {
     for (int32_t v = 0; v < topo.num_vertices(); ++v) {
       if (topo.kind[v] == VertexKind::kBoundary) role[v] = rim_role;
     }
-    const job::FoldRepair repair(topo, role.data(), h, 1);
+    const job::FoldRepair repair(topo, role.data(), h, 1, job::kPolicy);
     Mesh repaired = slid;
     repair.Run(repaired.positions.data());
     double longest = 0.0;
@@ -857,7 +857,7 @@ TEST(DefaultJobTest, FoldRepairSlidesVerticesPushedAcrossTheirRings) {
   const Topology& topo = truth.topology();
   const double h = MeanEdgeLength(clean, topo);
   std::vector<uint8_t> role(clean.num_vertices(), flows::kFree);
-  const job::FoldRepair repair(topo, role.data(), h, 1);
+  const job::FoldRepair repair(topo, role.data(), h, 1, job::kPolicy);
   Mesh pushed = clean;
   std::vector<uint8_t> near(clean.num_vertices(), 0);  // a pushed vertex and its two rings
   int moved = 0;

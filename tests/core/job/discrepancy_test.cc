@@ -136,7 +136,7 @@ TEST(DiscrepancyTest, StopsOnceTheFacesTurnedByTheTarget) {
   };
   const NoiseEstimate noise;
   const std::vector<uint8_t> role(sheet.num_vertices(), flows::kFree);
-  job::TurnStop rule(1.0, noise, /*target=*/0.1, /*rims=*/false);
+  job::TurnStop rule(1.0, noise, job::kPolicy, /*target=*/0.1, /*rims=*/false);
   EXPECT_EQ(rule.Start(sheet, topo, role.data(), 1), std::nullopt);
   int stopped = 0;
   std::optional<StopReason> reason;
@@ -146,7 +146,7 @@ TEST(DiscrepancyTest, StopsOnceTheFacesTurnedByTheTarget) {
   }
   EXPECT_EQ(reason, StopReason::kNoiseRemoved);
   EXPECT_EQ(stopped, 10);  // 0.110 >= 0.1 > 0.099
-  job::TurnStop slow(1.0, noise, 0.1, false);
+  job::TurnStop slow(1.0, noise, job::kPolicy, 0.1, false);
   slow.Start(sheet, topo, role.data(), 1);
   reason.reset();
   for (int it = 1; it <= 40 && !reason; ++it) {
