@@ -75,8 +75,13 @@ class Checks:
         return value
 
     def summary(self):
-        """Prints 'N passed, M failed'; returns the exit status, 1 when anything failed."""
+        """Prints 'N passed, M failed'; returns the exit status, 1 when anything failed or when
+        no check ran at all (as ctest --no-tests=error: a test that checked nothing has not
+        passed)."""
         print(f"{self.passed} passed, {self.failed} failed", flush=True)
+        if self.passed + self.failed == 0:
+            print("FAIL: no check ran", flush=True)
+            return 1
         return 1 if self.failed else 0
 
 
