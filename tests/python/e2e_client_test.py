@@ -23,7 +23,10 @@ from harness import Server, parser, ply_counts, require, run, run_checks
 
 PROTO_FILE = "meshsmooth/v1/smoothing.proto"
 GRPC_PYTHON_PLUGIN = "/usr/bin/grpc_python_plugin"
-EXPECTED_FLOWS = {"laplacian", "taubin", "bilaplacian", "mcf", "mcf_tangential", "median"}
+# Every flow of smoothing.proto's contract (README's list): ListFlows names exactly these, and
+# each runs end to end.
+EXPECTED_FLOWS = {"laplacian", "taubin", "bilaplacian", "mcf", "mcf_tangential", "median", "bilateral_normal",
+                  "guided_normal"}
 SMOOTH_DEADLINE_S = 60.0
 ERROR_DEADLINE_S = 30.0
 # Well below the contract's 1 MiB limit. The lossless sequential test mesh is ~15 KB, so 64 KiB
@@ -155,8 +158,9 @@ def chunked(data, size):
 def check_list_flows(stub, pb2):
     reply = stub.ListFlows(pb2.ListFlowsRequest(), timeout=10)
     names = [f.name for f in reply.flows]
-    missing = EXPECTED_FLOWS - set(names)
-    require(not missing, f"missing flows {sorted(missing)}; got {names}")
+    require(len(names) == len(set(names)), f"a flow named twice: {names}")
+    missing, extra = EXPECTED_FLOWS - set(names), set(names) - EXPECTED_FLOWS
+    require(not missing and not extra, f"missing flows {sorted(missing)}, unexpected {sorted(extra)}; got {names}")
     for flow in reply.flows:
         described = [p.name for p in flow.parameters if p.description.strip()]
         require(described, f"flow {flow.name!r} has no parameter with a description "
@@ -251,6 +255,19 @@ def check_result_decodes(work_dir, responses):
             f"result.ply has {v} vertices / {f} faces")
 
 
+def check_flow_runs(stub, pb2, grpc, work_dir, flow, mesh):
+    """One Smooth call of `flow`, 3 iterations: status OK, the summary's flow and count, and a
+    result draco_decoder reads back with the input's counts."""
+    responses, code, details, _ = run_smooth(stub, pb2, pb2.JobSpec(flow=flow, iterations=3), mesh)
+    require(code == grpc.StatusCode.OK, f"status {code} {details!r}")
+    require(responses and responses[-1].WhichOneof("kind") == "summary", "last response is not summary")
+    s = responses[-1].summary
+    require(s.parameters.flow == flow, f"parameters.flow {s.parameters.flow!r}")
+    require(s.parameters.iterations_run == 3, f"parameters.iterations_run {s.parameters.iterations_run}")
+    v, f = decode_counts(work_dir, f"result_{flow}", result_bytes_of(responses))
+    require((v, f) == (ICOSPHERE_VERTICES, ICOSPHERE_FACES), f"result has {v} vertices / {f} faces")
+
+
 def expect_error(stub, grpc, messages, code_name, words):
     """Sends messages; the call must end with status code_name and a message naming words."""
     call = stub.Smooth(iter(messages), timeout=ERROR_DEADLINE_S)
@@ -329,10 +346,13 @@ def run_all(args, checks, tmp):
 
         checks.check("health service answers SERVING", check_health, channel)
         checks.check("server reflection lists meshsmooth.v1.MeshSmoother", check_reflection, channel)
-        checks.check("ListFlows names all six flows, each with a described parameter",
+        checks.check(f"ListFlows names exactly the {len(EXPECTED_FLOWS)} flows, each with a described parameter",
                      check_list_flows, stub, pb2)
 
         if mesh is not None:
+            for flow in sorted(EXPECTED_FLOWS):
+                checks.check(f"{flow}: 3 iterations end OK, the summary names it, the result decodes to "
+                             "642 v / 1280 f", check_flow_runs, stub, pb2, grpc, work_dir, flow, mesh)
             spec = pb2.JobSpec(flow="median", iterations=10)
             result = checks.check("Smooth call made (median, 10 iterations, 4 KiB chunks)",
                                   run_smooth, stub, pb2, spec, mesh)
