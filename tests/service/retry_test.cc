@@ -41,17 +41,67 @@ TEST(RetryTest, BackoffIsJitteredBelowAnExponentialCap) {
                                milliseconds(3200), milliseconds(5000), milliseconds(5000)};
   for (int retry = 1; retry <= 7; ++retry) {
     milliseconds lo = milliseconds::max(), hi = milliseconds::zero();
-    for (int i = 0; i < 2000; ++i) {
+    double sum = 0;
+    const int samples = 2000;
+    for (int i = 0; i < samples; ++i) {
       const milliseconds d = BackoffDelay(p, retry, rng);
       lo = std::min(lo, d);
       hi = std::max(hi, d);
+      sum += static_cast<double>(d.count());
     }
     const milliseconds cap = caps[retry - 1];
-    EXPECT_GE(lo.count(), 0) << retry;
     EXPECT_LE(hi, cap) << retry;
-    // Full jitter: the waits cover the range, not one value.
+    // Full jitter: the waits cover the range, not one value, and spread evenly over it (uniform
+    // on [0, cap]: a mean of cap / 2, whose spread over 2000 samples is 0.7 % of the cap).
     EXPECT_LT(lo.count(), cap.count() / 10) << retry;
     EXPECT_GT(hi.count(), cap.count() * 9 / 10) << retry;
+    EXPECT_NEAR(sum / samples, cap.count() / 2.0, cap.count() * 0.05) << retry;
+  }
+}
+
+// RetryingSmooth against a server that is never there: max_attempts attempts, the retries told
+// in order (1, 2, 3) with UNAVAILABLE, each wait below its exponential cap and actually waited.
+TEST(RetryTest, EachRetryWaitsItsBackoffUntilTheAttemptsRunOut) {
+  const auto deadline = std::chrono::system_clock::now() + std::chrono::seconds(60);
+  RetryPolicy policy;
+  policy.max_attempts = 4;
+  policy.initial_backoff = milliseconds(40);
+  policy.max_backoff = milliseconds(100);
+  struct Retry {
+    int number;
+    absl::StatusCode code;
+    milliseconds wait;
+    std::chrono::steady_clock::time_point told;
+  };
+  std::vector<Retry> retries;
+  std::vector<std::chrono::steady_clock::time_point> attempt_starts;
+  RetryingSmooth call(
+      policy,
+      [&](grpc::ClientContext& ctx) {
+        attempt_starts.push_back(std::chrono::steady_clock::now());
+        ctx.set_deadline(deadline);
+        return absl::OkStatus();
+      },
+      deadline,
+      [&](int retry, const absl::Status& s, milliseconds wait) {
+        retries.push_back({retry, s.code(), wait, std::chrono::steady_clock::now()});
+      });
+  // Nothing listens on port 1: every attempt fails with UNAVAILABLE at once.
+  auto dead = v1::MeshSmoother::NewStub(grpc::CreateChannel("127.0.0.1:1", grpc::InsecureChannelCredentials()));
+  const std::string draco = *EncodeDraco(testing::FloatMesh(testing::NoisySphere(1)));
+  const absl::Status s = call.Run(*dead, testing::Spec("laplacian", 1), draco).status();
+  EXPECT_EQ(s.code(), absl::StatusCode::kUnavailable) << s;
+  EXPECT_EQ(call.attempts(), 4);
+  ASSERT_EQ(retries.size(), 3u);
+  ASSERT_EQ(attempt_starts.size(), 4u);
+  const milliseconds caps[] = {milliseconds(40), milliseconds(80), milliseconds(100)};
+  for (int i = 0; i < 3; ++i) {
+    SCOPED_TRACE(::testing::Message() << "retry " << i + 1);
+    EXPECT_EQ(retries[i].number, i + 1);
+    EXPECT_EQ(retries[i].code, absl::StatusCode::kUnavailable);
+    EXPECT_LE(retries[i].wait, caps[i]);
+    // The next attempt starts no sooner than the wait told (1 ms for the clock's rounding).
+    EXPECT_GE(attempt_starts[i + 1] - retries[i].told, retries[i].wait - milliseconds(1));
   }
 }
 
