@@ -30,6 +30,9 @@ if [ "$preset" != image ]; then
     nginx prometheus clang-format
   )
 fi
+# kubectl renders deploy/kubernetes in tests/deploy/kubernetes_test.py. Debian's is
+# kubernetes-client; a kubectl already on PATH (from another package) is used as it is.
+if [ "$preset" != image ] && ! command -v kubectl >/dev/null; then packages+=(kubernetes-client); fi
 if [ "$preset" = fuzz ]; then packages+=(clang libfuzzer-14-dev libomp-dev); fi
 missing=()
 for p in "${packages[@]}"; do
