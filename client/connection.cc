@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <random>
+#include <string>
 #include <string_view>
 #include <vector>
 
@@ -141,9 +142,13 @@ std::chrono::system_clock::time_point CallDeadline(const ConnectionOptions& opti
 absl::Status WithConnectionHint(const absl::Status& status, const ConnectionOptions& options) {
   if (status.code() != absl::StatusCode::kUnavailable || options.server.empty()) return status;
   const char* hint = nullptr;
+  const std::string message = absl::AsciiStrToLower(status.message());
   if (options.tls_ca.empty() && absl::StrContains(status.message(), "Socket closed")) {
     hint = "the server may require TLS: --tls-ca FILE";
-  } else if (!options.tls_ca.empty() && absl::StrContains(absl::AsciiStrToLower(status.message()), "handshake")) {
+  } else if (!options.tls_ca.empty() && absl::StrContains(message, "certificate verify failed")) {
+    // The server speaks TLS, but its certificate chain does not lead to a CA of the file.
+    hint = "the server's certificate is not signed by a CA in --tls-ca";
+  } else if (!options.tls_ca.empty() && absl::StrContains(message, "handshake")) {
     hint = "the server may not use TLS: leave out --tls-ca";
   }
   if (hint == nullptr) return status;

@@ -52,7 +52,8 @@ std::chrono::system_clock::time_point CallDeadline(const ConnectionOptions& opti
 
 // `status` of a failed call to `options.server`, with a hint when it looks like one side speaks
 // TLS and the other does not: a server that closes the connection at once ("Socket closed")
-// when no --tls-ca was given, a failed TLS handshake when one was. Anything else unchanged.
+// when no --tls-ca was given, a failed TLS handshake when one was; or that the server's
+// certificate does not verify against --tls-ca. Anything else unchanged.
 absl::Status WithConnectionHint(const absl::Status& status, const ConnectionOptions& options);
 
 // Sets the call's deadline and, with a token file, its "authorization: Bearer" metadata.
