@@ -13,10 +13,10 @@
 //   5. Finish (in every run, JobRule): repair folds, give a closed mesh its volume back.
 //
 // A JobPolicy (policy.h) holds every number; docs/quality-method.md says why the method is this one.
+#include "core/job/default_job.h"
+
 #include <utility>
 #include <vector>
-
-#include "core/job/default_job.h"
 
 #include "core/flows/driver.h"
 #include "core/flows/flow.h"
