@@ -14,7 +14,7 @@ using flows::kFree;
 
 JobRule::JobRule(double h, const NoiseEstimate& noise, const JobPolicy& policy, const std::vector<uint8_t>* measured,
                  bool rims, bool repair_idle)
-    : noise_(noise), policy_(policy), measured_(measured), rims_(rims), repair_idle_(repair_idle), h_(h) {
+    : policy_(policy), measured_(measured), rims_(rims), repair_idle_(repair_idle), h_(h) {
   estimated_ = noise.reliable;
   const double floor2 = policy_.estimator_floor_h * policy_.estimator_floor_h;
   report_.noise_sigma_h = noise.sigma_h;

@@ -66,7 +66,6 @@ class JobRule : public flows::StopRule {
   // The unit normal of the ring at v in `pos`, or none where the ring has no area.
   std::optional<Vec3> UnitNormal(const Vec3* pos, int32_t v) const;
 
-  const NoiseEstimate& noise_;
   const JobPolicy& policy_;
   const std::vector<uint8_t>* measured_;
   const bool rims_, repair_idle_;
