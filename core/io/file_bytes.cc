@@ -17,22 +17,25 @@ absl::StatusOr<std::string> ReadFileBytes(const std::string& path) {
   if (fd < 0) return absl::ErrnoToStatus(errno, absl::StrCat("cannot open '", path, "'"));
   std::string bytes;
   struct stat st {};
-  // Files under /proc and /sys report size 0: the loop below reads them all the same.
+  // Files under /proc and /sys report size 0: ReadToEnd reads them all the same.
   if (::fstat(fd, &st) == 0 && S_ISREG(st.st_mode) && st.st_size > 0) bytes.reserve(static_cast<size_t>(st.st_size));
+  const int error = ReadToEnd(fd, &bytes);
+  ::close(fd);
+  if (error != 0) return absl::ErrnoToStatus(error, absl::StrCat("cannot read '", path, "'"));
+  return bytes;
+}
+
+int ReadToEnd(int fd, std::string* bytes) {
   char chunk[1 << 16];
   for (;;) {
     const ssize_t n = ::read(fd, chunk, sizeof chunk);
-    if (n == 0) break;
+    if (n == 0) return 0;
     if (n < 0) {
       if (errno == EINTR) continue;
-      const int error = errno;
-      ::close(fd);
-      return absl::ErrnoToStatus(error, absl::StrCat("cannot read '", path, "'"));
+      return errno;
     }
-    bytes.append(chunk, static_cast<size_t>(n));
+    bytes->append(chunk, static_cast<size_t>(n));
   }
-  ::close(fd);
-  return bytes;
 }
 
 absl::Status WriteFileBytes(const std::string& path, std::string_view bytes) {

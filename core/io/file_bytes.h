@@ -15,6 +15,10 @@ namespace meshsmooth {
 // an unreadable file PermissionDenied, a directory FailedPrecondition ("cannot read ...").
 absl::StatusOr<std::string> ReadFileBytes(const std::string& path);
 
+// Appends to `bytes` everything left to read from the open descriptor `fd` (a pipe: until every
+// writer has closed it): 0, or the errno of the read that failed.
+int ReadToEnd(int fd, std::string* bytes);
+
 // Writes `bytes` to `path` (created or truncated): PermissionDenied when it cannot be opened,
 // DataLoss when writing fails.
 absl::Status WriteFileBytes(const std::string& path, std::string_view bytes);
