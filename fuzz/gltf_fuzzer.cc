@@ -1,8 +1,9 @@
 // libFuzzer target: the glTF path (core/io/gltf.h) as the CLI takes it. Bytes -> a .glb file ->
-// GltfScene::ReadInChildFirst (Draco's glTF decoder and encoder, first in a child process:
-// Draco 1.5.5's own crashes on malformed files, which this target finds within seconds, kill
-// the child and make the file refused); a refusal must be INVALID_ARGUMENT. A scene read must
-// hold:
+// GltfScene::ReadInChildFirst (Draco's glTF decoder and encoder, and our code around them, first
+// in a child process). A refusal must be INVALID_ARGUMENT: a file Draco refuses, or one that
+// crashes the child in Draco's own frames (Draco 1.5.5 crashes on some malformed files), whose
+// crash report goes to the log. A crash of the child in meshsmooth's frames, or in frames that
+// name neither, is INTERNAL and a finding. A scene read must hold:
 //   - its surface has triangles, every index in range;
 //   - written back with its own positions, plain and Draco-compressed, it reads again with the
 //     same nodes, meshes, primitives, materials and textures.
@@ -15,6 +16,7 @@
 #include <filesystem>
 #include <string>
 
+#include "core/io/crash_report.h"
 #include "core/io/file_bytes.h"
 #include "core/io/gltf.h"
 
@@ -53,7 +55,12 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
               "cannot write the input file");
   absl::StatusOr<GltfScene> scene = GltfScene::ReadInChildFirst(in, /*draco_compressed=*/true);
   if (!scene.ok()) {
-    fuzz::Check(scene.status().code() == absl::StatusCode::kInvalidArgument, "a refusal that is not INVALID_ARGUMENT");
+    if (const auto report = scene.status().GetPayload(kCrashReportPayload); report.has_value()) {
+      std::fprintf(stderr, "glTF fuzz target: %s\nThe child's crash report:\n%s\n",
+                   std::string(scene.status().message()).c_str(), std::string(*report).c_str());
+    }
+    fuzz::Check(scene.status().code() == absl::StatusCode::kInvalidArgument,
+                "a refusal that is not INVALID_ARGUMENT (a crash outside Draco's code is INTERNAL)");
     return 0;
   }
   const Mesh& s = scene->surface();

@@ -4,10 +4,12 @@
 #
 # Usage: fuzz/run.sh [--no-build] [--seed N] SECONDS [TARGET...]
 #   TARGET: fuzz_job fuzz_ply fuzz_obj fuzz_off fuzz_stl fuzz_drc fuzz_gltf (default: all). Draco
-#     1.5.5's own glTF reader and writer crash on malformed files within seconds of fuzzing; the
-#     glTF path reads and writes a file in a child process first (GltfScene::ReadInChildFirst),
-#     so fuzz_gltf logs those children's sanitizer reports and goes on: only a crash of the
-#     target itself fails it
+#     1.5.5's own glTF reader and writer crash on malformed files; the glTF path reads and writes
+#     a file in a child process first (GltfScene::ReadInChildFirst), whose crash report says
+#     whose frames crashed. fuzz_gltf logs a crash in Draco's frames (the line "glTF fuzz
+#     target: ... Draco's glTF reader crashed on it (...)" and the child's report) and goes on;
+#     a crash in meshsmooth's frames, or in frames that name neither, fails it like a crash of
+#     the target itself
 #   --no-build: run the binaries already in build-fuzz/ (e.g. a long run beside other builds)
 #   --seed N: libFuzzer's random seed for every target (default: one from the clock). With a
 #     fixed seed and the same corpus, a target makes the same mutations in the same order, so a

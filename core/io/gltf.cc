@@ -1,5 +1,6 @@
 #include "core/io/gltf.h"
 
+#include <fcntl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -10,10 +11,13 @@
 #include <filesystem>
 #include <optional>
 
+#include "absl/strings/cord.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_join.h"
+#include "core/io/crash_report.h"
 #include "core/io/draco_checks.h"
 #include "core/io/draco_codec.h"
+#include "core/io/file_bytes.h"
 #include "core/io/gltf_texcoords.h"
 #include "draco/io/file_reader_factory.h"
 #include "draco/io/file_utils.h"
@@ -25,10 +29,6 @@
 #include "draco/scene/scene.h"
 #include "draco/scene/scene_utils.h"
 #include "draco/texture/texture_utils.h"
-
-// A sanitizer's hook (present in sanitized builds only): what runs when a sanitizer stops the
-// process. libFuzzer sets it to save the input as a finding.
-extern "C" void __sanitizer_set_death_callback(void (*callback)()) __attribute__((weak));
 
 namespace meshsmooth {
 
@@ -231,50 +231,90 @@ absl::Status WriteMeshAsGltf(std::string_view bytes, const Vec3& origin, const s
   return WriteNamedAfter(*scene, SceneImages(*scene), path);
 }
 
+namespace {
+
+// What the child of ReadInChildFirst writes first to its pipe once it has read the scene; a crash
+// report may follow.
+constexpr std::string_view kSceneRead = "the scene was read\n";
+
+// The child of ReadInChildFirst: reads `path` and writes the scene it reads to a temporary .glb,
+// plain and (with `draco_compressed`) Draco-compressed. `fd` gets kSceneRead once the scene is
+// read, and the crash report if one of the steps crashes.
+[[noreturn]] void ReadAndWriteInChild(const std::string& path, bool draco_compressed, int fd) {
+  SendCrashReportsTo(fd);
+  absl::StatusOr<GltfScene> scene = GltfScene::Read(path);
+  if (!scene.ok()) _exit(0);
+  if (write(fd, kSceneRead.data(), kSceneRead.size()) != static_cast<ssize_t>(kSceneRead.size())) _exit(0);
+  const std::string out =
+      (std::filesystem::temp_directory_path() / absl::StrCat("meshsmooth_gltf_check_", getpid(), ".glb")).string();
+  for (bool draco : {false, true}) {
+    if (draco && !draco_compressed) continue;
+    (void)scene->Write(scene->surface().positions, out, draco);
+    std::remove(out.c_str());
+  }
+  _exit(0);
+}
+
+// The status for a child of ReadInChildFirst that ended with `wait_status` after writing `report`:
+// a crash in Draco's frames refuses the file (InvalidArgument), a crash in ours or in frames no
+// name tells is a bug to report (Internal). The report goes with it (kCrashReportPayload).
+absl::Status ChildCrashStatus(const std::string& path, int wait_status, const std::string& report) {
+  const CrashReport crash = ReadCrashReport(report);
+  std::string what = crash.kind;
+  if (what.empty()) {
+    what = WIFSIGNALED(wait_status) ? absl::StrCat("signal ", WTERMSIG(wait_status))
+                                    : absl::StrCat("exit status ", WEXITSTATUS(wait_status));
+  }
+  if (!crash.frames.empty()) {
+    const size_t shown = std::min<size_t>(crash.frames.size(), 3);
+    absl::StrAppend(&what, " in ", absl::StrJoin(crash.frames.begin(), crash.frames.begin() + shown, " <- "));
+  }
+  absl::StrAppend(&what, "; tried in a child process");
+  const char* step = report.starts_with(kSceneRead) ? "writer" : "reader";
+  absl::Status status;
+  switch (crash.owner) {
+    case CrashOwner::kDraco:
+      status = absl::InvalidArgumentError(
+          absl::StrCat(path, ": a malformed glTF file: Draco's glTF ", step, " crashed on it (", what, ")"));
+      break;
+    case CrashOwner::kMeshsmooth:
+      status = absl::InternalError(absl::StrCat(path, ": meshsmooth's glTF ", step,
+                                                " crashed on it: a bug in meshsmooth, please report it (", what, ")"));
+      break;
+    case CrashOwner::kUnknown:
+      status = absl::InternalError(absl::StrCat(path, ": the glTF ", step, " crashed on it where no frame names ",
+                                                "Draco's code or meshsmooth's: please report it (", what, ")"));
+      break;
+  }
+  status.SetPayload(kCrashReportPayload, absl::Cord(report));
+  return status;
+}
+
+}  // namespace
+
 absl::StatusOr<GltfScene> GltfScene::ReadInChildFirst(const std::string& path, bool draco_compressed) {
-  // The child writes one byte to `fds` once it has read the scene: a child that dies after it
-  // crashed in Draco's writer, before it in its reader.
   int fds[2];
-  if (pipe(fds) != 0) return Read(path);  // no pipe, no child: read as before
+  if (pipe2(fds, O_CLOEXEC) != 0) return Read(path);  // no pipe, no child: read as before
   std::fflush(nullptr);
   const pid_t child = fork();
   if (child == 0) {
-    // A crash here is the finding this child exists for, not the fuzzer's (fuzz/gltf_fuzzer.cc).
-    if (__sanitizer_set_death_callback != nullptr) __sanitizer_set_death_callback(nullptr);
     close(fds[0]);
-    absl::StatusOr<GltfScene> scene = Read(path);
-    if (!scene.ok()) _exit(0);
-    const char byte = 1;
-    if (write(fds[1], &byte, 1) != 1) _exit(0);
-    const std::string out =
-        (std::filesystem::temp_directory_path() / absl::StrCat("meshsmooth_gltf_check_", getpid(), ".glb")).string();
-    for (bool draco : {false, true}) {
-      if (draco && !draco_compressed) continue;
-      (void)scene->Write(scene->surface().positions, out, draco);
-      std::remove(out.c_str());
-    }
-    _exit(0);
+    ReadAndWriteInChild(path, draco_compressed, fds[1]);
   }
   close(fds[1]);
   if (child < 0) {
     close(fds[0]);
     return Read(path);
   }
-  char byte = 0;
-  ssize_t got;
-  while ((got = read(fds[0], &byte, 1)) < 0 && errno == EINTR) {
-  }
+  std::string report;
+  (void)ReadToEnd(fds[0], &report);  // until the child ends
   close(fds[0]);
   int status = 0;
   pid_t waited;
   while ((waited = waitpid(child, &status, 0)) < 0 && errno == EINTR) {
   }
   if (waited == child && !(WIFEXITED(status) && WEXITSTATUS(status) == 0)) {
-    const std::string how = WIFSIGNALED(status) ? absl::StrCat("signal ", WTERMSIG(status))
-                                                : absl::StrCat("exit status ", WEXITSTATUS(status));
-    return absl::InvalidArgumentError(absl::StrCat(path, ": a malformed glTF file: Draco's glTF ",
-                                                   got == 1 ? "writer" : "reader", " crashed on it (", how,
-                                                   "; tried in a child process)"));
+    return ChildCrashStatus(path, status, report);
   }
   return Read(path);  // the child read it (or refused it): this process gets the same result
 }

@@ -49,9 +49,13 @@ class GltfScene {
   // file). Draco 1.5.5's glTF reading and writing crash on some malformed files (a null
   // dereference in its copy of tinygltf, heap overflows in its triangle-soup builder, a wild
   // write in its entropy coder: docs/development.md), which no check of ours can stop before
-  // Draco parses them: a child that dies (a signal, or a sanitizer's exit) makes the file
-  // refused (InvalidArgument, "... crashed on it ...") instead of crashing this process.
-  // Fork-safe only where no other thread holds a lock: call it before starting threads.
+  // Draco parses them. A child that dies (a signal, or a sanitizer's exit) leaves a crash report
+  // (core/io/crash_report.h) whose stack says whose code crashed: in Draco's, the file is refused
+  // (InvalidArgument, "... Draco's glTF reader crashed on it (SEGV in tinygltf::ParseMesh
+  // <- ...)"); in meshsmooth's, or where no frame names either, the status is Internal ("...
+  // a bug in meshsmooth, please report it ..."). Either carries the report as its
+  // kCrashReportPayload. Fork-safe only where no other thread holds a lock: call it before
+  // starting threads.
   static absl::StatusOr<GltfScene> ReadInChildFirst(const std::string& path, bool draco_compressed);
 
   GltfScene(GltfScene&&) noexcept;

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "client/transfer.h"
+#include "core/io/crash_report.h"
 #include "core/io/draco_codec.h"
 #include "core/io/file_bytes.h"
 #include "core/io/gltf.h"
@@ -314,7 +315,8 @@ TEST(GltfTest, ScenesComeBackWithTheirNodesMaterialsTexturesAndUvs) {
 
 // A Draco-compressed GLB whose "buffers" key is misspelt (as fuzz_gltf found it): Draco's own glTF
 // reader dereferences a null pointer on it. The CLI reads a glTF file in a child process first,
-// so the upload is refused with a message instead of the CLI crashing.
+// so the upload is refused with a message instead of the CLI crashing, and the child's stack
+// tells that the crash was Draco's.
 TEST(GltfTest, FileThatCrashesDracosReaderIsRefused) {
   const fs::path dir = fs::temp_directory_path() / ("meshsmooth_gltf_crash_" + std::to_string(getpid()));
   fs::create_directories(dir);
@@ -336,7 +338,9 @@ TEST(GltfTest, FileThatCrashesDracosReaderIsRefused) {
   fs::remove_all(dir);
   ASSERT_FALSE(upload.ok());
   EXPECT_EQ(upload.status().code(), absl::StatusCode::kInvalidArgument);
-  EXPECT_NE(upload.status().message().find("crashed"), std::string::npos) << upload.status();
+  EXPECT_NE(upload.status().message().find("Draco's glTF reader crashed on it (SEGV in tinygltf::"), std::string::npos)
+      << upload.status();
+  EXPECT_TRUE(upload.status().GetPayload(kCrashReportPayload).has_value());
 }
 
 // Positions that no reader would take back (not finite, or beyond kMaxCoordinate, which float32
