@@ -69,10 +69,11 @@ for target in "${targets[@]}"; do
   start=$SECONDS
   "$out/fuzz/$target" "${args[@]}" "$corpus" "$seeds" >"$log" 2>&1 || status=FAILED
   elapsed=$((SECONDS - start))
-  # libFuzzer's last status line (cov, ft, corp) and its final statistics.
+  # libFuzzer's last status line (cov, ft, corp) and its final statistics: the last ones, since
+  # a child of fuzz_gltf that libFuzzer's malloc limit stops prints statistics of its own.
   last=$(grep -E '^#[0-9]+' "$log" | tail -n 1 || true)
-  execs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log")
-  rate=$(sed -n 's/^stat::average_exec_per_sec: *//p' "$log")
+  execs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -n 1)
+  rate=$(sed -n 's/^stat::average_exec_per_sec: *//p' "$log" | tail -n 1)
   cov=$(sed -n 's/.* cov: \([0-9]*\).*/\1/p' <<<"$last")
   ft=$(sed -n 's/.* ft: \([0-9]*\).*/\1/p' <<<"$last")
   corp=$(sed -n 's/.* corp: \([0-9]*\/[0-9]*[a-zA-Z]*\).*/\1/p' <<<"$last")
