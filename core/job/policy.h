@@ -17,9 +17,8 @@ namespace meshsmooth::job {
 struct JobPolicy {
   // Reading the noise ("Automatic stopping: Stein's unbiased risk estimate", "Detail read as
   // noise: a second, wider fit").
-  double estimator_floor_h = 0.04;  // the estimator's misfit on clean meshes, taken off in quadrature
-  double no_noise_h = 0.02;         // below this much noise to remove (in h) the run does nothing
-  double detail_only_h = 0.03;      // ... nor below this detail-free estimate (in h)
+  double no_noise_h = 0.02;     // below this much noise to remove (in h) the run does nothing
+  double detail_only_h = 0.03;  // ... nor below this detail-free estimate (in h)
 
   // Outliers ("Outliers").
   double impulsive_share = 0.04;  // above this share of outlying fits the outliers move back first
@@ -72,7 +71,6 @@ inline constexpr JobPolicy kPolicy{};
 // an int32_t&): for listing the numbers and setting them by name.
 template <typename Visit>
 void VisitPolicy(JobPolicy& policy, Visit visit) {
-  visit("estimator_floor_h", policy.estimator_floor_h);
   visit("no_noise_h", policy.no_noise_h);
   visit("detail_only_h", policy.detail_only_h);
   visit("impulsive_share", policy.impulsive_share);

@@ -16,15 +16,11 @@ JobRule::JobRule(double h, const NoiseEstimate& noise, const JobPolicy& policy, 
                  bool rims, bool repair_idle)
     : policy_(policy), measured_(measured), rims_(rims), repair_idle_(repair_idle), h_(h) {
   estimated_ = noise.reliable;
-  const double floor2 = policy_.estimator_floor_h * policy_.estimator_floor_h;
   report_.noise_sigma_h = noise.sigma_h;
   report_.detail_free_h = noise.detail_free_h;
-  report_.noise_to_remove_h = std::sqrt(std::max(0.0, noise.sigma_h * noise.sigma_h - floor2));
-  // Fine detail, not noise: the run has nothing to remove.
-  if (noise.detail_free_h < policy_.detail_only_h) report_.noise_to_remove_h = 0.0;
-  if (TurnsFacesVisibly(noise, policy)) report_.noise_to_remove_h = noise.sigma_h;
-  // Not less the floor: SURE weighs the fidelity to the input against the noise, and a floor
-  // taken off small noise (0.06 h) makes it stop after an iteration or two.
+  // Fine detail, not noise, unless the noise turns the faces visibly: nothing to remove.
+  const bool detail_only = noise.detail_free_h < policy_.detail_only_h && !TurnsFacesVisibly(noise, policy);
+  report_.noise_to_remove_h = detail_only ? 0.0 : noise.sigma_h;
   sigma_ = RiskSigmaH(noise, policy) * h;
 }
 
