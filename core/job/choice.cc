@@ -78,7 +78,7 @@ absl::StatusOr<FlowResult> Choose(Mesh& mesh, const Topology& topo, const FlowPa
   quiet.on_progress = nullptr;
   std::optional<FlowResult> best;
   std::vector<Vec3> best_positions;
-  std::optional<Roughness> input_roughness;
+  std::optional<double> input_area;
   std::optional<FlowResult> rejected;  // the first candidate that left the input rougher
   for (FlowId flow : candidates) {
     ReportPhase(control, Phase::kChoosing, flow);
@@ -95,11 +95,11 @@ absl::StatusOr<FlowResult> Choose(Mesh& mesh, const Topology& topo, const FlowPa
     }
     const bool idle = r->iterations_run == 0;
     if (!idle) {
-      // A run that left its input rougher did not remove noise, whatever its estimate says
+      // A run that left its input more area did not remove noise, whatever its estimate says
       // (slivers: the estimate reads offsets along the normals, and a sliver's normal turns
       // under an offset far below h): it is not chosen.
-      if (!input_roughness) input_roughness = RoughnessOf(mesh.positions, mesh, topo, policy);
-      if (Rougher(RoughnessOf(copy.positions, mesh, topo, policy), *input_roughness, topo.faces.size(), policy)) {
+      if (!input_area) input_area = SurfaceArea(mesh.positions, mesh, topo);
+      if (SurfaceArea(copy.positions, mesh, topo) > *input_area) {
         if (!rejected) rejected = *std::move(r);
         continue;
       }

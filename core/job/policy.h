@@ -43,9 +43,6 @@ struct JobPolicy {
   int32_t core_percent = 60;   // measured within this percent of a patch's radius, in rings
   double sample_bias = 0.025;  // a later candidate wins on a sample by this share of sigma^2
 
-  // A run that leaves its input rougher ("A run that leaves its input rougher is not taken").
-  double no_gain_fold_share = 2e-4;  // more new folded edges than this share of the faces: not taken
-
   // Fold repair ("Fold repair, within 0.2 h").
   double fold_angle_deg = 120.0;        // two faces across an edge further apart than this are folded
   double rim_needle_angle_deg = 160.0;  // a rim vertex with a face angle above this is folded
@@ -90,7 +87,6 @@ void VisitPolicy(JobPolicy& policy, Visit visit) {
   visit("max_patches", policy.max_patches);
   visit("core_percent", policy.core_percent);
   visit("sample_bias", policy.sample_bias);
-  visit("no_gain_fold_share", policy.no_gain_fold_share);
   visit("fold_angle_deg", policy.fold_angle_deg);
   visit("rim_needle_angle_deg", policy.rim_needle_angle_deg);
   visit("fold_repair_rounds", policy.fold_repair_rounds);

@@ -189,27 +189,13 @@ void RestoreVolume(Vec3* pos, const Topology& topo, const uint8_t* role, double 
   }
 }
 
-Roughness RoughnessOf(const std::vector<Vec3>& pos, const Mesh& mesh, const Topology& topo, const JobPolicy& policy) {
-  Roughness r;
+double SurfaceArea(const std::vector<Vec3>& pos, const Mesh& mesh, const Topology& topo) {
+  double area = 0.0;
   for (int32_t f : topo.faces) {
     const Triangle& t = mesh.triangles[f];
-    r.area += 0.5 * Norm(Cross(pos[t[1]] - pos[t[0]], pos[t[2]] - pos[t[0]]));
+    area += 0.5 * Norm(Cross(pos[t[1]] - pos[t[0]], pos[t[2]] - pos[t[0]]));
   }
-  const double cos_fold = FoldCosine(policy);
-  for (int32_t v = 0; v < topo.num_vertices(); ++v) {
-    if (topo.kind[v] != VertexKind::kInterior) continue;
-    // Each folded edge once: from its lower interior end.
-    ForFoldedEdges(pos.data(), topo, v, cos_fold, [&](int32_t w) {
-      r.folds += topo.kind[w] != VertexKind::kInterior || v < w;
-      return false;
-    });
-  }
-  return r;
-}
-
-bool Rougher(const Roughness& after, const Roughness& before, size_t faces, const JobPolicy& policy) {
-  return after.area > before.area ||
-         static_cast<double>(after.folds - before.folds) > policy.no_gain_fold_share * static_cast<double>(faces);
+  return area;
 }
 
 void RemoveOutliers(Mesh& mesh, const Topology& topo, double h, double threshold_h, int rounds,

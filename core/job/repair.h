@@ -94,19 +94,9 @@ double EnclosedVolume(const Vec3* pos, const Topology& topo, int threads);
 // distance that gives a closed mesh back `volume`; leaves it when that is more than h.
 void RestoreVolume(Vec3* pos, const Topology& topo, const uint8_t* role, double h, int threads, double volume);
 
-// How rough a surface is, for telling a run that made its input worse: the area of its usable
-// faces and its folded edges (the two faces of an edge at an interior vertex facing more than
-// fold_angle_deg apart). Noise adds area and folds; a run that removes noise takes both away.
-struct Roughness {
-  double area = 0.0;
-  int64_t folds = 0;
-};
-Roughness RoughnessOf(const std::vector<Vec3>& pos, const Mesh& mesh, const Topology& topo,
-                      const JobPolicy& policy = kPolicy);
-
-// True when `after` is rougher than `before` (the same mesh's): more area, or more folded edges
-// than no_gain_fold_share of the faces allows. The job does not take such a run.
-bool Rougher(const Roughness& after, const Roughness& before, size_t faces, const JobPolicy& policy = kPolicy);
+// The area of the usable faces of `mesh` at positions `pos`: noise adds area, and a run that
+// removes noise takes it away. The job does not take a run that leaves its input more area.
+double SurfaceArea(const std::vector<Vec3>& pos, const Mesh& mesh, const Topology& topo);
 
 // True when a face of v's fan turns against the fan's orientation (an interior vertex's: the
 // vector area of its ring polygon, which does not depend on where the vertex is; a boundary
