@@ -2,13 +2,18 @@
 
 #include <cmath>
 #include <cstring>
+#include <memory>
+#include <string>
+#include <vector>
 
+#include "absl/strings/str_cat.h"
 #include "core/io/file_bytes.h"
 #include "core/shapes/added_noise.h"
 #include "core/shapes/parametric.h"
 #include "core/topology.h"
 #include "draco/compression/encode.h"
 #include "draco/mesh/mesh.h"
+#include "draco/metadata/geometry_metadata.h"
 #include "gtest/gtest.h"
 #include "tests/hostile_inputs.h"
 #include "tests/test_data.h"
@@ -20,6 +25,22 @@ Mesh FloatNoisySphere(int level) {
   Mesh m = Icosphere(level);
   AddUniformNoise(m, 0.3, 11);
   for (Vec3& p : m.positions) p = RoundToFloat(p);
+  return m;
+}
+
+// FloatNoisySphere(1) and one more point, n, a copy of vertex 0 that half of vertex 0's faces
+// use instead: a seam that DracoMesh welds back into vertex 0.
+Mesh SphereWithASeamCopy() {
+  Mesh m = FloatNoisySphere(1);
+  const int32_t n = m.num_vertices();
+  m.positions.push_back(m.positions[0]);
+  int32_t split = 0;
+  for (Triangle& t : m.triangles) {
+    for (int32_t& v : t) {
+      if (v == 0 && split++ % 2 == 0) v = n;
+    }
+  }
+  EXPECT_GT(split, 1);
   return m;
 }
 
@@ -171,16 +192,8 @@ TEST(DracoCodecTest, ExtentTooSmallToQuantizeIsRefused) {
 // A job takes the welded mesh instead of copying it; Encode() then still knows the vertex
 // count and writes each vertex back to every point welded into it.
 TEST(DracoCodecTest, TakenWeldedMeshEncodesBackToEveryPoint) {
-  Mesh m = FloatNoisySphere(1);
-  const int32_t n = m.num_vertices();
-  m.positions.push_back(m.positions[0]);  // point n: a seam copy of vertex 0 for half its faces
-  int32_t split = 0;
-  for (Triangle& t : m.triangles) {
-    for (int32_t& v : t) {
-      if (v == 0 && split++ % 2 == 0) v = n;
-    }
-  }
-  ASSERT_GT(split, 1);
+  const Mesh m = SphereWithASeamCopy();
+  const int32_t n = m.num_vertices() - 1;
   absl::StatusOr<std::string> bytes = EncodeDraco(m);
   ASSERT_TRUE(bytes.ok()) << bytes.status();
   absl::StatusOr<DracoMesh> dm = DracoMesh::Decode(*bytes);
@@ -299,6 +312,107 @@ TEST(DracoCodecTest, SeededCorruptionNeverCrashes) {
   }
   EXPECT_EQ(decoded + refused, 3000);
   EXPECT_GT(refused, 1000);
+}
+
+// DracoMesh::Encode's extra attributes: each vertex's value reaches every point of the vertex
+// (its seam copies too) in the type given, and an attribute of the same name is replaced, so
+// each name is there once and its metadata names the new values.
+TEST(DracoCodecTest, ExtraAttributesReachEveryPointAndReplaceTheirName) {
+  Mesh m = SphereWithASeamCopy();
+  const int32_t n = m.num_vertices() - 1;
+  m.properties.push_back({"confidence", "float", std::vector<double>(n + 1, 9.0)});
+  absl::StatusOr<DracoMesh> dm = DracoMesh::Decode(*EncodeDraco(m));
+  ASSERT_TRUE(dm.ok()) << dm.status();
+  ASSERT_EQ(dm->welded().num_vertices(), n);
+  std::vector<uint8_t> labels(n);
+  std::vector<float> weights(n);
+  for (int32_t v = 0; v < n; ++v) {
+    labels[v] = static_cast<uint8_t>(v % 7 + 1);
+    weights[v] = 0.25f * v;
+  }
+  absl::StatusOr<std::string> out = dm->Encode(dm->welded(), {}, {{"label", labels}, {"confidence", weights}});
+  ASSERT_TRUE(out.ok()) << out.status();
+
+  std::unique_ptr<draco::Mesh> raw = *DecodeDracoMesh(*out);
+  int confidences = 0;
+  for (int32_t i = 0; i < raw->num_attributes(); ++i) {
+    std::string name;
+    const draco::AttributeMetadata* md = raw->GetAttributeMetadataByAttributeId(i);
+    if (md != nullptr && md->GetEntryString("name", &name) && name == "confidence") ++confidences;
+  }
+  EXPECT_EQ(confidences, 1);
+  EXPECT_EQ(raw->GetNamedAttribute(draco::GeometryAttribute::GENERIC, 0)->data_type(), draco::DT_UINT8);
+  absl::StatusOr<std::vector<float>> label = DecodeDracoAttribute(*out, "label");
+  absl::StatusOr<std::vector<float>> confidence = DecodeDracoAttribute(*out, "confidence");
+  ASSERT_TRUE(label.ok() && confidence.ok()) << label.status() << confidence.status();
+  ASSERT_EQ(label->size(), static_cast<size_t>(n + 1));
+  ASSERT_EQ(confidence->size(), static_cast<size_t>(n + 1));
+  for (int32_t p = 0; p <= n; ++p) {
+    const int32_t v = p < n ? p : 0;
+    EXPECT_EQ((*label)[p], labels[v]) << p;
+    EXPECT_EQ((*confidence)[p], weights[v]) << p;
+  }
+
+  const absl::Status short_one = dm->Encode(dm->welded(), {}, {{"label", std::vector<uint8_t>(n - 1)}}).status();
+  EXPECT_EQ(short_one.code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_EQ(short_one.message(), absl::StrCat("attribute 'label' has ", n - 1, " values for ", n, " vertices"));
+  EXPECT_EQ(DecodeDracoAttribute(*out, "quality").status().code(), absl::StatusCode::kNotFound);
+}
+
+// A decoded mesh keeps the first TEX_COORD, NORMAL of 3 and COLOR of 3 or more components, and
+// each named one-component attribute as a vertex property; every other attribute is named in
+// `dropped`, with its index, type, name and components.
+TEST(DracoCodecTest, AttributesAMeshCannotHoldAreNamedAsDropped) {
+  draco::Mesh dm;
+  dm.set_num_points(3);
+  auto add = [&dm](draco::GeometryAttribute::Type type, int components, draco::DataType dt, const char* name) {
+    draco::GeometryAttribute ga;
+    ga.Init(type, nullptr, components, dt, dt == draco::DT_UINT8, draco::DataTypeLength(dt) * components, 0);
+    const int id = dm.AddAttribute(ga, /*identity_mapping=*/true, 3);
+    for (uint32_t p = 0; p < 3; ++p) {
+      const float f[4] = {p == 1 ? 1.0f : 0.0f, p == 2 ? 1.0f : 0.0f, 0.5f, 0.5f};
+      const uint16_t u16[4] = {static_cast<uint16_t>(100 * p), 1, 2, 3};
+      const uint8_t u8[4] = {static_cast<uint8_t>(100 * p), 1, 2, 3};
+      const void* value = dt == draco::DT_FLOAT32  ? static_cast<const void*>(f)
+                          : dt == draco::DT_UINT16 ? static_cast<const void*>(u16)
+                                                   : static_cast<const void*>(u8);
+      dm.attribute(id)->SetAttributeValue(draco::AttributeValueIndex(p), value);
+    }
+    if (name != nullptr) {
+      auto metadata = std::make_unique<draco::AttributeMetadata>();
+      metadata->AddEntryString("name", name);
+      dm.AddAttributeMetadata(id, std::move(metadata));
+    }
+  };
+  add(draco::GeometryAttribute::POSITION, 3, draco::DT_FLOAT32, nullptr);
+  add(draco::GeometryAttribute::TEX_COORD, 2, draco::DT_FLOAT32, nullptr);
+  add(draco::GeometryAttribute::TEX_COORD, 2, draco::DT_FLOAT32, nullptr);  // a second set
+  add(draco::GeometryAttribute::GENERIC, 1, draco::DT_FLOAT32, nullptr);    // no name
+  add(draco::GeometryAttribute::GENERIC, 2, draco::DT_FLOAT32, "pair");     // two components
+  add(draco::GeometryAttribute::GENERIC, 1, draco::DT_UINT16, "quality");   // a property
+  add(draco::GeometryAttribute::NORMAL, 2, draco::DT_FLOAT32, nullptr);     // not 3 components
+  add(draco::GeometryAttribute::COLOR, 4, draco::DT_UINT8, nullptr);        // normalized: 0..1
+  dm.AddFace({draco::PointIndex(0), draco::PointIndex(1), draco::PointIndex(2)});
+  draco::Encoder encoder;
+  encoder.SetEncodingMethod(draco::MESH_SEQUENTIAL_ENCODING);
+  draco::EncoderBuffer buf;
+  ASSERT_TRUE(encoder.EncodeMeshToBuffer(dm, &buf).ok());
+
+  std::vector<std::string> dropped;
+  absl::StatusOr<Mesh> m = DecodeDraco(std::string_view(buf.data(), buf.size()), &dropped);
+  ASSERT_TRUE(m.ok()) << m.status();
+  EXPECT_EQ(dropped,
+            (std::vector<std::string>{
+                "Draco attribute 2 (TEX_COORD, 2 components)", "Draco attribute 3 (GENERIC, 1 components)",
+                "Draco attribute 4 (GENERIC 'pair', 2 components)", "Draco attribute 6 (NORMAL, 2 components)"}));
+  EXPECT_EQ(m->uvs.values, (std::vector<double>{0, 0, 1, 0, 0, 1}));
+  EXPECT_EQ(m->uvs.corners, (std::vector<int32_t>{0, 1, 2}));
+  EXPECT_TRUE(m->normals.empty());
+  ASSERT_EQ(m->properties.size(), 1u);
+  EXPECT_EQ(m->properties[0].name, "quality");
+  EXPECT_EQ(m->properties[0].type, "float");
+  EXPECT_EQ(m->properties[0].values, (std::vector<double>{0, 100, 200}));
+  EXPECT_EQ(m->colors, (std::vector<Rgb>{{0, 1, 2}, {100, 1, 2}, {200, 1, 2}}));
 }
 
 }  // namespace
