@@ -1,8 +1,14 @@
 #include "core/attributes.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace meshsmooth {
+
+bool AllFloat32(const std::vector<double>& values) {
+  return std::all_of(values.begin(), values.end(),
+                     [](double v) { return !std::isfinite(v) || static_cast<double>(static_cast<float>(v)) == v; });
+}
 
 std::optional<std::vector<double>> PerVertexValues(const Mesh& mesh, const CornerAttribute& a) {
   if (a.empty() || a.corners.size() != 3 * mesh.triangles.size()) return std::nullopt;

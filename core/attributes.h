@@ -14,6 +14,11 @@ namespace meshsmooth {
 // attribute is empty, its corners do not match the triangles, or some vertex has two values.
 std::optional<std::vector<double>> PerVertexValues(const Mesh& mesh, const CornerAttribute& a);
 
+// True when float32 holds every value exactly (infinities and NaN count as held): the writers
+// store such values (texture coordinates, vertex properties) as float32, bit for bit, and the
+// others as float64.
+bool AllFloat32(const std::vector<double>& values);
+
 // Unit normals from the positions, laid out as `layout` (entries and corners kept): each entry
 // gets the area-weighted normal of the usable triangles whose corners name it, so a vertex with
 // several entries (a hard edge) keeps them apart. An empty layout gives one entry per vertex.

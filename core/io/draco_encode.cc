@@ -1,12 +1,12 @@
 // Mesh -> Draco bytes: the points (one per vertex, and one per seam, SplitAtSeams), their
 // positions and attributes, the faces over them, and Draco's encoder.
 #include <algorithm>
-#include <cmath>
 #include <new>
 #include <tuple>
 
 #include "absl/container/flat_hash_map.h"
 #include "absl/strings/str_cat.h"
+#include "core/attributes.h"
 #include "core/io/draco_checks.h"
 #include "core/io/draco_codec.h"
 #include "core/io/draco_convert.h"
@@ -14,12 +14,6 @@
 
 namespace meshsmooth {
 namespace {
-
-// True when every value is a float32 exactly (so a float32 attribute carries it bit for bit).
-bool AllFloat(const std::vector<double>& values) {
-  return std::all_of(values.begin(), values.end(),
-                     [](double v) { return !std::isfinite(v) || static_cast<double>(static_cast<float>(v)) == v; });
-}
 
 // Adds an attribute of `components` values per point, float32 when that holds every value
 // exactly and float64 otherwise; `value(p, out)` writes point p's values as doubles.
@@ -79,7 +73,7 @@ void AddAttributes(const Mesh& mesh, const DracoPoints& points, draco::Mesh& dm)
     }
   };
   if (!points.uv.empty()) {
-    AddFloatAttribute(dm, draco::GeometryAttribute::TEX_COORD, 2, AllFloat(mesh.uvs.values),
+    AddFloatAttribute(dm, draco::GeometryAttribute::TEX_COORD, 2, AllFloat32(mesh.uvs.values),
                       [&](uint32_t p, double* v) { entry(mesh.uvs, points.uv[p], 2, v); });
   }
   if (!points.normal.empty()) {
@@ -100,7 +94,7 @@ void AddAttributes(const Mesh& mesh, const DracoPoints& points, draco::Mesh& dm)
   }
   for (const VertexProperty& prop : mesh.properties) {
     if (prop.values.size() != n) continue;
-    const int id = AddFloatAttribute(dm, draco::GeometryAttribute::GENERIC, 1, AllFloat(prop.values),
+    const int id = AddFloatAttribute(dm, draco::GeometryAttribute::GENERIC, 1, AllFloat32(prop.values),
                                      [&](uint32_t p, double* v) { v[0] = prop.values[points.vertex[p]]; });
     NameAttribute(dm, id, prop.name);
   }

@@ -2,7 +2,6 @@
 // coordinates that are one per vertex, the colours and the vertex properties; a face element of
 // triangles, with MeshLab's per-corner `texcoord` lists when texture coordinates differ at a
 // vertex. Binary files are little-endian.
-#include <algorithm>
 #include <bit>
 #include <charconv>
 #include <cmath>
@@ -72,12 +71,6 @@ void AppendText(std::string& out, PlyType t, double value) {
   out += ' ';
 }
 
-// True when every value is a float32 exactly.
-bool AllFloat(const std::vector<double>& values) {
-  return std::all_of(values.begin(), values.end(),
-                     [](double v) { return !std::isfinite(v) || static_cast<double>(static_cast<float>(v)) == v; });
-}
-
 // InvalidArgument unless the colours are one per vertex (or none) and every vertex property has
 // one value per vertex and a PLY type.
 absl::Status CheckWritable(const Mesh& mesh) {
@@ -130,7 +123,7 @@ PlyLayout::PlyLayout(const Mesh& mesh, bool double_positions)
       normals(PerVertexValues(mesh, mesh.normals)),
       vertex_uvs(PerVertexValues(mesh, mesh.uvs)),
       corner_uvs(!mesh.uvs.empty() && !vertex_uvs.has_value() && mesh.uvs.corners.size() == 3 * mesh.triangles.size()),
-      uv_type(!mesh.uvs.empty() && !AllFloat(mesh.uvs.values) ? PlyType::kF64 : PlyType::kF32),
+      uv_type(!mesh.uvs.empty() && !AllFloat32(mesh.uvs.values) ? PlyType::kF64 : PlyType::kF32),
       with_colors(!mesh.colors.empty()) {
   static constexpr std::string_view kNormal[] = {"nx", "ny", "nz"}, kUv[] = {"s", "t"};
   if (normals.has_value()) {
