@@ -3,11 +3,12 @@
 // has the figures that chose them.
 //
 // Every run (JobRule) reads the input's noise (NoiseEstimate, core/measure/noise.h). Below
-// no_noise_h there is nothing to remove and the run does no iteration: a clean mesh comes back as it went in; so does a
-// mesh without a reliable estimate (too few fits, or a mesh almost all creases), and one whose detail-free estimate is
-// below detail_only_h (fine detail, not noise) unless its noise turns the faces visibly. After the run, on the
-// positions it returns: the folds are repaired (repair.h) and a closed mesh gets its volume back (every flow with a
-// step loses some: a bias of the flow, not noise).
+// no_noise_h there is nothing to remove and the run does no iteration: a clean mesh comes back as
+// it went in; so does a mesh without a reliable estimate (too few fits, or a mesh almost all
+// creases), and one whose detail-free estimate is below detail_only_h (fine detail, not noise)
+// unless its noise turns the faces visibly. After the run, on the positions it returns: the folds
+// are repaired (repair.h) and a closed mesh gets its volume back (every flow with a step loses
+// some: a bias of the flow, not noise).
 //
 // RiskStop keeps the iteration whose error to the noise-free surface is least by Stein's
 // unbiased risk estimate (SURE; Stein 1981), in its Monte-Carlo form for any denoiser (Ramani,
