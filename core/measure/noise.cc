@@ -47,6 +47,17 @@ constexpr size_t kMaxGather = 1024;
 // ... and a third ring, for the wide fits, from this many times as many.
 constexpr size_t kWideGather = 4;
 constexpr int64_t kMinWellPosedPerTried = 4;  // one in four
+// A rim vertex's plane (RobustPlaneNormal) is chosen among at most this many planes through
+// three of its points: all of them for up to 13 points (286), else this many drawn at random.
+// With a fifth of the points thrown, 300 draws all miss a clean triple with probability 0.49^300.
+constexpr int64_t kLmedsTriples = 300;
+// ... and refitted to the points within this many robust scales of the best one (Rousseeuw and
+// Leroy 1987: 2.5, a Gaussian's 98.8%) or within kLmedsFloorH mean edges, whichever is more: a
+// second ring reaches about 2 h from its vertex, so a surface whose curvature radius is 2 h or
+// more sags by at most 1 h below its tangent plane there, and those points are the surface (the
+// plane through half of a curved ring's points leaves the rest further off than 2.5 scales).
+constexpr double kLmedsInlierScales = 2.5;
+constexpr double kLmedsFloorH = 1.0;
 // The wide fits (first to third rings) of the detail-free estimate run on at most about this
 // many of the vertices tried (every k-th one): each median then has a relative standard error of
 // ~3.7%, and the pair's errors largely cancel (a vertex's two residuals correlate 0.6-0.9). They
@@ -264,12 +275,113 @@ double Median(std::vector<double>& values) {
   return *mid;
 }
 
+// The unit normal of the least-squares plane (principal components) through pos[ids]; none when
+// the points span less than a plane.
+std::optional<Vec3> PlaneNormal(const Vec3* pos, const std::vector<int32_t>& ids) {
+  if (ids.size() < 3) return std::nullopt;
+  Vec3 centre;
+  for (int32_t u : ids) centre += pos[u];
+  centre *= 1.0 / static_cast<double>(ids.size());
+  Eigen::Matrix3d moment = Eigen::Matrix3d::Zero();
+  for (int32_t u : ids) {
+    const Vec3 d = pos[u] - centre;
+    const Eigen::Vector3d e(d.x, d.y, d.z);
+    moment += e * e.transpose();
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> pca(moment);
+  if (pca.info() != Eigen::Success || !(pca.eigenvalues()(1) > 0.0)) return std::nullopt;
+  const Eigen::Vector3d least = pca.eigenvectors().col(0);  // eigenvalues ascending
+  const Vec3 unit{least(0), least(1), least(2)};
+  if (!IsFinite(unit)) return std::nullopt;
+  return unit;
+}
+
+// The normal of the least-squares plane through pos[ids], fitted again without the points more
+// than three times the median offset off it; `ids` keeps the points of the last fit.
+std::optional<Vec3> TrimmedPlaneNormal(const Vec3* pos, std::vector<int32_t>& ids, RingScratch& s) {
+  const std::optional<Vec3> unit = PlaneNormal(pos, ids);
+  if (!unit) return std::nullopt;
+  Vec3 centre;
+  for (int32_t u : ids) centre += pos[u];
+  centre *= 1.0 / static_cast<double>(ids.size());
+  s.off.resize(ids.size());
+  for (size_t i = 0; i < ids.size(); ++i) s.off[i] = std::abs(Dot(pos[ids[i]] - centre, *unit));
+  s.sorted = s.off;
+  const double keep = 3.0 * Median(s.sorted);
+  size_t kept = 0;
+  for (size_t i = 0; i < ids.size(); ++i) {
+    if (s.off[i] <= keep) ids[kept++] = ids[i];
+  }
+  if (kept == ids.size() || kept < 3) return unit;
+  ids.resize(kept);
+  return PlaneNormal(pos, ids);
+}
+
+// The normal of the plane through pos[ids] that resists points thrown off it: least median of
+// squares (Rousseeuw 1984) over planes through three of the points (all triples, or kLmedsTriples
+// drawn with a generator seeded by v), then the least-squares plane of the points within
+// kLmedsInlierScales robust scales of it or kLmedsFloorH mean edges `h`. A least-squares plane
+// through a rim's dozen points, three of them thrown 2 h, leans by ~45 degrees; least median of
+// squares ignores up to half. `ids` keeps the points of the last fit.
+std::optional<Vec3> RobustPlaneNormal(const Vec3* pos, std::vector<int32_t>& ids, int32_t v, double h, RingScratch& s) {
+  const auto n = static_cast<int64_t>(ids.size());
+  if (n < 3) return std::nullopt;
+  if (n == 3) return PlaneNormal(pos, ids);
+  const int64_t all = n * (n - 1) * (n - 2) / 6;
+  uint64_t state = 0x9E3779B97F4A7C15ull ^ static_cast<uint64_t>(v);
+  auto draw = [&]() {  // splitmix64
+    uint64_t z = (state += 0x9E3779B97F4A7C15ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return static_cast<int64_t>((z ^ (z >> 31)) % static_cast<uint64_t>(n));
+  };
+  double best = std::numeric_limits<double>::infinity();
+  Vec3 best_point, best_normal;
+  s.off.resize(ids.size());
+  auto try_plane = [&](int64_t i, int64_t j, int64_t k) {
+    const Vec3 a = pos[ids[i]];
+    const Vec3 normal = Cross(pos[ids[j]] - a, pos[ids[k]] - a);
+    const double length = Norm(normal);
+    if (!(length > 0.0) || !std::isfinite(length)) return;
+    const Vec3 unit = normal * (1.0 / length);
+    for (int64_t m = 0; m < n; ++m) s.off[m] = std::abs(Dot(pos[ids[m]] - a, unit));
+    s.sorted = s.off;
+    const double median = Median(s.sorted);
+    if (median < best) {
+      best = median;
+      best_point = a;
+      best_normal = unit;
+    }
+  };
+  if (all <= kLmedsTriples) {
+    for (int64_t i = 0; i < n; ++i)
+      for (int64_t j = i + 1; j < n; ++j)
+        for (int64_t k = j + 1; k < n; ++k) try_plane(i, j, k);
+  } else {
+    for (int t = 0; t < kLmedsTriples; ++t) {
+      const int64_t i = draw(), j = draw(), k = draw();
+      if (i != j && j != k && i != k) try_plane(i, j, k);
+    }
+  }
+  if (!std::isfinite(best)) return PlaneNormal(pos, ids);
+  const double cut = std::max(kLmedsInlierScales * kMadToSigma * best, kLmedsFloorH * h);
+  size_t kept = 0;
+  for (int32_t u : ids) {
+    if (std::abs(Dot(pos[u] - best_point, best_normal)) <= cut) ids[kept++] = u;
+  }
+  ids.resize(kept);
+  const std::optional<Vec3> refined = PlaneNormal(pos, ids);
+  return refined ? refined : std::optional<Vec3>(best_normal);
+}
+
 // The median height above v of its ring's inliers (the vertices not flagged in `skip`, when at
-// least three are not; else all of them), along the normal of the plane that fits the inliers of
-// its first and second rings (principal components: a dozen points or more, where the ring's own
-// polygon leans by tens of degrees when some of it is thrown), into `axis`. None for a
+// least three are not; else all of them), along the normal of a plane through the inliers of its
+// first and second rings, into `axis`: a dozen points or more, where the ring's own polygon leans
+// by tens of degrees when some of it is thrown. On the rim, where three thrown points lean even
+// that plane by tens of degrees, the robust one (RobustPlaneNormal); inside, the least-squares
+// plane, trimmed (a robust plane there fails on fans of slivers: docs/decisions.md). None for a
 // degenerate ring.
-std::optional<double> RingMedianHeight(const Vec3* pos, const Topology& topo, int32_t v, const uint8_t* skip,
+std::optional<double> RingMedianHeight(const Vec3* pos, const Topology& topo, int32_t v, double h, const uint8_t* skip,
                                        RingScratch& s, Vec3* axis = nullptr) {
   const int32_t first = topo.ring_offsets[v], last = topo.ring_offsets[v + 1];
   if (last - first < 3) return std::nullopt;
@@ -290,36 +402,10 @@ std::optional<double> RingMedianHeight(const Vec3* pos, const Topology& topo, in
   }
   std::sort(ids.begin(), ids.end());
   ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
-  // The plane, then again without the points far off it (thrown vertices not flagged yet).
-  Vec3 unit;
-  for (int pass = 0; pass < 2; ++pass) {
-    if (ids.size() < 3) return std::nullopt;
-    Vec3 centre;
-    for (int32_t u : ids) centre += pos[u];
-    centre *= 1.0 / static_cast<double>(ids.size());
-    Eigen::Matrix3d moment = Eigen::Matrix3d::Zero();
-    for (int32_t u : ids) {
-      const Vec3 d = pos[u] - centre;
-      const Eigen::Vector3d e(d.x, d.y, d.z);
-      moment += e * e.transpose();
-    }
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> pca(moment);
-    if (pca.info() != Eigen::Success || !(pca.eigenvalues()(1) > 0.0)) return std::nullopt;
-    const Eigen::Vector3d least = pca.eigenvectors().col(0);  // eigenvalues ascending
-    unit = Vec3{least(0), least(1), least(2)};
-    if (!IsFinite(unit)) return std::nullopt;
-    if (pass == 1) break;
-    s.off.resize(ids.size());
-    for (size_t i = 0; i < ids.size(); ++i) s.off[i] = std::abs(Dot(pos[ids[i]] - centre, unit));
-    s.sorted = s.off;
-    const double keep = 3.0 * Median(s.sorted);
-    size_t kept = 0;
-    for (size_t i = 0; i < ids.size(); ++i) {
-      if (s.off[i] <= keep) ids[kept++] = ids[i];
-    }
-    if (kept == ids.size() || kept < 3) break;
-    ids.resize(kept);
-  }
+  const std::optional<Vec3> normal =
+      topo.kind[v] == VertexKind::kBoundary ? RobustPlaneNormal(pos, ids, v, h, s) : TrimmedPlaneNormal(pos, ids, s);
+  if (!normal) return std::nullopt;
+  const Vec3 unit = *normal;
   s.heights.clear();
   for (int32_t k = first; k < last; ++k) {
     if (inlier(topo.ring[k])) s.heights.push_back(Dot(pos[topo.ring[k]] - pos[v], unit));
@@ -430,9 +516,9 @@ std::optional<double> LocalFit::ResidualH(const Mesh& mesh, const Topology& topo
   return std::abs(fit->r) / std::sqrt(1.0 + fit->g);
 }
 
-std::optional<double> LocalFit::RingHeight(const Vec3* pos, const Topology& topo, int32_t v, const uint8_t* skip,
-                                           Vec3* axis) {
-  return RingMedianHeight(pos, topo, v, skip, buffers_->ring, axis);
+std::optional<double> LocalFit::RingHeight(const Vec3* pos, const Topology& topo, int32_t v, double h,
+                                           const uint8_t* skip, Vec3* axis) {
+  return RingMedianHeight(pos, topo, v, h, skip, buffers_->ring, axis);
 }
 
 }  // namespace meshsmooth
