@@ -126,7 +126,7 @@ class FlowRun {
   // pass, no threshold, no cap on a vertex's move, no boundary curve (its umbrella is not
   // covered by the floor).
   std::optional<double> LinearStepFloor() const {
-    if (kernel_->passes() != 1 || p_.adaptive != AdaptiveMode::kNone) return std::nullopt;
+    if (kernel_->passes() != 1 || p_.adaptive != AdaptiveMode::kNone || partial_) return std::nullopt;
     if (!std::isinf(ctx_.max_step_sq)) return std::nullopt;
     if (std::any_of(role_.begin(), role_.end(), [](uint8_t r) { return r == kCurve; })) return std::nullopt;
     return kernel_->LinearStepFloor(lambda_);
@@ -171,11 +171,14 @@ class FlowRun {
       kernel_->Prepare(ctx_, in, n_, threads_);
       const FlowKernel& k = *kernel_;
       Vec3* const dst = out->data();
-      ForBlocks(n_, threads_,
-                [&](int32_t b, int32_t begin, int32_t end) { stats_[b] = k.Step(ctx_, in, dst, begin, end); });
+      ForBlocks(n_, threads_, [&](int32_t b, int32_t begin, int32_t end) {
+        stats_[b] = k.Step(ctx_, in, dst, begin, end);
+        if (partial_) ScaleMoves(in, dst, begin, end);
+      });
       in = dst;
     }
-    if (passes > 1) MeasureWholeIteration(cur.data(), in);
+    // Scaled moves are measured anew: the kernel's statistics are of its unscaled ones.
+    if (passes > 1 || partial_) MeasureWholeIteration(cur.data(), in);
     return Reduce(stats_);
   }
 
@@ -216,14 +219,17 @@ class FlowRun {
     if (p_.boundary == BoundaryMode::kFixed && p_.small_hole_edges > 0) {
       small_hole = SmallHoleVertices(topo_, p_.small_hole_edges);
     }
+    const bool strength = !p_.strength.empty();
     for (int32_t v = 0; v < n_; ++v) {
       if (!p_.locked.empty() && p_.locked[v] != 0) continue;
+      if (strength && p_.strength[v] == 0.0f) continue;
       if (topo_.kind[v] == VertexKind::kInterior || (!small_hole.empty() && small_hole[v] != 0)) {
         role_[v] = kFree;
       } else if (topo_.kind[v] == VertexKind::kBoundary && p_.boundary == BoundaryMode::kCurve) {
         role_[v] = kCurve;
       }
       movable_ += role_[v] != kFixed;
+      partial_ |= strength && role_[v] != kFixed && p_.strength[v] < 1.0f;
     }
     blocks_ = (n_ + kBlock - 1) / kBlock;
     all_free_.assign(blocks_, 1);
@@ -259,11 +265,22 @@ class FlowRun {
     for (double& t : threshold_) t *= t_scale_;
   }
 
+  // FlowParams::strength: a pass's move of each movable vertex of strength s < 1 in
+  // [begin, end), from `in` to `out`, scaled by s. Strength 1 is left as the kernel wrote it.
+  void ScaleMoves(const Vec3* in, Vec3* out, int32_t begin, int32_t end) const {
+    const float* const strength = p_.strength.data();
+    for (int32_t v = begin; v < end; ++v) {
+      if (role_[v] == kFixed || strength[v] == 1.0f) continue;
+      out[v] = in[v] + (out[v] - in[v]) * static_cast<double>(strength[v]);
+    }
+  }
+
   // The statistics of a several-pass iteration are of its whole displacement, not its last
-  // pass's.
+  // pass's; so are those of scaled moves (ScaleMoves), which keep the count of capped moves.
   void MeasureWholeIteration(const Vec3* start, const Vec3* end_pos) {
     ForBlocks(n_, threads_, [&](int32_t b, int32_t begin, int32_t end) {
       BlockStats s;
+      if (partial_) s.capped = stats_[b].capped;
       for (int32_t v = begin; v < end; ++v) {
         if (role_[v] == kFixed) continue;
         const double d2 = SquaredNorm(end_pos[v] - start[v]);
@@ -287,6 +304,7 @@ class FlowRun {
   std::unique_ptr<FlowKernel> kernel_;
   std::vector<uint8_t> role_, all_free_;
   int64_t movable_ = 0;
+  bool partial_ = false;  // some movable vertex has a strength below 1 (ScaleMoves)
   int32_t blocks_ = 0;
   int threads_ = 1;
   StepContext ctx_;

@@ -123,6 +123,13 @@ struct FlowParams {
   // Optional per-vertex lock mask (non-zero = keep fixed); empty = none. Vertices on
   // non-manifold edges or vertices and isolated vertices are always fixed.
   std::vector<uint8_t> locked;
+  // Optional per-vertex strength in [0, 1]; empty = 1 everywhere. 0 keeps the vertex where it
+  // is (as `locked` does); a value between scales the vertex's move in every pass of an
+  // iteration (for the normal-filtering flows, each vertex update), 1 is the flow as it is.
+  // The default job also leaves the vertices of strength 0 out of its noise estimate and its
+  // outlier and fold edits, and gives back no more folded faces than the input had
+  // (core/job/default_job.cc).
+  std::vector<float> strength;
 
   // Stop early when the largest displacement of an iteration falls below tolerance * h
   // (0 = run every iteration).
@@ -213,6 +220,10 @@ struct FlowResult {
 
 // InvalidArgument with a message naming the parameter when `p` is out of range for `mesh`.
 absl::Status ValidateFlowParams(const FlowParams& p, int32_t num_vertices);
+
+// InvalidArgument naming the vertex unless `strength` is empty or holds one value in [0, 1]
+// (not NaN) per vertex (FlowParams::strength).
+absl::Status ValidateStrength(const std::vector<float>& strength, int32_t num_vertices);
 
 // Runs the flow on `mesh` (positions change in place; connectivity never does).
 // Errors: InvalidArgument for bad parameters or non-finite input coordinates; Cancelled when

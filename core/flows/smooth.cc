@@ -61,6 +61,22 @@ std::string_view PhaseName(Phase phase) {
   return "smoothing";
 }
 
+absl::Status ValidateStrength(const std::vector<float>& strength, int32_t num_vertices) {
+  if (strength.empty()) return absl::OkStatus();
+  if (strength.size() != static_cast<size_t>(num_vertices)) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("the strength has ", strength.size(), " values for ", num_vertices, " vertices"));
+  }
+  for (size_t v = 0; v < strength.size(); ++v) {
+    // Written so that NaN fails too.
+    if (!(strength[v] >= 0.0f && strength[v] <= 1.0f)) {
+      return absl::InvalidArgumentError(
+          absl::StrFormat("the strength of vertex %d is %g; strengths are in [0, 1]", v, strength[v]));
+    }
+  }
+  return absl::OkStatus();
+}
+
 absl::Status ValidateFlowParams(const FlowParams& p, int32_t num_vertices) {
   // The cotangent kernel addresses coordinates as int32 3 * vertex (operators.h, MeanCurvatureLanes).
   if (num_vertices > std::numeric_limits<int32_t>::max() / 3) {
@@ -112,6 +128,7 @@ absl::Status ValidateFlowParams(const FlowParams& p, int32_t num_vertices) {
     return absl::InvalidArgumentError(
         absl::StrCat("the lock mask has ", p.locked.size(), " entries for ", num_vertices, " vertices"));
   }
+  if (absl::Status s = ValidateStrength(p.strength, num_vertices); !s.ok()) return s;
   if (p.threads < 0) return absl::InvalidArgumentError(absl::StrCat("threads must be >= 0, got ", p.threads));
   return absl::OkStatus();
 }
@@ -134,6 +151,9 @@ absl::StatusOr<FlowResult> SmoothOneFlow(Mesh& mesh, const Topology& topo, const
   ReorderedMesh local = ReorderByMorton(mesh, topo, p.locked, threads);
   FlowParams q = p;
   q.locked = std::move(local.locked);
+  if (!p.strength.empty()) {
+    for (int32_t i = 0; i < n; ++i) q.strength[i] = p.strength[local.order[i]];
+  }
   // The caller's positions are all written back below: their memory is free during the run
   // (24 bytes a vertex off the job's peak).
   std::vector<Vec3>().swap(mesh.positions);

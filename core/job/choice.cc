@@ -134,7 +134,10 @@ struct Sample {
 
 // About `size` vertices of `mesh` in patches grown breadth-first from seeds spread over the
 // vertex order, and the faces among them. The patches' rims are boundaries (fixed in the runs).
-Sample SamplePatches(const Mesh& mesh, const Topology& topo, int32_t size, const JobPolicy& policy) {
+// A seed that `locked` (per vertex; empty: none) holds moves on to the next vertex free to move,
+// so that the patches measure the vertices the job moves.
+Sample SamplePatches(const Mesh& mesh, const Topology& topo, int32_t size, const JobPolicy& policy,
+                     const std::vector<uint8_t>& locked) {
   const int patches = std::clamp(size / policy.min_patch, 1, policy.max_patches);
   const int32_t n = topo.num_vertices();
   std::vector<int32_t> index(n, -1);  // vertex -> sample vertex
@@ -143,7 +146,8 @@ Sample SamplePatches(const Mesh& mesh, const Topology& topo, int32_t size, const
   std::vector<int32_t> queue, depth;  // depth: per sample vertex, rings from its seed
   for (int i = 0; i < patches; ++i) {
     const auto budget = static_cast<size_t>(size) * (i + 1) / patches;
-    const int32_t seed = static_cast<int32_t>(static_cast<int64_t>(n) * i / patches);
+    int32_t seed = static_cast<int32_t>(static_cast<int64_t>(n) * i / patches);
+    while (!locked.empty() && seed + 1 < n && locked[seed] != 0) ++seed;
     if (index[seed] >= 0 || topo.kind[seed] == VertexKind::kIsolated) continue;
     queue.assign(1, seed);
     const size_t first = sample.positions.size();
@@ -190,9 +194,9 @@ namespace {
 
 // The sample's vertices a run may not move: the patches' cuts (not the mesh's boundary), which
 // the risk estimate does not measure either (they leave sample.core), and the mesh's own locked
-// vertices.
-std::vector<uint8_t> SampleLocks(Sample& sample, const Topology& sample_topo, const Topology& topo,
-                                 const FlowParams& q) {
+// vertices. The mesh's strengths (FlowParams::strength) go to the sample's vertices in `on_sample`.
+void SampleLocks(Sample& sample, const Topology& sample_topo, const Topology& topo, const FlowParams& q,
+                 FlowParams& on_sample) {
   std::vector<uint8_t> locked(sample_topo.num_vertices(), 0);
   for (int32_t s = 0; s < sample_topo.num_vertices(); ++s) {
     const int32_t v = sample.origin[s];
@@ -200,7 +204,11 @@ std::vector<uint8_t> SampleLocks(Sample& sample, const Topology& sample_topo, co
     locked[s] = cut || (!q.locked.empty() && q.locked[v] != 0);
     if (cut) sample.core[s] = 0;
   }
-  return locked;
+  on_sample.locked = std::move(locked);
+  on_sample.strength.clear();
+  if (q.strength.empty()) return;
+  on_sample.strength.resize(sample_topo.num_vertices());
+  for (int32_t s = 0; s < sample_topo.num_vertices(); ++s) on_sample.strength[s] = q.strength[sample.origin[s]];
 }
 
 }  // namespace
@@ -212,13 +220,13 @@ absl::StatusOr<FlowResult> SmoothByRisk(Mesh& mesh, const Topology& topo, const 
   const int32_t size = SampleSize(n, policy);
   if (size >= n) return Choose(mesh, topo, q, control, h, noise, policy, nullptr, 0.0, repair_idle);
 
-  Sample sample = SamplePatches(mesh, topo, size, policy);
+  Sample sample = SamplePatches(mesh, topo, size, policy, q.locked);
   const Topology sample_topo = BuildTopology(sample.mesh);
   FlowParams on_sample = q;
   on_sample.reorder = ReorderMode::kNever;  // `core` is in the sample's order
   // The patches' rims are cuts, not the mesh's boundary: they stay fixed and unmeasured
   // whatever the boundary mode. The mesh's own locked vertices stay locked.
-  on_sample.locked = SampleLocks(sample, sample_topo, topo, q);
+  SampleLocks(sample, sample_topo, topo, q, on_sample);
   // The sample runs with the mesh's h (the step of a curvature flow scales with it): its count
   // is then a count of the same iterations.
   const double sigma_h = RiskSigmaH(noise, policy);
@@ -286,11 +294,11 @@ absl::StatusOr<std::optional<FlowResult>> SmoothByTurn(Mesh& mesh, const Topolog
   const int32_t n = mesh.num_vertices();
   if (n <= policy.max_whole_turn_vertices) return ChooseByTurn(mesh, topo, q, control, h, noise, policy, target);
   const int32_t size = SampleSize(n, policy);
-  Sample sample = SamplePatches(mesh, topo, size, policy);
+  Sample sample = SamplePatches(mesh, topo, size, policy, q.locked);
   const Topology sample_topo = BuildTopology(sample.mesh);
   FlowParams on_sample = q;
   on_sample.reorder = ReorderMode::kNever;
-  on_sample.locked = SampleLocks(sample, sample_topo, topo, q);
+  SampleLocks(sample, sample_topo, topo, q, on_sample);
   absl::StatusOr<std::optional<FlowResult>> chosen =
       ChooseByTurn(sample.mesh, sample_topo, on_sample, control, h, noise, policy, target);
   if (!chosen.ok() || !chosen->has_value()) return chosen;

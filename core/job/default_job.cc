@@ -12,9 +12,15 @@
 //      turned as far as the noise turns them (SmoothByTurn, TurnStop).
 //   5. Finish (in every run, JobRule): repair folds, give a closed mesh its volume back.
 //
+// With per-vertex strengths (FlowParams::strength), the vertices of strength 0 are held as
+// locked ones are (no outlier move, fold repair or volume correction moves them) and the noise
+// is read on the others only (their fits); last, the result keeps no more folded faces than the
+// input had (KeepNoMoreFolds, repair.h).
+//
 // A JobPolicy (policy.h) holds every number; docs/quality-method.md says why the method is this one.
 #include "core/job/default_job.h"
 
+#include <algorithm>
 #include <utility>
 #include <vector>
 
@@ -31,6 +37,10 @@ namespace meshsmooth {
 namespace job {
 namespace {
 
+// The vertices the noise estimate leaves out: those of strength 0 (null without strengths; `p`
+// has them in its lock mask, SmoothWithPolicy).
+const uint8_t* NotMeasured(const FlowParams& p) { return p.strength.empty() ? nullptr : p.locked.data(); }
+
 // Step 2: moves the outliers back when the noise reads impulsive; returns how many moved and
 // reads `noise` again. Twice, the second time at the threshold of the noise read without the
 // first pass's outliers, which had pulled their neighbours' fits and raised it.
@@ -41,7 +51,7 @@ int64_t MoveOutliersBack(Mesh& mesh, const Topology& topo, const FlowParams& p, 
   for (int pass = 0; pass < 2 && noise.reliable; ++pass) {
     RemoveOutliers(mesh, topo, h, OutlierThresholdH(noise), policy.outlier_rounds, moved, p.threads, control.stop,
                    p.locked.empty() ? nullptr : p.locked.data(), policy.unfold_rounds);
-    noise = EstimateNoise(mesh, topo, h, p.threads, control.stop);
+    noise = EstimateNoise(mesh, topo, h, p.threads, control.stop, NotMeasured(p));
   }
   int64_t outliers = 0;
   for (uint8_t m : moved) outliers += m;
@@ -54,7 +64,7 @@ absl::StatusOr<FlowResult> SmoothAutomatic(Mesh& mesh, const Topology& topo, con
   if (!ChoosesFlow(p)) q.flow = p.flow.value_or(kDefaultFlow);
   // 1. Every thread the job may use, whatever the mesh's size: the fits are independent and costly.
   ReportPhase(control, Phase::kNoiseEstimate, q.flow.value_or(kDefaultFlow));
-  NoiseEstimate noise = EstimateNoise(mesh, topo, h, p.threads, control.stop);
+  NoiseEstimate noise = EstimateNoise(mesh, topo, h, p.threads, control.stop, NotMeasured(p));
   // 2.
   const int64_t outliers = MoveOutliersBack(mesh, topo, q, control, h, policy, noise);
   if (absl::Status s = control.stop.Check(); !s.ok()) return s;
@@ -96,9 +106,20 @@ absl::StatusOr<FlowResult> SmoothWithPolicy(Mesh& mesh, const Topology& topo, co
   }
   const double h = MeanEdgeLength(mesh, topo);
   FlowParams q = p;
+  // Strength 1 everywhere is no strength: the same run, bit for bit.
+  if (std::all_of(p.strength.begin(), p.strength.end(), [](float s) { return s == 1.0f; })) q.strength.clear();
   // Only the default job moves rims of its own accord (BoundaryMode::kAuto).
   if (q.boundary == BoundaryMode::kAuto && !ChoosesFlow(p)) q.boundary = BoundaryMode::kFixed;
-  if (p.iterations == kAutoIterations) return SmoothAutomatic(mesh, topo, q, control, h, policy);
+  if (p.iterations == kAutoIterations) {
+    if (q.strength.empty()) return SmoothAutomatic(mesh, topo, q, control, h, policy);
+    // Strength 0 holds a vertex as the lock mask does, in every edit of the job.
+    if (q.locked.empty()) q.locked.assign(n, 0);
+    for (int32_t v = 0; v < n; ++v) q.locked[v] |= q.strength[v] == 0.0f;
+    const std::vector<Vec3> input = mesh.positions;
+    absl::StatusOr<FlowResult> result = SmoothAutomatic(mesh, topo, q, control, h, policy);
+    if (result.ok()) KeepNoMoreFolds(mesh.positions.data(), input.data(), mesh, topo);
+    return result;
+  }
   q.flow = p.flow.value_or(kDefaultFlow);
   return flows::SmoothOneFlow(mesh, topo, q, control, h);
 }

@@ -7,6 +7,7 @@
 #include <optional>
 
 #include "core/flows/flow_kernel.h"
+#include "core/measure/folded_faces.h"
 #include "core/measure/noise.h"
 #include "core/normals.h"
 
@@ -264,6 +265,42 @@ void RemoveOutliers(Mesh& mesh, const Topology& topo, double h, double threshold
     if (!any) break;
   }
   UnfoldFans(mesh, topo, unfold_rounds, moved, threads, stop, keep);
+}
+
+int64_t KeepNoMoreFolds(Vec3* pos, const Vec3* input, const Mesh& mesh, const Topology& topo, int max_rounds) {
+  const FaceFolds folds(mesh, topo);
+  const std::vector<uint8_t> before = folds.Folded(input);
+  int64_t allowed = 0;
+  for (uint8_t f : before) allowed += f;
+  const int32_t n = topo.num_vertices();
+  std::vector<uint8_t> back(n, 0);
+  auto put_back = [&](int32_t v) {
+    if (back[v] || pos[v] == input[v]) return;
+    back[v] = 1;
+    pos[v] = input[v];
+  };
+  for (int round = 0;; ++round) {
+    const std::vector<uint8_t> after = folds.Folded(pos);
+    int64_t count = 0;
+    for (uint8_t f : after) count += f;
+    if (count <= allowed) break;
+    if (round == max_rounds) {
+      for (int32_t v = 0; v < n; ++v) put_back(v);
+      break;
+    }
+    for (size_t i = 0; i < after.size(); ++i) {
+      if (!after[i] || before[i]) continue;
+      const auto f = static_cast<int32_t>(i);
+      for (int32_t v : folds.face(f)) put_back(v);
+      for (int32_t g : folds.across(f)) {
+        if (g < 0) continue;
+        for (int32_t v : folds.face(g)) put_back(v);
+      }
+    }
+  }
+  int64_t count = 0;
+  for (uint8_t b : back) count += b;
+  return count;
 }
 
 bool FanFolds(const Vec3* pos, const Topology& topo, int32_t v) {

@@ -111,6 +111,14 @@ bool FanFolds(const Vec3* pos, const Topology& topo, int32_t v);
 int64_t UnfoldFans(Mesh& mesh, const Topology& topo, int rounds, std::vector<uint8_t>& moved, int threads = 0,
                    const StopToken& stop = {}, const uint8_t* keep = nullptr);
 
+// Puts vertices of `pos` back where `input` has them until `pos` has no more folded faces
+// (core/measure/folded_faces.h) than `input`: each round, the vertices of every face folded in
+// `pos` but not in `input` and of the faces across its edges (one of them moved, or the face
+// would be as it was). At most max_rounds rounds, then every vertex goes back. Returns the
+// vertices put back. What the default job does last when it is given strengths: a run pulls
+// its vertices against the fixed ones at a region's edge.
+int64_t KeepNoMoreFolds(Vec3* pos, const Vec3* input, const Mesh& mesh, const Topology& topo, int max_rounds = 64);
+
 // Moves the outliers back (docs/decisions.md, "Outliers"): an interior vertex whose normalised
 // residual (LocalFit::ResidualH, core/measure/noise.h) exceeds `threshold_h`, or a vertex without
 // a fit (a boundary vertex, a ring too small) whose ring's median height (LocalFit::RingHeight)

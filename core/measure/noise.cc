@@ -416,7 +416,8 @@ std::optional<double> RingMedianHeight(const Vec3* pos, const Topology& topo, in
 
 }  // namespace
 
-NoiseEstimate EstimateNoise(const Mesh& mesh, const Topology& topo, double h, int threads, const StopToken& stop) {
+NoiseEstimate EstimateNoise(const Mesh& mesh, const Topology& topo, double h, int threads, const StopToken& stop,
+                            const uint8_t* skip) {
   NoiseEstimate estimate;
   const int32_t n = topo.num_vertices();
   if (!(h > 0.0) || !std::isfinite(h) || n == 0) return estimate;
@@ -444,7 +445,7 @@ NoiseEstimate EstimateNoise(const Mesh& mesh, const Topology& topo, double h, in
 #pragma omp atomic read
       give_up = stopped;
       const int32_t v = i * stride;
-      if (give_up || topo.kind[v] != VertexKind::kInterior) continue;
+      if (give_up || topo.kind[v] != VertexKind::kInterior || (skip != nullptr && skip[v] != 0)) continue;
       const Fan fan = FanAt(mesh.positions.data(), topo, v);
       creases += fan.on_crease;
       residual[i] = std::abs(NormalisedResidual(mesh, topo, v, fan.normal, inv_h, fit_scratch));

@@ -82,8 +82,10 @@ struct NoiseEstimate {
 // The estimate for `mesh`; zero and not reliable when too few vertices have a well-posed fit
 // (fewer than 14 second-ring neighbours, or a ring too degenerate for a cubic). `threads`: 0 = all hardware threads.
 // Deterministic for any thread count. Returns early (an estimate of zero) once `stop` fires.
+// Vertices where `skip` (per vertex; null: none) is non-zero are not fitted (the default job's
+// vertices of strength 0, which no run moves); they still serve in their neighbours' fits.
 NoiseEstimate EstimateNoise(const Mesh& mesh, const Topology& topo, double h, int threads = 0,
-                            const StopToken& stop = {});
+                            const StopToken& stop = {}, const uint8_t* skip = nullptr);
 
 // Two faces of a fan meet at a sharp edge when their normals are more than kCreaseSharpDeg apart,
 // flat when less than kCreaseFlatDeg; a mesh with more than kMaxCreaseShare of the vertices tried
