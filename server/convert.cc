@@ -56,6 +56,7 @@ absl::StatusOr<JobParams> FromProto(const v1::JobSpec& spec, int max_iterations)
   if (absl::Status s = CheckJobId(spec.job_id()); !s.ok()) return s;
   JobParams j;
   j.job_id = spec.job_id();
+  j.strength_attribute = spec.strength_attribute();
   FlowParams& p = j.flow;
   if (!spec.flow().empty()) {  // empty: the default job's rule (FlowParams::flow)
     absl::StatusOr<FlowId> flow = ParseFlowName(spec.flow());

@@ -26,6 +26,8 @@ struct JobParams {
   bool detect_features = false;
   FeatureOptions features;
   std::string job_id;  // the client's JobSpec.job_id (checked); empty = the server makes one up
+  // JobSpec.strength_attribute: the upload's attribute that fills flow.strength; empty = none.
+  std::string strength_attribute;
 };
 
 // JobSpec.job_id's longest length.

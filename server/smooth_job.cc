@@ -2,6 +2,9 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
@@ -32,6 +35,17 @@ constexpr int64_t kQuadraticWorkFloor = int64_t{1} << 26;
 Clock::time_point Deadline(Clock::time_point start, double seconds) {
   if (!(seconds > 0.0) || seconds > 1e9) return Clock::time_point::max();
   return start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds));
+}
+
+// JobSpec.strength_attribute's values, one per vertex of the upload (empty when the spec names
+// none); InvalidArgument naming the field for an attribute the job cannot take.
+absl::StatusOr<std::vector<float>> ReadStrength(const DracoMesh& draco, const std::string& name) {
+  if (name.empty()) return std::vector<float>{};
+  absl::StatusOr<std::vector<float>> values = draco.VertexValues(name);
+  absl::Status s = values.status();
+  if (s.ok()) s = ValidateStrength(*values, static_cast<int32_t>(values->size()));
+  if (!s.ok()) return absl::InvalidArgumentError(absl::StrCat("strength_attribute '", name, "': ", s.message()));
+  return values;
 }
 
 }  // namespace
@@ -121,9 +135,11 @@ void SmoothJob::SendAccepted(const ValidationReport& validation, int64_t seam_po
 }
 
 absl::StatusOr<FlowResult> SmoothJob::SmoothMesh(Mesh& mesh, const Topology& topo, Clock::time_point decoded,
-                                                 const StopToken& stop, JobReport& report) {
+                                                 const StopToken& stop, std::vector<float> strength,
+                                                 JobReport& report) {
   FlowParams flow = params_.flow;
   flow.threads = options_.threads_per_job;
+  flow.strength = std::move(strength);
   RunControl control;
   control.stop = stop;                                            // the job's cancel flag and what is left of its time
   Clock::time_point last_progress = decoded - kProgressInterval;  // the first iteration is reported
@@ -210,6 +226,11 @@ void SmoothJob::Run() {
                                                                   " vertices, above this server's limit of ",
                                                                   options_.max_vertices, " (--max-vertices)")));
   }
+  absl::StatusOr<std::vector<float>> strength = ReadStrength(*draco, params_.strength_attribute);
+  if (!strength.ok()) {
+    report.decode_seconds = Seconds(start, Clock::now());
+    return Fail(report, strength.status());
+  }
   // An output the encoder would refuse is refused before the smoothing it would waste.
   if (absl::Status s = draco->CheckEncodable(params_.output); !s.ok()) {
     report.decode_seconds = Seconds(start, Clock::now());
@@ -234,7 +255,7 @@ void SmoothJob::Run() {
   if (absl::Status s = stop.Check(); !s.ok()) return Fail(report, StepStatus(s, "validating the mesh"));
   SendAccepted(validation, draco->seam_points());
 
-  absl::StatusOr<FlowResult> result = SmoothMesh(mesh, topo, decoded, stop, report);
+  absl::StatusOr<FlowResult> result = SmoothMesh(mesh, topo, decoded, stop, *std::move(strength), report);
   const Clock::time_point smoothed = Clock::now();
   report.smooth_seconds = Seconds(decoded, smoothed);
   if (!result.ok()) return Fail(report, result.status());

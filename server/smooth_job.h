@@ -80,10 +80,10 @@ class SmoothJob {
   // --max-job-seconds) fires.
   absl::StatusOr<DracoMesh> DecodeUpload(const StopToken& stop);  // takes the upload and frees it
   void SendAccepted(const ValidationReport& validation, int64_t seam_points);
-  // The flow with what is left of the job's time, progress throttled to ~10/s; the iterations
-  // done so far go to `report` as they complete.
+  // The flow with what is left of the job's time and the per-vertex `strength` (empty: none),
+  // progress throttled to ~10/s; the iterations done so far go to `report` as they complete.
   absl::StatusOr<FlowResult> SmoothMesh(Mesh& mesh, const Topology& topo, Clock::time_point decoded,
-                                        const StopToken& stop, JobReport& report);
+                                        const StopToken& stop, std::vector<float> strength, JobReport& report);
   // Ridges and ravines as the result's attributes when the spec asks; counts in `report`.
   absl::StatusOr<std::vector<GenericAttribute>> DetectFeaturesIfAsked(const Mesh& mesh, const Topology& topo,
                                                                       const StopToken& stop, JobReport& report) const;

@@ -129,6 +129,17 @@ std::vector<ParameterInfo> CommonParameters(int max_iterations) {
        true,
        {}},
       {"output.quantization_bits", "0 = lossless float32 positions; 1..24 = quantized", 0, 0, 24, false, false, {}},
+      {"strength_attribute",
+       "per-vertex strength: the name (metadata entry \"name\") of a one-component generic attribute of the "
+       "upload, values in [0, 1]: 0 = the vertex does not move, 1 = the flow as it is, between = its moves scaled; "
+       "the default job reads the noise on the vertices that may move and returns no more folded faces than it got; "
+       "empty = 1 everywhere",
+       1.0,
+       0.0,
+       1.0,
+       false,
+       false,
+       {}},
   };
 }
 

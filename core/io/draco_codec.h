@@ -143,6 +143,13 @@ class DracoMesh {
   // Points that share their position with an earlier point (welded into it).
   int64_t seam_points() const;
 
+  // The values of the one-component attribute whose metadata "name" is `name` (any integer or
+  // floating-point type), converted to float, one per vertex of welded(): a vertex whose points
+  // disagree takes the smallest. NotFound when no attribute has that name; InvalidArgument, the
+  // message naming the attribute, for more than one component, values that are not numbers, and
+  // a point without a value.
+  absl::StatusOr<std::vector<float>> VertexValues(std::string_view name) const;
+
   // OK when Encode() can write this mesh with `options`: InvalidArgument for options out of
   // range, and for Edgebreaker when it would drop a vertex of welded() (one none of whose
   // points is in a face of three distinct points). A job checks this before smoothing.

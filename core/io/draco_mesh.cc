@@ -1,6 +1,8 @@
 // DracoMesh: a decoded Draco mesh kept whole, its points welded into vertices for smoothing,
 // and written back with new positions, fresh normals and any added attributes.
 #include <algorithm>
+#include <cmath>
+#include <limits>
 #include <memory>
 #include <utility>
 #include <variant>
@@ -183,6 +185,34 @@ std::vector<Vec3> DracoMesh::InputPositions() const {
   return positions;
 }
 int64_t DracoMesh::seam_points() const { return impl_->seam_points; }
+
+absl::StatusOr<std::vector<float>> DracoMesh::VertexValues(std::string_view name) const {
+  const draco::Mesh& dm = *impl_->draco;
+  const int id = NamedAttributeId(dm, name);
+  const std::string what = absl::StrCat("attribute '", std::string(name), "'");
+  if (id < 0) return absl::NotFoundError(absl::StrCat("the mesh has no ", what));
+  const draco::PointAttribute& a = *dm.attribute(id);
+  if (absl::Status s = CheckNumericValues(a, what); !s.ok()) return s;
+  if (a.num_components() != 1) {
+    return absl::InvalidArgumentError(
+        absl::StrCat(what, " has ", static_cast<int>(a.num_components()), " components a point; it needs one"));
+  }
+  std::vector<float> values(impl_->num_vertices, std::numeric_limits<float>::infinity());
+  std::vector<uint8_t> seen(impl_->num_vertices, 0);
+  for (uint32_t p = 0; p < dm.num_points(); ++p) {
+    const draco::AttributeValueIndex avi = a.mapped_index(draco::PointIndex(p));
+    float value = 0.0f;
+    if (avi.value() >= a.size() || !a.ConvertValue<float>(avi, 1, &value)) {
+      return absl::InvalidArgumentError(absl::StrCat(what, " has no value for point ", p));
+    }
+    float& v = values[impl_->VertexOf(p)];
+    uint8_t& first = seen[impl_->VertexOf(p)];
+    // NaN stays NaN, so that a check of the values finds it.
+    v = !first || std::isnan(value) ? value : std::isnan(v) ? v : std::min(v, value);
+    first = 1;
+  }
+  return values;
+}
 
 absl::StatusOr<std::string> DracoMesh::Encode(const Mesh& smoothed, const DracoOptions& options,
                                               const std::vector<GenericAttribute>& extra, const StopToken& stop) {
