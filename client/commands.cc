@@ -76,12 +76,14 @@ v1::JobSpec SpecFrom(const SmoothOptions& o) {
     spec.mutable_features()->set_enabled(true);
     spec.mutable_features()->set_min_abs_curvature(o.ridge_threshold);
   }
+  if (o.strength.any()) spec.set_strength_attribute(kStrengthAttribute);
   return spec;
 }
 
 }  // namespace
 
 absl::Status CheckSmoothOptions(const SmoothOptions& options) {
+  if (absl::Status s = CheckStrengthOptions(options.strength); !s.ok()) return s;
   v1::JobSpec spec = SpecFrom(options);
   spec.clear_job_id();
   return server::FromProto(spec, std::numeric_limits<int>::max()).status();
@@ -107,7 +109,7 @@ int RunSmooth(const SmoothOptions& o, const ConnectionOptions& c) {
                  "(attributes) output; the summary still counts them\n";
   }
   // The attributes go to the service only for a .drc output, which is written as it comes back.
-  absl::StatusOr<Upload> upload = PrepareUpload(o.input, *out_format == MeshFormat::kDraco, o.gltf_draco);
+  absl::StatusOr<Upload> upload = PrepareUpload(o.input, *out_format == MeshFormat::kDraco, o.gltf_draco, o.strength);
   if (!upload.ok()) return Fail("", upload.status());
   for (const std::string& w : upload->warnings) std::cerr << "meshsmooth: warning: " << w << "\n";
   const v1::JobSpec spec = SpecFrom(o);

@@ -6,6 +6,7 @@
 
 #include "absl/status/status.h"
 #include "client/connection.h"
+#include "client/strength.h"
 
 namespace meshsmooth::client {
 
@@ -37,7 +38,8 @@ struct SmoothOptions {
   bool quiet = false, json = false;
   bool ridges = false;
   double ridge_threshold = 0.0;
-  std::string job_id;  // JobSpec.job_id; empty = the server makes one up
+  std::string job_id;        // JobSpec.job_id; empty = the server makes one up
+  StrengthOptions strength;  // --weight, --fixed, --region, --outside, --falloff
 };
 
 // `meshsmooth render`.

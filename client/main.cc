@@ -263,6 +263,24 @@ void AddSmoothOptions(CLI::App* smooth, SmoothOptions& so) {
   smooth->add_option("--job-id", so.job_id,
                      "the job's id in the server's log and the summary (1-128 printable ASCII characters, no "
                      "spaces); default: the server makes one up. Retries send the same id");
+  // Per-vertex strength (client/strength.h), sent as JobSpec.strength_attribute.
+  StrengthOptions& st = so.strength;
+  smooth->add_option("--weight", st.weight,
+                     "per-vertex strength from a PLY vertex property: PROP (values in [0, 1]) or PROP:LO,HI (LO -> 0, "
+                     "HI -> 1, clamped), e.g. --weight quality:0,255. 0 = the vertex does not move, 1 = the flow as "
+                     "it is, between = its moves scaled; combined with --region and --fixed by product");
+  smooth->add_option("--fixed", st.fixed,
+                     "a file of vertex indices (0-based, as the input file numbers them; separated by spaces, commas "
+                     "or lines; # starts a comment) held fixed: strength 0");
+  smooth->add_option("--region", st.region,
+                     "box:x0,y0,z0,x1,y1,z1 (two opposite corners) or sphere:cx,cy,cz,r, in the input's coordinates: "
+                     "strength 1 inside, 0 outside");
+  smooth->add_flag("--outside", st.outside, "with --region: strength 0 inside the region, 1 outside");
+  smooth
+      ->add_option("--falloff", st.falloff,
+                   "with --region: over this distance (mesh units) outside the region's edge the strength goes "
+                   "smoothly (smoothstep) from the region's value to the other one; 0 = a sharp edge")
+      ->capture_default_str();
 }
 
 void AddConnectionOptions(CLI::App* app, ConnectionOptions& c) {

@@ -145,6 +145,18 @@ std::string Float32Loss(const std::vector<Vec3>& positions, const char* format) 
                       " at these coordinates; .obj, .off and .ply keep them)");
 }
 
+// EncodeDraco(mesh) with `strength` (when not empty) as the property kStrengthAttribute, which
+// replaces one of that name for the upload only: the mesh keeps its own properties.
+absl::StatusOr<std::string> EncodeWithStrength(Mesh& mesh, const std::vector<float>& strength) {
+  if (strength.empty()) return EncodeDraco(mesh);
+  std::vector<VertexProperty> own = mesh.properties;
+  std::erase_if(mesh.properties, [](const VertexProperty& p) { return p.name == kStrengthAttribute; });
+  mesh.properties.push_back({kStrengthAttribute, "float", std::vector<double>(strength.begin(), strength.end())});
+  absl::StatusOr<std::string> bytes = EncodeDraco(mesh);
+  mesh.properties = std::move(own);
+  return bytes;
+}
+
 }  // namespace
 
 absl::Status CheckOutputPath(const std::string& output) {
@@ -173,9 +185,15 @@ bool IsGltfPath(const std::string& path) {
   return ext == ".gltf" || ext == ".glb";
 }
 
-absl::StatusOr<Upload> PrepareUpload(const std::string& input, bool with_attributes, bool gltf_draco) {
+absl::StatusOr<Upload> PrepareUpload(const std::string& input, bool with_attributes, bool gltf_draco,
+                                     const StrengthOptions& strength) {
   Upload upload;
   upload.input = input;
+  const absl::StatusOr<MeshFormat> format = FormatFromPath(input);
+  if (strength.any() && (IsGltfPath(input) || (format.ok() && *format == MeshFormat::kDraco))) {
+    return absl::InvalidArgumentError(
+        "--weight, --fixed and --region read OBJ, PLY, OFF or STL input (or builtin:NAME), not a .drc or glTF file");
+  }
   if (IsGltfPath(input)) {
     // Before any thread starts (ReadInChildFirst forks).
     absl::StatusOr<GltfScene> scene = GltfScene::ReadInChildFirst(input, gltf_draco);
@@ -188,7 +206,6 @@ absl::StatusOr<Upload> PrepareUpload(const std::string& input, bool with_attribu
     upload.num_vertices = upload.gltf->surface().num_vertices();
     return upload;
   }
-  const absl::StatusOr<MeshFormat> format = FormatFromPath(input);
   if (format.ok() && *format == MeshFormat::kDraco) {
     absl::StatusOr<std::string> bytes = ReadFileBytes(input);
     if (!bytes.ok()) return bytes.status();
@@ -212,6 +229,10 @@ absl::StatusOr<Upload> PrepareUpload(const std::string& input, bool with_attribu
         absl::StrCat(bad_faces, " faces reference vertices that do not exist; they cannot be sent and are left out"));
     DropTriangles(*mesh, out_of_range);  // out of step with the result's faces otherwise
   }
+  // In the file's own coordinates, before the shift to the local origin.
+  absl::StatusOr<std::vector<float>> weights = VertexStrength(*mesh, strength);
+  if (!weights.ok()) return weights.status();
+  upload.strength = !weights->empty();
   upload.origin = LocalOrigin(mesh->positions);
   // PLY output in double when float could not hold the input: a vertex the job leaves where it
   // is must come back as it went in.
@@ -221,12 +242,12 @@ absl::StatusOr<Upload> PrepareUpload(const std::string& input, bool with_attribu
   if (upload.origin != Vec3{}) Translate(mesh->positions, -upload.origin);
   absl::StatusOr<std::string> bytes;
   if (with_attributes) {
-    bytes = EncodeDraco(*mesh);
+    bytes = EncodeWithStrength(*mesh, *weights);
   } else {  // the positions and faces lent to a mesh of their own, then given back
     Mesh bare;
     bare.positions = std::move(mesh->positions);
     bare.triangles = std::move(mesh->triangles);
-    bytes = EncodeDraco(bare);
+    bytes = EncodeWithStrength(bare, *weights);
     mesh->positions = std::move(bare.positions);
     mesh->triangles = std::move(bare.triangles);
   }

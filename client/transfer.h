@@ -10,6 +10,7 @@
 
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
+#include "client/strength.h"
 #include "core/io/draco_codec.h"
 #include "core/io/gltf.h"
 #include "core/mesh.h"
@@ -35,6 +36,8 @@ struct Upload {
   std::vector<std::string> dropped;   // what the input held that does not come back, one phrase each
   // A .gltf/.glb input: the scene, whose primitives' points were sent as one mesh.
   std::shared_ptr<GltfScene> gltf;
+  // The upload carries a per-vertex strength, the attribute kStrengthAttribute (client/strength.h).
+  bool strength = false;
 };
 
 // True for a path whose extension is .gltf or .glb (case-insensitive).
@@ -51,7 +54,12 @@ bool IsGltfPath(const std::string& path);
 // service. The reader's errors when the input cannot be read. A glTF input is first read and
 // written in a child process (GltfScene::ReadInChildFirst; Draco-compressed too with
 // `gltf_draco`, the output the CLI will write): call this before starting threads.
-absl::StatusOr<Upload> PrepareUpload(const std::string& input, bool with_attributes = true, bool gltf_draco = false);
+// `strength` (VertexStrength, from the mesh as read) goes along as the generic attribute
+// kStrengthAttribute (replacing an input property of that name), whatever `with_attributes`;
+// InvalidArgument naming the flag for a Draco or glTF input, which the CLI does not read as a
+// mesh of its own, and for VertexStrength's errors.
+absl::StatusOr<Upload> PrepareUpload(const std::string& input, bool with_attributes = true, bool gltf_draco = false,
+                                     const StrengthOptions& strength = {});
 
 // OK when `output` can be written once the job is done: a format the CLI writes (.obj, .ply,
 // .off, .stl, .drc, and .gltf/.glb for a glTF input) in a folder that exists and is writable,
