@@ -220,12 +220,42 @@ def cli_checks(a, check, tmp):
             text = " ".join(f.read().split())
         r = run([cli, "smooth", "--help"])
         assert r.returncode == 0, r.returncode
-        # A per-vertex lock is a library field (FlowParams::locked); no option of the CLI sets it.
-        if "--lock" not in r.stdout:
-            assert "a lock mask can fix any vertex" not in text, "README promises a lock mask the CLI cannot set"
-            assert "FlowParams::locked" in text, "README does not say where a lock mask exists"
-    check("README promises no per-vertex lock the CLI cannot set, and says where one exists",
+        # Vertices are held by a per-vertex strength: the CLI's options for it are the README's.
+        for option in ("--weight", "--fixed", "--region", "--outside", "--falloff"):
+            assert option in r.stdout, f"smooth --help does not list {option}"
+            assert f"`{option}" in text, f"README does not explain {option}"
+        assert "FlowParams::strength" in text, "README does not say where the library's strength is"
+    check("README explains every per-vertex strength option smooth --help lists, and the library's field",
           readme_promises_what_the_cli_offers)
+
+    def fixed_file_keeps_its_vertices():
+        noisy = os.path.join(tmp, "fixed-in.obj")
+        r = run([cli, "smooth", "builtin:noisy-sphere", "-o", noisy, "--flow", "laplacian", "--iterations", "1", "-q"])
+        assert r.returncode == 0, r.stderr
+        fixed = list(range(0, 2562, 7))
+        listing = os.path.join(tmp, "fixed.txt")
+        with open(listing, "w") as f:
+            f.write("# every seventh vertex\n" + "\n".join(map(str, fixed)) + "\n")
+        out = os.path.join(tmp, "fixed-out.obj")
+        r = run([cli, "smooth", noisy, "-o", out, "--fixed", listing, "-q"])
+        assert r.returncode == 0, r.stderr
+
+        def vertex_lines(path):
+            with open(path) as f:
+                return [line for line in f if line.startswith("v ")]
+        before, after = vertex_lines(noisy), vertex_lines(out)
+        assert len(before) == len(after) == 2562, (len(before), len(after))
+        held = [i for i in fixed if before[i] != after[i]]
+        assert not held, f"fixed vertices moved: {held[:5]}"
+        assert sum(b != a for b, a in zip(before, after)) > 1000, "the other vertices hardly moved"
+        with open(listing, "a") as f:
+            f.write("2562\n")
+        r = run([cli, "smooth", noisy, "-o", out, "--fixed", listing, "-q"])
+        assert r.returncode == 1 and "--fixed" in r.stderr and "out of range" in r.stderr, (r.returncode, r.stderr)
+        r = run([cli, "smooth", noisy, "-o", out, "--region", "box:1,2,3"])
+        assert r.returncode == 2 and "--region box:1,2,3" in r.stderr, (r.returncode, r.stderr)
+    check("smooth --fixed keeps the listed vertices' lines bit for bit; an index out of range exits 1, a malformed "
+          "--region 2, each naming the flag", fixed_file_keeps_its_vertices)
 
     def unreachable():
         r = run([cli, "smooth", "builtin:sphere", "-o", out_ply, "--server", "127.0.0.1:1", "--timeout", "5"])
