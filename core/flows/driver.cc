@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <cmath>
 #include <memory>
-#include <mutex>
 #include <optional>
 #include <utility>
 #include <vector>
@@ -316,35 +315,8 @@ class FlowRun {
 
 }  // namespace
 
-namespace {
-
-std::mutex kernel_options_mutex;
-KernelOptions kernel_options;
-
-}  // namespace
-
-void SetKernelOptions(const KernelOptions& options) {
-  const std::lock_guard<std::mutex> lock(kernel_options_mutex);
-  kernel_options = options;
-}
-
-KernelOptions GetKernelOptions() {
-  const std::lock_guard<std::mutex> lock(kernel_options_mutex);
-  return kernel_options;
-}
-
 int ThreadsFor(int32_t n, const FlowParams& p) {
   return n < kParallelThreshold ? 1 : (p.threads > 0 ? p.threads : omp_get_max_threads());
-}
-
-VectorIsa BestVectorIsa() {
-  VectorIsa best = VectorIsa::kSse2;
-  if (__builtin_cpu_supports("avx2")) best = VectorIsa::kAvx2;
-  if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl") && __builtin_cpu_supports("avx512dq")) {
-    best = VectorIsa::kAvx512;
-  }
-  if (const std::optional<VectorIsa> want = GetKernelOptions().isa) best = std::min(best, *want);
-  return MESHSMOOTH_WIDE_LANES ? best : VectorIsa::kSse2;
 }
 
 absl::StatusOr<FlowResult> RunIterations(Mesh& mesh, const Topology& topo, const FlowParams& p,
