@@ -202,7 +202,8 @@ void SampleLocks(Sample& sample, const Topology& sample_topo, const Topology& to
     const int32_t v = sample.origin[s];
     const bool cut = sample_topo.kind[s] == VertexKind::kBoundary && topo.kind[v] != VertexKind::kBoundary;
     locked[s] = cut || (!q.locked.empty() && q.locked[v] != 0);
-    if (cut) sample.core[s] = 0;
+    // With strengths, a held vertex (a rim's, which the estimate would count) is not measured.
+    if (cut || (locked[s] && !q.strength.empty())) sample.core[s] = 0;
   }
   on_sample.locked = std::move(locked);
   on_sample.strength.clear();
@@ -218,7 +219,14 @@ absl::StatusOr<FlowResult> SmoothByRisk(Mesh& mesh, const Topology& topo, const 
                                         const JobPolicy& policy, bool repair_idle) {
   const int32_t n = mesh.num_vertices();
   const int32_t size = SampleSize(n, policy);
-  if (size >= n) return Choose(mesh, topo, q, control, h, noise, policy, nullptr, 0.0, repair_idle);
+  // With strengths, the estimate measures the vertices free to move only (a held rim's would count).
+  std::vector<uint8_t> free_to_move;
+  if (!q.strength.empty()) {
+    free_to_move.resize(n);
+    for (int32_t v = 0; v < n; ++v) free_to_move[v] = q.locked[v] == 0;
+  }
+  const std::vector<uint8_t>* const measured = free_to_move.empty() ? nullptr : &free_to_move;
+  if (size >= n) return Choose(mesh, topo, q, control, h, noise, policy, measured, 0.0, repair_idle);
 
   Sample sample = SamplePatches(mesh, topo, size, policy, q.locked);
   const Topology sample_topo = BuildTopology(sample.mesh);
@@ -239,7 +247,7 @@ absl::StatusOr<FlowResult> SmoothByRisk(Mesh& mesh, const Topology& topo, const 
   if (chosen->iterations_run == 0) {
     // An idle sample (no noise, or no estimate on it) leaves the decision to the whole mesh's
     // own estimate and stopping (nothing to do on a clean mesh: as cheap as the sample).
-    return Choose(mesh, topo, whole, control, h, noise, policy, nullptr, 0.0, repair_idle);
+    return Choose(mesh, topo, whole, control, h, noise, policy, measured, 0.0, repair_idle);
   }
   JobRule rule(h, noise, policy, nullptr, q.boundary != BoundaryMode::kFixed);
   absl::StatusOr<FlowResult> result = SmoothOneFlow(mesh, topo, whole, control, h, {chosen->iterations_run, &rule});
@@ -289,8 +297,8 @@ absl::StatusOr<std::optional<FlowResult>> ChooseByTurn(Mesh& mesh, const Topolog
 
 absl::StatusOr<std::optional<FlowResult>> SmoothByTurn(Mesh& mesh, const Topology& topo, const FlowParams& q,
                                                        const RunControl& control, double h, const NoiseEstimate& noise,
-                                                       const JobPolicy& policy) {
-  const double target = policy.discrepancy_turn_share * noise.normal_turn;
+                                                       const JobPolicy& policy, double turnable) {
+  const double target = turnable * policy.discrepancy_turn_share * noise.normal_turn;
   const int32_t n = mesh.num_vertices();
   if (n <= policy.max_whole_turn_vertices) return ChooseByTurn(mesh, topo, q, control, h, noise, policy, target);
   const int32_t size = SampleSize(n, policy);

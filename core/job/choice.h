@@ -40,9 +40,10 @@ absl::StatusOr<FlowResult> SmoothByRisk(Mesh& mesh, const Topology& topo, const 
                                         const JobPolicy& policy, bool repair_idle);
 
 // As SmoothByRisk, by the turn; none (the mesh as it was) when every result's normals vary more
-// than the input's.
+// than the input's. `turnable`: the share of the faces a run can turn (with strengths, those
+// with a vertex free to move), which scales the turn the runs stop at.
 absl::StatusOr<std::optional<FlowResult>> SmoothByTurn(Mesh& mesh, const Topology& topo, const FlowParams& q,
                                                        const RunControl& control, double h, const NoiseEstimate& noise,
-                                                       const JobPolicy& policy);
+                                                       const JobPolicy& policy, double turnable = 1.0);
 
 }  // namespace meshsmooth::job

@@ -41,6 +41,19 @@ namespace {
 // has them in its lock mask, SmoothWithPolicy).
 const uint8_t* NotMeasured(const FlowParams& p) { return p.strength.empty() ? nullptr : p.locked.data(); }
 
+// The share of the usable faces a run with strengths can turn: those with a vertex of strength
+// above 0 (1 without strengths). The noise's turn is predicted over every face, a run's measured
+// over every face too: the held ones, which never turn, would keep it below the prediction.
+double TurnableShare(const Mesh& mesh, const Topology& topo, const FlowParams& p) {
+  if (p.strength.empty() || topo.faces.empty()) return 1.0;
+  int64_t turnable = 0;
+  for (int32_t f : topo.faces) {
+    const Triangle& t = mesh.triangles[f];
+    turnable += p.strength[t[0]] > 0.0f || p.strength[t[1]] > 0.0f || p.strength[t[2]] > 0.0f;
+  }
+  return static_cast<double>(turnable) / static_cast<double>(topo.faces.size());
+}
+
 // Step 2: moves the outliers back when the noise reads impulsive; returns how many moved and
 // reads `noise` again. Twice, the second time at the threshold of the noise read without the
 // first pass's outliers, which had pulled their neighbours' fits and raised it.
@@ -73,14 +86,15 @@ absl::StatusOr<FlowResult> SmoothAutomatic(Mesh& mesh, const Topology& topo, con
   const std::vector<Vec3> input = visible ? mesh.positions : std::vector<Vec3>{};
   absl::StatusOr<FlowResult> result = SmoothByRisk(mesh, topo, q, control, h, noise, policy, outliers > 0);
   if (!result.ok()) return result;
-  // 4.
+  // 4. On the faces a run can turn (TurnableShare).
   const bool ran = result->iterations_run > 0 || result->stop_reason == StopReason::kNoGain;
   if (ran && visible) {
+    const double share = TurnableShare(mesh, topo, q);
     const double turned = NormalTurn(input.data(), mesh.triangles, topo).Of(mesh.positions.data());
-    if (turned < policy.risk_turn_share * noise.normal_turn) {
+    if (turned < policy.risk_turn_share * share * noise.normal_turn) {
       std::vector<Vec3> by_risk = std::move(mesh.positions);
       mesh.positions = input;
-      absl::StatusOr<std::optional<FlowResult>> by_turn = SmoothByTurn(mesh, topo, q, control, h, noise, policy);
+      absl::StatusOr<std::optional<FlowResult>> by_turn = SmoothByTurn(mesh, topo, q, control, h, noise, policy, share);
       if (!by_turn.ok()) return by_turn.status();
       if (by_turn->has_value()) {
         result = **std::move(by_turn);

@@ -156,6 +156,28 @@ TEST(StrengthTest, DefaultJobReturnsNoMoreFoldedFaces) {
   }
 }
 
+// The default job reads the noise on the vertices it may move: a clean cap held at strength 0 on
+// a noisy sphere leaves the estimate and the count of the whole noisy sphere's, where the cap's
+// clean fits would pull the median down by about the cap's share.
+TEST(StrengthTest, DefaultJobReadsTheNoiseWhereVerticesMove) {
+  const Mesh clean = Icosphere(4);
+  const Mesh noisy = NoisySphere(4);
+  Mesh half = noisy;
+  const std::vector<float> strength = CapHeld(noisy);
+  for (size_t v = 0; v < strength.size(); ++v) {
+    if (strength[v] == 0.0f) half.positions[v] = clean.positions[v];
+  }
+  Mesh all = noisy;
+  const absl::StatusOr<FlowResult> whole = Smooth(all, FlowParams{});
+  FlowParams p;
+  p.strength = strength;
+  const absl::StatusOr<FlowResult> held = Smooth(half, p);
+  ASSERT_TRUE(whole.ok() && held.ok());
+  ASSERT_TRUE(whole->auto_stop && held->auto_stop);
+  EXPECT_NEAR(held->auto_stop->noise_sigma_h, whole->auto_stop->noise_sigma_h, 0.1 * whole->auto_stop->noise_sigma_h);
+  EXPECT_NEAR(held->iterations_run, whole->iterations_run, 0.3 * whole->iterations_run);
+}
+
 // The last edit of the default job with strengths: vertices pushed through a clean sphere fold
 // their faces; KeepNoMoreFolds puts back those vertices (and their neighbours where needed) and
 // leaves the moves far from any fold.
