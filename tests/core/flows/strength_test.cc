@@ -119,6 +119,25 @@ TEST(StrengthTest, ReorderedRunKeepsTheStrengths) {
   EXPECT_TRUE(SameBytes(never, always));
 }
 
+// Scaled moves are made block by block, beside the kernel's: the same bytes on 1 and 2 threads
+// (a mesh above the parallel threshold), in every flow.
+TEST(StrengthTest, ScaledMovesAreTheSameOnAnyThreadCount) {
+  const Mesh noisy = NoisySphere(6);  // 40,962 vertices: two threads
+  const Topology topo = BuildTopology(noisy);
+  std::vector<float> strength = CapHeld(noisy);
+  for (size_t v = 0; v < strength.size(); v += 3) strength[v] *= 0.4f;
+  for (auto [name, p] : Jobs()) {
+    SCOPED_TRACE(name);
+    p.strength = strength;
+    Mesh one = noisy, two = noisy;
+    p.threads = 1;
+    ASSERT_TRUE(Smooth(one, topo, p).ok());
+    p.threads = 2;
+    ASSERT_TRUE(Smooth(two, topo, p).ok());
+    EXPECT_TRUE(SameBytes(one, two));
+  }
+}
+
 TEST(StrengthTest, BadStrengthsAreRefusedNamingThem) {
   const Mesh noisy = NoisySphere(2);
   const auto n = noisy.positions.size();
