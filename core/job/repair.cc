@@ -229,7 +229,7 @@ void RemoveOutliers(Mesh& mesh, const Topology& topo, double h, double threshold
         if (residual) {
           moves[v] = *residual > threshold_h;
         } else {
-          const std::optional<double> height = fit.RingHeight(mesh.positions.data(), topo, v, h, nullptr);
+          const std::optional<double> height = fit.RingHeight(mesh.positions.data(), topo, v, nullptr);
           moves[v] = height && std::abs(*height) > threshold_h * h;
         }
       }
@@ -241,7 +241,11 @@ void RemoveOutliers(Mesh& mesh, const Topology& topo, double h, double threshold
       for (int32_t v = 0; v < n; ++v) {
         if (!moves[v]) continue;
         Vec3 axis;
-        const std::optional<double> height = fit.RingHeight(mesh.positions.data(), topo, v, h, moves.data(), &axis);
+        // A rim vertex's half ring along a plane its thrown neighbours do not lean.
+        const std::optional<double> height =
+            topo.kind[v] == VertexKind::kBoundary
+                ? fit.RobustRingHeight(mesh.positions.data(), topo, v, h, moves.data(), &axis)
+                : fit.RingHeight(mesh.positions.data(), topo, v, moves.data(), &axis);
         if (height)
           target[v] = mesh.positions[v] + axis * *height;
         else

@@ -47,10 +47,10 @@ constexpr size_t kMaxGather = 1024;
 // ... and a third ring, for the wide fits, from this many times as many.
 constexpr size_t kWideGather = 4;
 constexpr int64_t kMinWellPosedPerTried = 4;  // one in four
-// A rim vertex's plane (RobustPlaneNormal) is chosen among at most this many planes through
-// three of its points: all of them for up to 13 points (286), else this many drawn at random.
-// With a fifth of the points thrown, 300 draws all miss a clean triple with probability 0.49^300.
-constexpr int64_t kLmedsTriples = 300;
+// The robust plane (RobustPlaneNormal) is chosen among this many planes through three of the
+// points, drawn at random: with a quarter of a dozen points thrown, 50 draws all miss a clean
+// triple with probability 0.62^50 (4e-11).
+constexpr int64_t kLmedsTriples = 50;
 // ... and refitted to the points within this many robust scales of the best one (Rousseeuw and
 // Leroy 1987: 2.5, a Gaussian's 98.8%) or within kLmedsFloorH mean edges, whichever is more: a
 // second ring reaches about 2 h from its vertex, so a surface whose curvature radius is 2 h or
@@ -318,8 +318,8 @@ std::optional<Vec3> TrimmedPlaneNormal(const Vec3* pos, std::vector<int32_t>& id
 }
 
 // The normal of the plane through pos[ids] that resists points thrown off it: least median of
-// squares (Rousseeuw 1984) over planes through three of the points (all triples, or kLmedsTriples
-// drawn with a generator seeded by v), then the least-squares plane of the points within
+// squares (Rousseeuw 1984) over kLmedsTriples planes through three of the points (drawn with a
+// generator seeded by v), then the least-squares plane of the points within
 // kLmedsInlierScales robust scales of it or kLmedsFloorH mean edges `h`. A least-squares plane
 // through a rim's dozen points, three of them thrown 2 h, leans by ~45 degrees; least median of
 // squares ignores up to half. `ids` keeps the points of the last fit.
@@ -327,7 +327,6 @@ std::optional<Vec3> RobustPlaneNormal(const Vec3* pos, std::vector<int32_t>& ids
   const auto n = static_cast<int64_t>(ids.size());
   if (n < 3) return std::nullopt;
   if (n == 3) return PlaneNormal(pos, ids);
-  const int64_t all = n * (n - 1) * (n - 2) / 6;
   uint64_t state = 0x9E3779B97F4A7C15ull ^ static_cast<uint64_t>(v);
   auto draw = [&]() {  // splitmix64
     uint64_t z = (state += 0x9E3779B97F4A7C15ull);
@@ -353,15 +352,9 @@ std::optional<Vec3> RobustPlaneNormal(const Vec3* pos, std::vector<int32_t>& ids
       best_normal = unit;
     }
   };
-  if (all <= kLmedsTriples) {
-    for (int64_t i = 0; i < n; ++i)
-      for (int64_t j = i + 1; j < n; ++j)
-        for (int64_t k = j + 1; k < n; ++k) try_plane(i, j, k);
-  } else {
-    for (int t = 0; t < kLmedsTriples; ++t) {
-      const int64_t i = draw(), j = draw(), k = draw();
-      if (i != j && j != k && i != k) try_plane(i, j, k);
-    }
+  for (int t = 0; t < kLmedsTriples; ++t) {
+    const int64_t i = draw(), j = draw(), k = draw();
+    if (i != j && j != k && i != k) try_plane(i, j, k);
   }
   if (!std::isfinite(best)) return PlaneNormal(pos, ids);
   const double cut = std::max(kLmedsInlierScales * kMadToSigma * best, kLmedsFloorH * h);
@@ -377,12 +370,11 @@ std::optional<Vec3> RobustPlaneNormal(const Vec3* pos, std::vector<int32_t>& ids
 // The median height above v of its ring's inliers (the vertices not flagged in `skip`, when at
 // least three are not; else all of them), along the normal of a plane through the inliers of its
 // first and second rings, into `axis`: a dozen points or more, where the ring's own polygon leans
-// by tens of degrees when some of it is thrown. On the rim, where three thrown points lean even
-// that plane by tens of degrees, the robust one (RobustPlaneNormal); inside, the least-squares
-// plane, trimmed (a robust plane there fails on fans of slivers: docs/decisions.md). None for a
-// degenerate ring.
-std::optional<double> RingMedianHeight(const Vec3* pos, const Topology& topo, int32_t v, double h, const uint8_t* skip,
-                                       RingScratch& s, Vec3* axis = nullptr) {
+// by tens of degrees when some of it is thrown. The least-squares plane, trimmed; with
+// `robust_h` > 0, the plane RobustPlaneNormal fits with that floor instead. None for a degenerate
+// ring.
+std::optional<double> RingMedianHeight(const Vec3* pos, const Topology& topo, int32_t v, const uint8_t* skip,
+                                       double robust_h, RingScratch& s, Vec3* axis) {
   const int32_t first = topo.ring_offsets[v], last = topo.ring_offsets[v + 1];
   if (last - first < 3) return std::nullopt;
   int32_t inliers = 0;
@@ -403,7 +395,7 @@ std::optional<double> RingMedianHeight(const Vec3* pos, const Topology& topo, in
   std::sort(ids.begin(), ids.end());
   ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
   const std::optional<Vec3> normal =
-      topo.kind[v] == VertexKind::kBoundary ? RobustPlaneNormal(pos, ids, v, h, s) : TrimmedPlaneNormal(pos, ids, s);
+      robust_h > 0.0 ? RobustPlaneNormal(pos, ids, v, robust_h, s) : TrimmedPlaneNormal(pos, ids, s);
   if (!normal) return std::nullopt;
   const Vec3 unit = *normal;
   s.heights.clear();
@@ -517,9 +509,14 @@ std::optional<double> LocalFit::ResidualH(const Mesh& mesh, const Topology& topo
   return std::abs(fit->r) / std::sqrt(1.0 + fit->g);
 }
 
-std::optional<double> LocalFit::RingHeight(const Vec3* pos, const Topology& topo, int32_t v, double h,
-                                           const uint8_t* skip, Vec3* axis) {
-  return RingMedianHeight(pos, topo, v, h, skip, buffers_->ring, axis);
+std::optional<double> LocalFit::RingHeight(const Vec3* pos, const Topology& topo, int32_t v, const uint8_t* skip,
+                                           Vec3* axis) {
+  return RingMedianHeight(pos, topo, v, skip, 0.0, buffers_->ring, axis);
+}
+
+std::optional<double> LocalFit::RobustRingHeight(const Vec3* pos, const Topology& topo, int32_t v, double h,
+                                                 const uint8_t* skip, Vec3* axis) {
+  return RingMedianHeight(pos, topo, v, skip, h, buffers_->ring, axis);
 }
 
 }  // namespace meshsmooth

@@ -123,16 +123,20 @@ class LocalFit {
   std::optional<double> ResidualH(const Mesh& mesh, const Topology& topo, int32_t v, double h);
 
   // The median height above v (in the mesh's units) of its ring's inliers (the vertices not
-  // flagged in `skip`, when at least three are not; else all of them), along the normal of a plane
-  // through the inliers of its first and second rings (a dozen points or more, where the ring's
-  // own polygon leans by tens of degrees when some of it is thrown); that normal into `axis`. For
-  // an interior vertex the least-squares plane, fitted again without the points far off it; for a
-  // rim vertex, whose half ring three thrown points lean by ~45 degrees even so, a plane that
-  // resists them: least median of squares, then least squares on the points within its robust
-  // scale or within a mean edge `h` (where a curved surface's second ring lies). None for a
-  // degenerate ring.
-  std::optional<double> RingHeight(const Vec3* pos, const Topology& topo, int32_t v, double h, const uint8_t* skip,
+  // flagged in `skip`, when at least three are not; else all of them), along the normal of the
+  // plane that fits the inliers of its first and second rings, fitted again without the points
+  // far off it (principal components: a dozen points or more, where the ring's own polygon leans
+  // by tens of degrees when some of it is thrown); that normal into `axis`. None for a degenerate
+  // ring.
+  std::optional<double> RingHeight(const Vec3* pos, const Topology& topo, int32_t v, const uint8_t* skip,
                                    Vec3* axis = nullptr);
+
+  // As RingHeight, along a plane that resists points thrown off it (a rim vertex's half ring,
+  // where three thrown points in fifteen lean even the trimmed plane by ~45 degrees): least
+  // median of squares, then least squares on the points within its robust scale or within a
+  // mean edge `h` of it (where a curved surface's second ring lies).
+  std::optional<double> RobustRingHeight(const Vec3* pos, const Topology& topo, int32_t v, double h,
+                                         const uint8_t* skip, Vec3* axis = nullptr);
 
  private:
   struct Buffers;

@@ -1,4 +1,4 @@
-// LocalFit::RingHeight, the place an outlier is moved back to: the median height of its ring
+// LocalFit::RobustRingHeight, the place a rim outlier is moved back to: the median height of its ring
 // along a plane through its first and second rings that resists thrown points there.
 #include <algorithm>
 #include <cmath>
@@ -40,9 +40,10 @@ std::vector<int32_t> SecondRing(const Topology& topo, int32_t v) {
 // A rim vertex of a flat grid thrown 2.3 h, with three of its second ring thrown 2 h the same way
 // and not flagged: a least-squares plane through its dozen points leans by 48 degrees towards
 // them and leaves the vertex more than a mean edge off when moved back. The robust one stays
-// within a degree of the grid's, and the vertex goes back onto the grid. (An interior vertex keeps
-// the least-squares plane, trimmed: it leans 27 degrees here; docs/decisions.md says why.)
-TEST(LocalFitTest, RingHeightResistsThrownPointsInTheSecondRing) {
+// within a degree of the grid's, and the vertex goes back onto the grid. (An interior vertex goes
+// back along the trimmed least-squares plane, which leans 27 degrees here: docs/decisions.md says
+// why.)
+TEST(LocalFitTest, RobustRingHeightResistsThrownPointsInTheSecondRing) {
   const Mesh plane = TwoRatePlane(24, 16, 1.0);
   const Topology topo = BuildTopology(plane);
   const double h = MeanEdgeLength(plane, topo);
@@ -64,7 +65,7 @@ TEST(LocalFitTest, RingHeightResistsThrownPointsInTheSecondRing) {
     // Three neighbours side by side, as a scanner's streak throws them.
     for (size_t i = 0; i < 3; ++i) m.positions[second[i]].z += 2.0 * h;
     Vec3 axis;
-    const std::optional<double> height = fit.RingHeight(m.positions.data(), topo, v, h, nullptr, &axis);
+    const std::optional<double> height = fit.RobustRingHeight(m.positions.data(), topo, v, h, nullptr, &axis);
     ASSERT_TRUE(height.has_value()) << v;
     EXPECT_LT(DegreesBetween(axis, Vec3{0, 0, 1}), 1.0) << v;
     const Vec3 back = m.positions[v] + axis * *height;
@@ -72,7 +73,7 @@ TEST(LocalFitTest, RingHeightResistsThrownPointsInTheSecondRing) {
   }
   // Nothing thrown: the grid's own normal, and height 0.
   Vec3 axis;
-  const std::optional<double> height = fit.RingHeight(plane.positions.data(), topo, inner, h, nullptr, &axis);
+  const std::optional<double> height = fit.RobustRingHeight(plane.positions.data(), topo, inner, h, nullptr, &axis);
   ASSERT_TRUE(height.has_value());
   EXPECT_LT(DegreesBetween(axis, Vec3{0, 0, 1}), 1e-6);
   EXPECT_NEAR(*height, 0.0, 1e-12);
@@ -83,7 +84,7 @@ TEST(LocalFitTest, RingHeightResistsThrownPointsInTheSecondRing) {
 // points are the surface, not outliers: kept, the plane leans no more than a least-squares plane
 // through all of them (17.8 degrees at worst: a half ring on a tube this coarse is lopsided).
 // Keeping only the points within the least-median plane's robust scale leans it by 23.
-TEST(LocalFitTest, RingHeightKeepsACurvedSecondRing) {
+TEST(LocalFitTest, RobustRingHeightKeepsACurvedSecondRing) {
   const Mesh tube = Cylinder(1.0, 3.0, 12, CylinderRings(1.0, 3.0, 12));
   const Topology topo = BuildTopology(tube);
   const double h = MeanEdgeLength(tube, topo);
@@ -95,7 +96,7 @@ TEST(LocalFitTest, RingHeightKeepsACurvedSecondRing) {
     ++rims;
     const Vec3& p = tube.positions[v];
     Vec3 axis;
-    const std::optional<double> height = fit.RingHeight(tube.positions.data(), topo, v, h, nullptr, &axis);
+    const std::optional<double> height = fit.RobustRingHeight(tube.positions.data(), topo, v, h, nullptr, &axis);
     ASSERT_TRUE(height.has_value()) << v;
     worst = std::max(worst, DegreesBetween(axis, Vec3{p.x, p.y, 0.0}));
   }
