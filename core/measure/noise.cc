@@ -344,8 +344,7 @@ std::optional<Vec3> RobustPlaneNormal(const Vec3* pos, std::vector<int32_t>& ids
     if (!(length > 0.0) || !std::isfinite(length)) return;
     const Vec3 unit = normal * (1.0 / length);
     for (int64_t m = 0; m < n; ++m) s.off[m] = std::abs(Dot(pos[ids[m]] - a, unit));
-    s.sorted = s.off;
-    const double median = Median(s.sorted);
+    const double median = Median(s.off);  // the offsets are not read again
     if (median < best) {
       best = median;
       best_point = a;
