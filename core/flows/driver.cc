@@ -121,11 +121,18 @@ class FlowRun {
   }
   int threads() const { return threads_; }
 
+  // FlowParams::max_displacement: every iteration's last pass puts the movable vertices back
+  // within `bound` of centre[v] (KeepWithinBound). `centre` outlives the run.
+  void SetBound(const Vec3* centre, double bound) {
+    centre_ = centre;
+    bound_ = bound;
+  }
+
   // The floor of the step's eigenvalues when it is linear (FlowKernel::LinearStepFloor): one
-  // pass, no threshold, no cap on a vertex's move, no boundary curve (its umbrella is not
-  // covered by the floor).
+  // pass, no threshold, no cap on a vertex's move, no strength or bound, no boundary curve (its
+  // umbrella is not covered by the floor).
   std::optional<double> LinearStepFloor() const {
-    if (kernel_->passes() != 1 || p_.adaptive != AdaptiveMode::kNone || partial_) return std::nullopt;
+    if (kernel_->passes() != 1 || p_.adaptive != AdaptiveMode::kNone || partial_ || bound_ > 0.0) return std::nullopt;
     if (!std::isinf(ctx_.max_step_sq)) return std::nullopt;
     if (std::any_of(role_.begin(), role_.end(), [](uint8_t r) { return r == kCurve; })) return std::nullopt;
     return kernel_->LinearStepFloor(lambda_);
@@ -173,11 +180,14 @@ class FlowRun {
       ForBlocks(n_, threads_, [&](int32_t b, int32_t begin, int32_t end) {
         stats_[b] = k.Step(ctx_, in, dst, begin, end);
         if (partial_) ScaleMoves(in, dst, begin, end);
+        // Once an iteration: taubin's second pass undoes the first's shrinking only from where
+        // that left the vertices (docs/decisions.md, "A bound on displacement").
+        if (bound_ > 0.0 && pass == passes - 1) KeepWithinBound(centre_, bound_, dst, begin, end, role_.data());
       });
       in = dst;
     }
-    // Scaled moves are measured anew: the kernel's statistics are of its unscaled ones.
-    if (passes > 1 || partial_) MeasureWholeIteration(cur.data(), in);
+    // Scaled and bounded moves are measured anew: the kernel's statistics are of its own moves.
+    if (passes > 1 || partial_ || bound_ > 0.0) MeasureWholeIteration(cur.data(), in);
     return Reduce(stats_);
   }
 
@@ -275,11 +285,12 @@ class FlowRun {
   }
 
   // The statistics of a several-pass iteration are of its whole displacement, not its last
-  // pass's; so are those of scaled moves (ScaleMoves), which keep the count of capped moves.
+  // pass's; so are those of scaled (ScaleMoves) and bounded (KeepWithinBound) moves, which keep
+  // the count of capped moves.
   void MeasureWholeIteration(const Vec3* start, const Vec3* end_pos) {
     ForBlocks(n_, threads_, [&](int32_t b, int32_t begin, int32_t end) {
       BlockStats s;
-      if (partial_) s.capped = stats_[b].capped;
+      if (partial_ || bound_ > 0.0) s.capped = stats_[b].capped;
       for (int32_t v = begin; v < end; ++v) {
         if (role_[v] == kFixed) continue;
         const double d2 = SquaredNorm(end_pos[v] - start[v]);
@@ -303,7 +314,9 @@ class FlowRun {
   std::unique_ptr<FlowKernel> kernel_;
   std::vector<uint8_t> role_, all_free_;
   int64_t movable_ = 0;
-  bool partial_ = false;  // some movable vertex has a strength below 1 (ScaleMoves)
+  bool partial_ = false;          // some movable vertex has a strength below 1 (ScaleMoves)
+  const Vec3* centre_ = nullptr;  // FlowParams::max_displacement's centres (SetBound)
+  double bound_ = 0.0;            // its radius; 0 = none
   int32_t blocks_ = 0;
   int threads_ = 1;
   StepContext ctx_;
@@ -317,6 +330,20 @@ class FlowRun {
 
 int ThreadsFor(int32_t n, const FlowParams& p) {
   return n < kParallelThreshold ? 1 : (p.threads > 0 ? p.threads : omp_get_max_threads());
+}
+
+int64_t KeepWithinBound(const Vec3* centre, double bound, Vec3* pos, int32_t begin, int32_t end, const uint8_t* role) {
+  const double bound_sq = bound * bound;
+  int64_t moved = 0;
+  for (int32_t v = begin; v < end; ++v) {
+    if (role != nullptr && role[v] == kFixed) continue;
+    const Vec3 offset = pos[v] - centre[v];
+    const double d2 = SquaredNorm(offset);
+    if (!(d2 > bound_sq)) continue;  // NaN too: the divergence check sees it
+    pos[v] = centre[v] + offset * (bound / std::sqrt(d2));
+    ++moved;
+  }
+  return moved;
 }
 
 absl::StatusOr<FlowResult> RunIterations(Mesh& mesh, const Topology& topo, const FlowParams& p,
@@ -366,13 +393,19 @@ absl::StatusOr<FlowResult> RunIterations(Mesh& mesh, const Topology& topo, const
   // Bound only now: a clean mesh (nothing to do) skips a normal filter's face graph.
   run.Bind(mesh);
   const int32_t n = mesh.num_vertices();
+  // FlowParams::max_displacement: the centres are the run's start unless the caller gives them.
+  const double bound = DisplacementBound(p, h);
+  std::vector<Vec3> own_centre;
+  if (bound > 0.0 && p.bound_centre.empty()) own_centre = mesh.positions;
+  const Vec3* const centre = p.bound_centre.empty() ? own_centre.data() : p.bound_centre.data();
+  if (bound > 0.0) run.SetBound(centre, bound);
   std::vector<Vec3> cur = std::move(mesh.positions), next(n), mid;
   if (run.passes() > 1) mid.resize(n);
   // The probe runs the flow a second time, beside the first, from the rule's probe input; the
   // run keeps the rule's best iteration in `best` once it has passed it.
   Mesh probe_mesh;
   std::optional<FlowRun> probe;
-  std::vector<Vec3> probe_next, probe_mid, best;
+  std::vector<Vec3> probe_next, probe_mid, best, probe_centre;
   if (probed) {
     probe_mesh.positions = rule->ProbeStart(cur);  // `cur`: the input still
     probe_mesh.triangles = mesh.triangles;
@@ -380,6 +413,11 @@ absl::StatusOr<FlowResult> RunIterations(Mesh& mesh, const Topology& topo, const
     FlowResult unused;
     probe->SetUp(unused);
     probe->Bind(probe_mesh);
+    if (bound > 0.0) {  // the run's centres, moved as the probe's start is
+      probe_centre.resize(n);
+      for (int32_t v = 0; v < n; ++v) probe_centre[v] = probe_mesh.positions[v] + (centre[v] - cur[v]);
+      probe->SetBound(probe_centre.data(), bound);
+    }
     probe_next.resize(n);
     if (probe->passes() > 1) probe_mid.resize(n);
   }
@@ -471,7 +509,9 @@ absl::StatusOr<FlowResult> RunIterations(Mesh& mesh, const Topology& topo, const
   }
   // What follows (the rule's Finish) reads only `cur`: the run's other buffers go first, so that
   // its own buffers do not add to theirs at the job's peak.
-  for (std::vector<Vec3>* buffer : {&next, &mid, &best, &probe_next, &probe_mid}) std::vector<Vec3>().swap(*buffer);
+  for (std::vector<Vec3>* buffer : {&next, &mid, &best, &probe_next, &probe_mid, &probe_centre, &own_centre}) {
+    std::vector<Vec3>().swap(*buffer);
+  }
   probe.reset();
   probe_mesh = Mesh();
   run.Release();

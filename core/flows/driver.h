@@ -19,6 +19,13 @@ inline constexpr int32_t kParallelThreshold = 20000;
 // (0 = all hardware threads).
 int ThreadsFor(int32_t n, const FlowParams& p);
 
+// FlowParams::max_displacement: puts each vertex v of pos[begin, end) farther than `bound` from
+// centre[v] back onto the sphere of radius `bound` around it, along the line to centre[v]
+// (skipping vertices whose role, flow_kernel.h, is kFixed when `role` is not null). Returns how
+// many it moved. A vertex at or within the bound keeps its bits.
+int64_t KeepWithinBound(const Vec3* centre, double bound, Vec3* pos, int32_t begin, int32_t end,
+                        const uint8_t* role = nullptr);
+
 // How a run with automatic iterations stops and what it does with its result: a rule the
 // caller gives (the default job's: core/job/). The driver calls Start before the first
 // iteration; unless it says the run has nothing to do, ProbeStart once (when the rule wants a

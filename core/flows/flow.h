@@ -130,6 +130,19 @@ struct FlowParams {
   // outlier and fold edits, and gives back no more folded faces than the input had
   // (core/job/default_job.cc).
   std::vector<float> strength;
+  // A bound on displacement: no vertex ends farther than this from where the job found it
+  // (mesh units); 0 = no bound. Every iteration of a run, once its passes are done (taubin's two,
+  // a normal filter's vertex updates), puts a movable vertex that would leave the ball of this
+  // radius around its start back onto the ball, along the line to the start, so the next
+  // iteration goes on from a position within the bound and may slide along it. The default job also keeps its own edits
+  // (outliers moved back, fold repair, volume) within the bound and gives back no more folded faces than the input had
+  // (core/job/default_job.cc). FlowResult::displacement_bound reports the bound applied.
+  double max_displacement = 0.0;
+  // The same bound in mean edge lengths h of the input (0 = none); at most one of the two is set.
+  double max_displacement_h = 0.0;
+  // Where the bound is measured from, one position per vertex; empty = the positions the run
+  // starts from. The default job sets it when it moved outliers before its runs.
+  std::vector<Vec3> bound_centre;
 
   // Stop early when the largest displacement of an iteration falls below tolerance * h
   // (0 = run every iteration).
@@ -214,6 +227,8 @@ struct FlowResult {
   // The default job's outliers moved onto their fitted surfaces before the run
   // (core/job/default_job.cc); 0 for any other job.
   int64_t outliers_moved = 0;
+  // The bound on displacement applied (DisplacementBound), mesh units; 0 = none.
+  double displacement_bound = 0.0;
   Progress last;
   std::optional<AutoStopReport> auto_stop;  // set when the run stopped automatically
 };
@@ -224,6 +239,10 @@ absl::Status ValidateFlowParams(const FlowParams& p, int32_t num_vertices);
 // InvalidArgument naming the vertex unless `strength` is empty or holds one value in [0, 1]
 // (not NaN) per vertex (FlowParams::strength).
 absl::Status ValidateStrength(const std::vector<float>& strength, int32_t num_vertices);
+
+// The bound on displacement of `p` in mesh units for an input of mean edge length h:
+// max_displacement, or max_displacement_h * h; 0 = none.
+double DisplacementBound(const FlowParams& p, double h);
 
 // Runs the flow on `mesh` (positions change in place; connectivity never does).
 // Errors: InvalidArgument for bad parameters or non-finite input coordinates; Cancelled when

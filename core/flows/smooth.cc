@@ -129,8 +129,28 @@ absl::Status ValidateFlowParams(const FlowParams& p, int32_t num_vertices) {
         absl::StrCat("the lock mask has ", p.locked.size(), " entries for ", num_vertices, " vertices"));
   }
   if (absl::Status s = ValidateStrength(p.strength, num_vertices); !s.ok()) return s;
+  for (const auto& [name, bound] :
+       {std::pair{"max_displacement", p.max_displacement}, std::pair{"max_displacement_h", p.max_displacement_h}}) {
+    if (!(bound >= 0.0) || !std::isfinite(bound)) {
+      return absl::InvalidArgumentError(
+          absl::StrFormat("%s must be finite and >= 0 (0 = no bound), got %g", name, bound));
+    }
+  }
+  if (p.max_displacement > 0.0 && p.max_displacement_h > 0.0) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("max_displacement (%g) and max_displacement_h (%g) are both set; give the bound one way",
+                        p.max_displacement, p.max_displacement_h));
+  }
+  if (!p.bound_centre.empty() && p.bound_centre.size() != static_cast<size_t>(num_vertices)) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("the bound's centres are ", p.bound_centre.size(), " positions for ", num_vertices, " vertices"));
+  }
   if (p.threads < 0) return absl::InvalidArgumentError(absl::StrCat("threads must be >= 0, got ", p.threads));
   return absl::OkStatus();
+}
+
+double DisplacementBound(const FlowParams& p, double h) {
+  return p.max_displacement > 0.0 ? p.max_displacement : p.max_displacement_h * h;
 }
 
 namespace flows {
@@ -153,6 +173,9 @@ absl::StatusOr<FlowResult> SmoothOneFlow(Mesh& mesh, const Topology& topo, const
   q.locked = std::move(local.locked);
   if (!p.strength.empty()) {
     for (int32_t i = 0; i < n; ++i) q.strength[i] = p.strength[local.order[i]];
+  }
+  if (!p.bound_centre.empty()) {
+    for (int32_t i = 0; i < n; ++i) q.bound_centre[i] = p.bound_centre[local.order[i]];
   }
   // The caller's positions are all written back below: their memory is free during the run
   // (24 bytes a vertex off the job's peak).

@@ -194,7 +194,8 @@ namespace {
 
 // The sample's vertices a run may not move: the patches' cuts (not the mesh's boundary), which
 // the risk estimate does not measure either (they leave sample.core), and the mesh's own locked
-// vertices. The mesh's strengths (FlowParams::strength) go to the sample's vertices in `on_sample`.
+// vertices. The mesh's strengths (FlowParams::strength) and bound centres go to the sample's
+// vertices in `on_sample`.
 void SampleLocks(Sample& sample, const Topology& sample_topo, const Topology& topo, const FlowParams& q,
                  FlowParams& on_sample) {
   std::vector<uint8_t> locked(sample_topo.num_vertices(), 0);
@@ -206,6 +207,12 @@ void SampleLocks(Sample& sample, const Topology& sample_topo, const Topology& to
     if (cut || (locked[s] && !q.strength.empty())) sample.core[s] = 0;
   }
   on_sample.locked = std::move(locked);
+  on_sample.bound_centre.clear();
+  if (!q.bound_centre.empty()) {
+    on_sample.bound_centre.resize(sample_topo.num_vertices());
+    for (int32_t s = 0; s < sample_topo.num_vertices(); ++s)
+      on_sample.bound_centre[s] = q.bound_centre[sample.origin[s]];
+  }
   on_sample.strength.clear();
   if (q.strength.empty()) return;
   on_sample.strength.resize(sample_topo.num_vertices());

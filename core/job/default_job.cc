@@ -14,8 +14,12 @@
 //
 // With per-vertex strengths (FlowParams::strength), the vertices of strength 0 are held as
 // locked ones are (no outlier move, fold repair or volume correction moves them) and the noise
-// is read on the others only (their fits); last, the result keeps no more folded faces than the
-// input had (KeepNoMoreFolds, repair.h).
+// is read on the others only (their fits). With a bound on displacement
+// (FlowParams::max_displacement), every run keeps its vertices within it iteration by iteration, centred
+// on the job's input (core/flows/driver.h, KeepWithinBound), and the edits after a run (fold
+// repair, volume) and outliers moved back farther than the bound go back onto it at the end.
+// With either, the result last keeps no more folded faces than the input had (KeepNoMoreFolds,
+// repair.h), which puts vertices back where the input has them.
 //
 // A JobPolicy (policy.h) holds every number; docs/quality-method.md says why the method is this one.
 #include "core/job/default_job.h"
@@ -71,8 +75,11 @@ int64_t MoveOutliersBack(Mesh& mesh, const Topology& topo, const FlowParams& p, 
   return outliers;
 }
 
+// `centre`: the bound's centres, the job's input unless the caller gave them (null without a
+// bound).
 absl::StatusOr<FlowResult> SmoothAutomatic(Mesh& mesh, const Topology& topo, const FlowParams& p,
-                                           const RunControl& control, double h, const JobPolicy& policy) {
+                                           const RunControl& control, double h, const JobPolicy& policy,
+                                           const std::vector<Vec3>* centre = nullptr) {
   FlowParams q = p;
   if (!ChoosesFlow(p)) q.flow = p.flow.value_or(kDefaultFlow);
   // 1. Every thread the job may use, whatever the mesh's size: the fits are independent and costly.
@@ -81,6 +88,8 @@ absl::StatusOr<FlowResult> SmoothAutomatic(Mesh& mesh, const Topology& topo, con
   // 2.
   const int64_t outliers = MoveOutliersBack(mesh, topo, q, control, h, policy, noise);
   if (absl::Status s = control.stop.Check(); !s.ok()) return s;
+  // The runs start from the outliers' new places; the bound stays centred on the input.
+  if (outliers > 0 && centre != nullptr) q.bound_centre = *centre;
   // 3. The input is kept only where step 4 may take over (24 bytes a vertex).
   const bool visible = TurnsFacesVisibly(noise, policy);
   const std::vector<Vec3> input = visible ? mesh.positions : std::vector<Vec3>{};
@@ -124,18 +133,29 @@ absl::StatusOr<FlowResult> SmoothWithPolicy(Mesh& mesh, const Topology& topo, co
   if (std::all_of(p.strength.begin(), p.strength.end(), [](float s) { return s == 1.0f; })) q.strength.clear();
   // Only the default job moves rims of its own accord (BoundaryMode::kAuto).
   if (q.boundary == BoundaryMode::kAuto && !ChoosesFlow(p)) q.boundary = BoundaryMode::kFixed;
-  if (p.iterations == kAutoIterations) {
-    if (q.strength.empty()) return SmoothAutomatic(mesh, topo, q, control, h, policy);
+  const double bound = DisplacementBound(q, h);
+  absl::StatusOr<FlowResult> result;
+  if (p.iterations != kAutoIterations) {
+    q.flow = p.flow.value_or(kDefaultFlow);
+    result = flows::SmoothOneFlow(mesh, topo, q, control, h);
+  } else if (q.strength.empty() && bound == 0.0) {
+    result = SmoothAutomatic(mesh, topo, q, control, h, policy);
+  } else {
     // Strength 0 holds a vertex as the lock mask does, in every edit of the job.
-    if (q.locked.empty()) q.locked.assign(n, 0);
-    for (int32_t v = 0; v < n; ++v) q.locked[v] |= q.strength[v] == 0.0f;
+    if (!q.strength.empty()) {
+      if (q.locked.empty()) q.locked.assign(n, 0);
+      for (int32_t v = 0; v < n; ++v) q.locked[v] |= q.strength[v] == 0.0f;
+    }
     const std::vector<Vec3> input = mesh.positions;
-    absl::StatusOr<FlowResult> result = SmoothAutomatic(mesh, topo, q, control, h, policy);
-    if (result.ok()) KeepNoMoreFolds(mesh.positions.data(), input.data(), mesh, topo);
-    return result;
+    const std::vector<Vec3>& centre = q.bound_centre.empty() ? input : q.bound_centre;
+    result = SmoothAutomatic(mesh, topo, q, control, h, policy, bound > 0.0 ? &centre : nullptr);
+    if (result.ok()) {
+      if (bound > 0.0) flows::KeepWithinBound(centre.data(), bound, mesh.positions.data(), 0, n);
+      KeepNoMoreFolds(mesh.positions.data(), input.data(), mesh, topo);
+    }
   }
-  q.flow = p.flow.value_or(kDefaultFlow);
-  return flows::SmoothOneFlow(mesh, topo, q, control, h);
+  if (result.ok()) result->displacement_bound = bound;
+  return result;
 }
 
 }  // namespace job

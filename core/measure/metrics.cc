@@ -190,17 +190,23 @@ absl::StatusOr<Displacement> CompareMeshes(const Mesh& before, const Mesh& after
   return CompareMeshes(before.positions, after);
 }
 
-absl::StatusOr<Displacement> CompareMeshes(const std::vector<Vec3>& before, const Mesh& after) {
+absl::StatusOr<Displacement> CompareMeshes(const std::vector<Vec3>& before, const Mesh& after, double bound) {
   if (before.size() != after.positions.size()) {
     return absl::InvalidArgumentError(
         absl::StrCat("vertex counts differ: ", before.size(), " and ", after.positions.size()));
   }
   Displacement d;
   double sq = 0.0;
+  const double at_bound = (1.0 - kAtBoundTolerance) * bound;
   for (size_t i = 0; i < before.size(); ++i) {
     const double len = Norm(after.positions[i] - before[i]);
     sq += len * len;
     d.max = std::max(d.max, len);
+    if (bound > 0.0) {
+      const Vec3& p = after.positions[i];
+      const Vec3 written{static_cast<float>(p.x), static_cast<float>(p.y), static_cast<float>(p.z)};
+      d.at_bound += Norm(written - before[i]) >= at_bound;
+    }
   }
   if (!before.empty()) d.rms = std::sqrt(sq / static_cast<double>(before.size()));
   const int32_t n = after.num_vertices();

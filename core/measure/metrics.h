@@ -37,10 +37,19 @@ inline constexpr int32_t kMetricsTeamMinVertices = 20000;
 MeshMetrics ComputeMetricsBeside(const Mesh& mesh, const Topology& topo, const std::function<void()>& beside,
                                  int threads = 0, const StopToken& stop = {});
 
+// A vertex is at a bound on displacement (FlowParams::max_displacement) when it moved at least
+// (1 - kAtBoundTolerance) times the bound: a run puts the vertices it holds at the bound exactly,
+// and a float32 coordinate's rounding moves them by far less than this share of any bound above
+// a ten-thousandth of the coordinates' magnitude.
+inline constexpr double kAtBoundTolerance = 1e-3;
+
 struct Displacement {
   double rms = 0.0;  // RMS of |after_i - before_i| over all vertices
   double max = 0.0;
   int64_t flipped_normals = 0;  // usable faces whose normal turned by more than 90 degrees
+  // With a bound: the vertices at it (kAtBoundTolerance), each displacement measured from
+  // `after` rounded to float32 as a lossless result holds it; 0 without a bound.
+  int64_t at_bound = 0;
 };
 
 // Compares two meshes with the same connectivity. InvalidArgument when the vertex counts or
@@ -48,9 +57,10 @@ struct Displacement {
 absl::StatusOr<Displacement> CompareMeshes(const Mesh& before, const Mesh& after);
 
 // Same, for `after` and the positions its vertices had before (its triangles throughout): a
-// job keeps only the input's positions, not a second copy of the triangles. InvalidArgument
-// when the vertex counts differ.
-absl::StatusOr<Displacement> CompareMeshes(const std::vector<Vec3>& before, const Mesh& after);
+// job keeps only the input's positions, not a second copy of the triangles; with `bound` > 0
+// (mesh units), Displacement::at_bound counts the vertices at it. InvalidArgument when the
+// vertex counts differ.
+absl::StatusOr<Displacement> CompareMeshes(const std::vector<Vec3>& before, const Mesh& after, double bound = 0.0);
 
 // Mean edge length of the usable faces' unique edges (0 for a mesh without edges).
 double MeanEdgeLength(const Mesh& mesh, const Topology& topo);
