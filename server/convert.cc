@@ -108,6 +108,8 @@ absl::StatusOr<JobParams> FromProto(const v1::JobSpec& spec, int max_iterations)
                : spec.boundary() == v1::BOUNDARY_MODE_FIXED ? BoundaryMode::kFixed
                                                             : BoundaryMode::kAuto;
   p.tolerance = spec.tolerance();
+  p.max_displacement = spec.max_displacement();
+  p.max_displacement_h = spec.max_displacement_h();
   if (absl::Status s = ValidateFlowParams(p, 0); !s.ok()) return s;
 
   if (spec.output().quantization_bits() > static_cast<uint32_t>(kMaxQuantizationBits)) {
@@ -207,6 +209,7 @@ void ToProto(const JobParams& params, const FlowResult& result, v1::EffectivePar
     out->set_noise_estimate_detail_free(result.auto_stop->detail_free_h);
   }
   out->set_outliers_moved(result.outliers_moved);
+  out->set_max_displacement(result.displacement_bound);
   out->set_weights(p.weights == UmbrellaWeights::kInverseDistance ? v1::UMBRELLA_WEIGHTS_INVERSE_DISTANCE
                                                                   : v1::UMBRELLA_WEIGHTS_UNIFORM);
   out->set_boundary(result.boundary == BoundaryMode::kCurve ? v1::BOUNDARY_MODE_CURVE : v1::BOUNDARY_MODE_FIXED);
@@ -237,6 +240,7 @@ v1::Summary MakeSummary(const JobReport& report, const JobParams& params) {
     summary.set_rms_displacement(report.displacement->rms);
     summary.set_max_displacement(report.displacement->max);
     summary.set_flipped_normals(report.displacement->flipped_normals);
+    summary.set_vertices_at_bound(report.displacement->at_bound);
   }
   v1::Timings* t = summary.mutable_timings();
   t->set_decode_seconds(report.decode_seconds);

@@ -190,7 +190,7 @@ absl::StatusOr<std::string> SmoothJob::EncodeAndMeasure(DracoMesh& draco, const 
       mesh, topo,
       [&] {
         encoded = draco.Encode(mesh, params_.output, attributes, stop);
-        displacement = CompareMeshes(input, mesh);
+        displacement = CompareMeshes(input, mesh, report.flow.displacement_bound);
       },
       options_.threads_per_job, stop);
   if (displacement.ok()) report.displacement = *displacement;

@@ -140,6 +140,24 @@ std::vector<ParameterInfo> CommonParameters(int max_iterations) {
        false,
        false,
        {}},
+      {"max_displacement",
+       "a bound on displacement, mesh units: no vertex ends farther than this from its input position (each iteration "
+       "puts a vertex leaving the ball around it back onto the ball; the default job returns no more folded faces "
+       "than it got); the summary counts the vertices at the bound (0 = no bound)",
+       0.0,
+       0.0,
+       kInf,
+       false,
+       true,
+       {}},
+      {"max_displacement_h",
+       "the same bound in mean edge lengths of the input (0 = none; set at most one of the two)",
+       0.0,
+       0.0,
+       kInf,
+       false,
+       true,
+       {}},
   };
 }
 
