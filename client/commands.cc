@@ -77,13 +77,38 @@ v1::JobSpec SpecFrom(const SmoothOptions& o) {
     spec.mutable_features()->set_min_abs_curvature(o.ridge_threshold);
   }
   if (o.strength.any()) spec.set_strength_attribute(kStrengthAttribute);
+  // Checked before (CheckSmoothOptions).
+  if (absl::StatusOr<DisplacementBoundOption> bound = ParseMaxDisplacement(o.max_displacement); bound.ok()) {
+    if (bound->in_h) {
+      spec.set_max_displacement_h(bound->value);
+    } else {
+      spec.set_max_displacement(bound->value);
+    }
+  }
   return spec;
 }
 
 }  // namespace
 
+absl::StatusOr<DisplacementBoundOption> ParseMaxDisplacement(const std::string& text) {
+  DisplacementBoundOption bound;
+  if (text.empty()) return bound;
+  std::string number = text;
+  if (number.back() == 'h') {
+    bound.in_h = true;
+    number.pop_back();
+  }
+  if (!absl::SimpleAtod(number, &bound.value) || !std::isfinite(bound.value) || bound.value < 0.0) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        "--max-displacement: '", text,
+        "' is not a bound; give a finite number >= 0 in mesh units (0.02) or in mean edge lengths (0.5h)"));
+  }
+  return bound;
+}
+
 absl::Status CheckSmoothOptions(const SmoothOptions& options) {
   if (absl::Status s = CheckStrengthOptions(options.strength); !s.ok()) return s;
+  if (absl::Status s = ParseMaxDisplacement(options.max_displacement).status(); !s.ok()) return s;
   v1::JobSpec spec = SpecFrom(options);
   spec.clear_job_id();
   return server::FromProto(spec, std::numeric_limits<int>::max()).status();

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "absl/status/status.h"
+#include "absl/status/statusor.h"
 #include "client/connection.h"
 #include "client/strength.h"
 
@@ -40,7 +41,20 @@ struct SmoothOptions {
   double ridge_threshold = 0.0;
   std::string job_id;        // JobSpec.job_id; empty = the server makes one up
   StrengthOptions strength;  // --weight, --fixed, --region, --outside, --falloff
+  // --max-displacement: D (mesh units) or Dh (D mean edge lengths); empty = no bound.
+  std::string max_displacement;
 };
+
+// --max-displacement parsed: the bound and whether it is in mean edge lengths.
+struct DisplacementBoundOption {
+  double value = 0.0;
+  bool in_h = false;
+};
+
+// "0.02" (mesh units) or "0.5h" (mean edge lengths of the input); empty = no bound (0).
+// InvalidArgument naming --max-displacement for anything else, a negative value, NaN or an
+// infinity.
+absl::StatusOr<DisplacementBoundOption> ParseMaxDisplacement(const std::string& text);
 
 // `meshsmooth render`.
 struct RenderCommand {

@@ -260,6 +260,13 @@ void AddSmoothOptions(CLI::App* smooth, SmoothOptions& so) {
       ->add_option("--ridge-threshold", so.ridge_threshold,
                    "with --ridges: ignore features with |curvature| at or below this (1/mesh units)")
       ->capture_default_str();
+  smooth->add_option(
+      "--max-displacement", so.max_displacement,
+      "D or Dh: a bound on displacement, no vertex ends farther than D mesh units (Dh: D mean edge "
+      "lengths of the input, e.g. 0.5h) from its input position. Every flow keeps it as it runs (a "
+      "vertex leaving the ball around its input position goes back onto it after each iteration, and the "
+      "flow goes on from there); the default job returns no more folded faces than it got. The "
+      "summary prints how many vertices reached the bound (99.9% of it or more); 0 = no bound");
   smooth->add_option("--job-id", so.job_id,
                      "the job's id in the server's log and the summary (1-128 printable ASCII characters, no "
                      "spaces); default: the server makes one up. Retries send the same id");

@@ -118,6 +118,10 @@ void PrintSummary(const v1::Summary& s) {
               100 * b.share_angles_below_10deg());
   std::printf("displacement RMS %.6g, max %.6g; flipped normals %lld\n", s.rms_displacement(), s.max_displacement(),
               static_cast<long long>(s.flipped_normals()));
+  if (p.max_displacement() > 0.0) {
+    std::printf("bound on displacement %.6g: %lld vertices at it (moved 99.9%% of it or more)\n", p.max_displacement(),
+                static_cast<long long>(s.vertices_at_bound()));
+  }
   if (s.has_features()) {
     std::printf("features: %lld ridge and %lld ravine vertices of %lld classified (%.3fs)\n",
                 static_cast<long long>(s.features().ridge_vertices()),
