@@ -17,6 +17,7 @@
 #include "absl/strings/str_join.h"
 #include "client/inputs.h"
 #include "client/json.h"
+#include "client/local_run.h"
 #include "client/report.h"
 #include "client/retry.h"
 #include "client/smooth_client.h"
@@ -114,6 +115,91 @@ absl::Status CheckSmoothOptions(const SmoothOptions& options) {
   return server::FromProto(spec, std::numeric_limits<int>::max()).status();
 }
 
+namespace {
+
+// How a job ran, through the service or in memory: its status, or its summary and result.
+struct JobRun {
+  absl::Status status;
+  std::string prefix;  // before the status's message: its code's name, for a status the call ended with
+  bool interrupted = false;
+  v1::Summary summary;
+  std::string result;  // through the service: the result's Draco bytes
+  LocalOutcome local;  // in memory: the result's points
+};
+
+// Without --server, a mesh file (or builtin:NAME) written to a mesh file other than .drc with
+// the default lossless sequential encoding goes to a job in this process in memory. The rest goes
+// through the in-process service's codec: quantization and Edgebreaker are Draco's encodings
+// of the result, and a .drc or glTF input or output is Draco data itself.
+bool RunsInMemory(const SmoothOptions& o, const ConnectionOptions& c, MeshFormat out) {
+  if (!c.server.empty() || IsGltfPath(o.input) || IsGltfPath(o.output) || out == MeshFormat::kDraco) return false;
+  const absl::StatusOr<MeshFormat> in = FormatFromPath(o.input);
+  if (in.ok() && *in == MeshFormat::kDraco) return false;
+  return o.quantization_bits == 0 && !o.edgebreaker;
+}
+
+JobRun RunInMemory(const v1::JobSpec& spec, Upload& upload, const ConnectionOptions& c, ProgressPrinter& progress) {
+  JobRun run;
+  server::MeshUpload mesh{&upload.kept.positions, &upload.kept.triangles, std::move(upload.strength_values)};
+  LocalJob job;
+  absl::StatusOr<LocalOutcome> outcome;
+  {
+    InterruptWatcher watcher([&job] { job.Cancel(); });
+    outcome = job.Run(spec, std::move(mesh), CallDeadline(c), std::ref(progress));
+    run.interrupted = watcher.interrupted();
+  }
+  if (!outcome.ok()) {
+    run.status = outcome.status();
+    run.prefix = std::string(absl::StatusCodeToString(run.status.code())) + ": ";
+    return run;
+  }
+  run.summary = std::move(outcome->summary);
+  run.local = *std::move(outcome);
+  return run;
+}
+
+JobRun RunThroughService(const v1::JobSpec& spec, Upload& upload, const ConnectionOptions& c, bool quiet,
+                         ProgressPrinter& progress) {
+  JobRun run;
+  std::unique_ptr<server::Server> embedded;
+  absl::StatusOr<std::shared_ptr<grpc::Channel>> channel = Connect(c, embedded);
+  if (!channel.ok()) {
+    run.status = channel.status();
+    return run;
+  }
+  auto stub = v1::MeshSmoother::NewStub(*channel);
+  RetryPolicy policy;
+  // The in-process server has no network to fail between: one attempt, and the upload's bytes
+  // go as soon as they are sent (the server holds its own copy while the job runs).
+  policy.max_attempts = embedded != nullptr ? 1 : 1 + std::max(0, c.retries);
+  const auto deadline = CallDeadline(c);  // one deadline for every attempt
+  RetryingSmooth call(
+      policy, [&c, deadline](grpc::ClientContext& ctx) { return PrepareContext(c, ctx, deadline); }, deadline,
+      [quiet](int retry, const absl::Status& s, std::chrono::milliseconds wait) {
+        if (quiet) return;
+        std::fprintf(stderr, "meshsmooth: attempt %d failed (%s: %s); retrying in %.1f s\n", retry,
+                     std::string(absl::StatusCodeToString(s.code())).c_str(), std::string(s.message()).c_str(),
+                     static_cast<double>(wait.count()) / 1000.0);
+      });
+  call.ReleaseAfterLastSend([&upload] { std::string().swap(upload.draco); });
+  absl::StatusOr<SmoothOutcome> outcome;
+  {
+    InterruptWatcher watcher([&call] { call.Cancel(); });
+    outcome = call.Run(*stub, spec, upload.draco, std::ref(progress));
+    run.interrupted = watcher.interrupted();
+  }
+  if (!outcome.ok()) {
+    run.prefix = std::string(absl::StatusCodeToString(outcome.status().code())) + ": ";
+    run.status = WithConnectionHint(outcome.status(), c);
+    return run;
+  }
+  run.summary = std::move(outcome->summary);
+  run.result = std::move(outcome->result);
+  return run;
+}
+
+}  // namespace
+
 int RunSmooth(const SmoothOptions& o, const ConnectionOptions& c) {
   const bool gltf_out = IsGltfPath(o.output);
   if (!gltf_out && IsGltfPath(o.input)) {
@@ -133,57 +219,32 @@ int RunSmooth(const SmoothOptions& o, const ConnectionOptions& c) {
     std::cerr << "meshsmooth: warning: --ridges labels are kept only in .ply and .obj (vertex colours) and .drc "
                  "(attributes) output; the summary still counts them\n";
   }
+  const bool in_memory = RunsInMemory(o, c, *out_format);
   // The attributes go to the service only for a .drc output, which is written as it comes back.
-  absl::StatusOr<Upload> upload = PrepareUpload(o.input, *out_format == MeshFormat::kDraco, o.gltf_draco, o.strength);
+  absl::StatusOr<Upload> upload =
+      PrepareUpload(o.input, *out_format == MeshFormat::kDraco, o.gltf_draco, o.strength, in_memory);
   if (!upload.ok()) return Fail("", upload.status());
   for (const std::string& w : upload->warnings) std::cerr << "meshsmooth: warning: " << w << "\n";
   const v1::JobSpec spec = SpecFrom(o);
-
-  std::unique_ptr<server::Server> embedded;
-  absl::StatusOr<std::shared_ptr<grpc::Channel>> channel = Connect(c, embedded);
-  if (!channel.ok()) return Fail("", channel.status());
-  auto stub = v1::MeshSmoother::NewStub(*channel);
-  RetryPolicy policy;
-  // The in-process server has no network to fail between: one attempt, and the upload's bytes
-  // go as soon as they are sent (the server holds its own copy while the job runs).
-  policy.max_attempts = embedded != nullptr ? 1 : 1 + std::max(0, c.retries);
-  const bool quiet = o.quiet || o.json;
-  const auto deadline = CallDeadline(c);  // one deadline for every attempt
-  RetryingSmooth call(
-      policy, [&c, deadline](grpc::ClientContext& ctx) { return PrepareContext(c, ctx, deadline); }, deadline,
-      [quiet](int retry, const absl::Status& s, std::chrono::milliseconds wait) {
-        if (quiet) return;
-        std::fprintf(stderr, "meshsmooth: attempt %d failed (%s: %s); retrying in %.1f s\n", retry,
-                     std::string(absl::StatusCodeToString(s.code())).c_str(), std::string(s.message()).c_str(),
-                     static_cast<double>(wait.count()) / 1000.0);
-      });
-  call.ReleaseAfterLastSend([&upload] { std::string().swap(upload->draco); });
-  ProgressPrinter progress(quiet);
-  absl::StatusOr<SmoothOutcome> outcome;
-  bool interrupted = false;
-  {
-    InterruptWatcher watcher([&call] { call.Cancel(); });
-    outcome = call.Run(*stub, spec, upload->draco, std::ref(progress));
-    interrupted = watcher.interrupted();
-  }
+  ProgressPrinter progress(o.quiet || o.json);
+  JobRun run = in_memory ? RunInMemory(spec, *upload, c, progress)
+                         : RunThroughService(spec, *upload, c, o.quiet || o.json, progress);
   progress.Done();
-  if (interrupted) {
+  if (run.interrupted) {
     std::cerr << "meshsmooth: interrupted; the job was cancelled\n";
     return kExitInterrupted;
   }
-  if (!outcome.ok()) {
-    return Fail(std::string(absl::StatusCodeToString(outcome.status().code())) + ": ",
-                WithConnectionHint(outcome.status(), c));
-  }
+  if (!run.status.ok()) return Fail(run.prefix, run.status);
   std::vector<std::string> dropped = upload->dropped;
   DracoOptions draco;
   draco.quantization_bits = o.quantization_bits;
   draco.method = o.edgebreaker ? DracoMethod::kEdgebreaker : DracoMethod::kSequential;
-  if (absl::Status s = WriteResult(*upload, outcome->result, o.output, o.ridges, &dropped, o.gltf_draco, draco);
-      !s.ok()) {
-    return Fail("", s);
-  }
-  for (const std::string& w : outcome->summary.warnings()) std::cerr << "meshsmooth: warning: " << w << "\n";
+  const absl::Status written =
+      in_memory
+          ? WriteResultPoints(*upload, std::move(run.local.points), run.local.labels, o.output, o.ridges, &dropped)
+          : WriteResult(*upload, run.result, o.output, o.ridges, &dropped, o.gltf_draco, draco);
+  if (!written.ok()) return Fail("", written);
+  for (const std::string& w : run.summary.warnings()) std::cerr << "meshsmooth: warning: " << w << "\n";
   // Everything not carried from the input to the output, in one line.
   if (!dropped.empty()) std::cerr << "meshsmooth: warning: not kept: " << absl::StrJoin(dropped, "; ") << "\n";
   if (o.json) {
@@ -191,10 +252,10 @@ int RunSmooth(const SmoothOptions& o, const ConnectionOptions& c) {
     v1::Summary summary;
     for (const std::string& w : upload->warnings) summary.add_warnings(w);
     for (const std::string& d : dropped) summary.add_warnings(absl::StrCat("not kept: ", d));
-    summary.MergeFrom(outcome->summary);
+    summary.MergeFrom(run.summary);
     std::printf("%s", ToJson(summary).c_str());
   } else if (!o.quiet) {
-    PrintSummary(outcome->summary);
+    PrintSummary(run.summary);
     std::printf("wrote %s\n", o.output.c_str());
   }
   return 0;

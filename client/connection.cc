@@ -15,6 +15,7 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_join.h"
 #include "absl/strings/str_split.h"
+#include "client/local_run.h"
 #include "core/io/file_bytes.h"
 
 namespace meshsmooth::client {
@@ -107,11 +108,7 @@ std::string ServiceConfigJson(int retries) {
 absl::StatusOr<std::shared_ptr<grpc::Channel>> Connect(const ConnectionOptions& options,
                                                        std::unique_ptr<server::Server>& embedded) {
   if (options.server.empty()) {
-    server::ServerOptions o;
-    o.log_jobs = false;
-    o.log_refusals = false;  // the call's status tells the user
-    o.workers = 1;
-    absl::StatusOr<std::unique_ptr<server::Server>> s = server::Server::Start(o, /*listen=*/false);
+    absl::StatusOr<std::unique_ptr<server::Server>> s = server::Server::Start(LocalServerOptions(), /*listen=*/false);
     if (!s.ok()) return s.status();
     embedded = std::move(*s);
     return embedded->InProcessChannel();

@@ -129,9 +129,11 @@ void PrintSummary(const v1::Summary& s) {
                 static_cast<long long>(s.features().classified_vertices()), s.features().detect_seconds());
   }
   const v1::Timings& t = s.timings();
-  std::printf("time: decode %.3fs, queue %.3fs, smooth %.3fs, encode %.3fs, total %.3fs; result %llu bytes\n",
-              t.decode_seconds(), t.queue_seconds(), t.smooth_seconds(), t.encode_seconds(), t.total_seconds(),
-              static_cast<unsigned long long>(s.result_bytes()));
+  std::printf("time: decode %.3fs, queue %.3fs, smooth %.3fs, encode %.3fs, total %.3fs", t.decode_seconds(),
+              t.queue_seconds(), t.smooth_seconds(), t.encode_seconds(), t.total_seconds());
+  // The local run hands its result over in memory: no bytes to count.
+  if (s.result_bytes() > 0) std::printf("; result %llu bytes", static_cast<unsigned long long>(s.result_bytes()));
+  std::printf("\n");
 }
 
 void PrintFlows(const v1::ListFlowsResponse& flows) {

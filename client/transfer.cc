@@ -157,6 +157,39 @@ absl::StatusOr<std::string> EncodeWithStrength(Mesh& mesh, const std::vector<flo
   return bytes;
 }
 
+absl::Status AboutResult(const absl::Status& s) {
+  return absl::Status(s.code(), absl::StrCat("the result: ", s.message()));
+}
+
+// The end of WriteResult for every output but .drc and glTF: `mesh` (the result's positions with
+// the input's attributes, or a Draco input's result as decoded) moved back by the origin, the
+// ridge `labels` (one per point, when `ridges`) as colours, written in `format`.
+absl::Status WriteMesh(const Upload& upload, Mesh mesh, const std::vector<uint8_t>& labels, MeshFormat format,
+                       const std::string& output, bool ridges, std::vector<std::string>& lost) {
+  if (upload.origin != Vec3{}) {
+    Translate(mesh.positions, upload.origin);
+    if (format == MeshFormat::kStl) lost.push_back(Float32Loss(mesh.positions, ".stl"));
+  }
+  if (ridges) {
+    std::vector<uint8_t> bytes = labels;
+    bytes.resize(mesh.positions.size());
+    mesh.colors = FeatureColors(bytes);
+    // Shown as the colours; the curvatures are the service's, not the input's.
+    std::erase_if(mesh.properties, [](const VertexProperty& p) {
+      return p.name == kFeatureLabelAttribute || p.name == kKmaxAttribute || p.name == kKminAttribute;
+    });
+  }
+  for (std::string& s : NotHeldBy(mesh, format)) lost.push_back(std::move(s));
+  if (format == MeshFormat::kPly && !mesh.normals.empty() && !PerVertexValues(mesh, mesh.normals).has_value()) {
+    lost.push_back("hard edges (.ply holds one normal per vertex: the smooth one is written)");
+    mesh.normals = FreshNormals(mesh, {});
+  }
+  if (format == MeshFormat::kObj && !upload.draco_input) RelinkMaterials(mesh, upload.input, output, lost);
+  WriteOptions options;
+  options.ply_double = upload.double_positions;
+  return meshsmooth::WriteMesh(output, mesh, options);
+}
+
 }  // namespace
 
 absl::Status CheckOutputPath(const std::string& output) {
@@ -186,7 +219,7 @@ bool IsGltfPath(const std::string& path) {
 }
 
 absl::StatusOr<Upload> PrepareUpload(const std::string& input, bool with_attributes, bool gltf_draco,
-                                     const StrengthOptions& strength) {
+                                     const StrengthOptions& strength, bool in_memory) {
   Upload upload;
   upload.input = input;
   const absl::StatusOr<MeshFormat> format = FormatFromPath(input);
@@ -240,6 +273,13 @@ absl::StatusOr<Upload> PrepareUpload(const std::string& input, bool with_attribu
       info.double_positions || upload.origin != Vec3{} ||
       std::any_of(mesh->positions.begin(), mesh->positions.end(), [](const Vec3& p) { return RoundToFloat(p) != p; });
   if (upload.origin != Vec3{}) Translate(mesh->positions, -upload.origin);
+  upload.num_vertices = mesh->num_vertices();
+  if (in_memory) {
+    if (absl::Status s = CheckPositionsEncodable(*mesh); !s.ok()) return s;
+    upload.strength_values = *std::move(weights);
+    upload.kept = std::move(*mesh);
+    return upload;
+  }
   absl::StatusOr<std::string> bytes;
   if (with_attributes) {
     bytes = EncodeWithStrength(*mesh, *weights);
@@ -253,7 +293,6 @@ absl::StatusOr<Upload> PrepareUpload(const std::string& input, bool with_attribu
   }
   if (!bytes.ok()) return bytes.status();
   upload.draco = std::move(*bytes);
-  upload.num_vertices = mesh->num_vertices();
   upload.kept = std::move(*mesh);
   return upload;
 }
@@ -297,54 +336,45 @@ absl::Status WriteResult(Upload& upload, const std::string& result, const std::s
     if (!bytes.ok()) return bytes.status();
     return WriteFileBytes(output, *bytes);
   }
-  auto about_result = [](const absl::Status& s) {
-    return absl::Status(s.code(), absl::StrCat("the result: ", s.message()));
-  };
   // Only a Draco input's attributes come from the result; the others' are the input's own.
   absl::StatusOr<Mesh> decoded = DecodeDraco(result, upload.draco_input ? &lost : nullptr, upload.draco_input);
-  if (!decoded.ok()) return about_result(decoded.status());
-  Mesh mesh;
-  if (upload.draco_input) {
-    mesh = std::move(*decoded);
-  } else {
-    // Vertex i is point i of the result (SplitAtSeams puts the seams' points after them).
-    if (decoded->num_vertices() < upload.num_vertices) {
-      return about_result(absl::DataLossError(
-          absl::StrCat("it has ", decoded->num_vertices(), " points for ", upload.num_vertices, " vertices")));
-    }
-    mesh.positions.assign(decoded->positions.begin(), decoded->positions.begin() + upload.num_vertices);
-    KeepUnmoved(upload.kept.positions, mesh.positions);
-    mesh.triangles = std::move(upload.kept.triangles);
-    mesh.colors = std::move(upload.kept.colors);
-    mesh.uvs = std::move(upload.kept.uvs);
-    mesh.properties = std::move(upload.kept.properties);
-    mesh.obj_directives = std::move(upload.kept.obj_directives);
-    if (!upload.kept.normals.empty()) mesh.normals = FreshNormals(mesh, upload.kept.normals);
+  if (!decoded.ok()) return AboutResult(decoded.status());
+  // Vertex i is point i of the result (SplitAtSeams puts the seams' points after them).
+  if (!upload.draco_input && decoded->num_vertices() < upload.num_vertices) {
+    return AboutResult(absl::DataLossError(
+        absl::StrCat("it has ", decoded->num_vertices(), " points for ", upload.num_vertices, " vertices")));
   }
-  if (upload.origin != Vec3{}) {
-    Translate(mesh.positions, upload.origin);
-    if (*format == MeshFormat::kStl) lost.push_back(Float32Loss(mesh.positions, ".stl"));
-  }
+  std::vector<uint8_t> labels;
   if (ridges) {
-    absl::StatusOr<std::vector<float>> labels = DecodeDracoAttribute(result, kFeatureLabelAttribute);
-    if (!labels.ok()) return about_result(labels.status());
-    std::vector<uint8_t> bytes(labels->begin(), labels->end());
-    bytes.resize(mesh.positions.size());
-    mesh.colors = FeatureColors(bytes);
-    // Shown as the colours; the curvatures are the service's, not the input's.
-    std::erase_if(mesh.properties, [](const VertexProperty& p) {
-      return p.name == kFeatureLabelAttribute || p.name == kKmaxAttribute || p.name == kKminAttribute;
-    });
+    absl::StatusOr<std::vector<float>> values = DecodeDracoAttribute(result, kFeatureLabelAttribute);
+    if (!values.ok()) return AboutResult(values.status());
+    labels.assign(values->begin(), values->end());
   }
-  for (std::string& s : NotHeldBy(mesh, *format)) lost.push_back(std::move(s));
-  if (*format == MeshFormat::kPly && !mesh.normals.empty() && !PerVertexValues(mesh, mesh.normals).has_value()) {
-    lost.push_back("hard edges (.ply holds one normal per vertex: the smooth one is written)");
-    mesh.normals = FreshNormals(mesh, {});
+  if (upload.draco_input) return WriteMesh(upload, *std::move(decoded), labels, *format, output, ridges, lost);
+  decoded->positions.resize(upload.num_vertices);
+  return WriteResultPoints(upload, std::move(decoded->positions), labels, output, ridges, &lost);
+}
+
+absl::Status WriteResultPoints(Upload& upload, std::vector<Vec3> points, const std::vector<uint8_t>& labels,
+                               const std::string& output, bool ridges, std::vector<std::string>* dropped) {
+  std::vector<std::string> ignored;
+  std::vector<std::string>& lost = dropped != nullptr ? *dropped : ignored;
+  absl::StatusOr<MeshFormat> format = FormatFromPath(output);
+  if (!format.ok()) return format.status();
+  if (*format == MeshFormat::kDraco || upload.draco_input || upload.gltf != nullptr ||
+      static_cast<int64_t>(points.size()) != upload.num_vertices) {
+    return absl::InvalidArgumentError("the result of a job run in memory is written from a mesh file's upload only");
   }
-  if (*format == MeshFormat::kObj && !upload.draco_input) RelinkMaterials(mesh, upload.input, output, lost);
-  WriteOptions options;
-  options.ply_double = upload.double_positions;
-  return WriteMesh(output, mesh, options);
+  Mesh mesh;
+  mesh.positions = std::move(points);
+  KeepUnmoved(upload.kept.positions, mesh.positions);
+  mesh.triangles = std::move(upload.kept.triangles);
+  mesh.colors = std::move(upload.kept.colors);
+  mesh.uvs = std::move(upload.kept.uvs);
+  mesh.properties = std::move(upload.kept.properties);
+  mesh.obj_directives = std::move(upload.kept.obj_directives);
+  if (!upload.kept.normals.empty()) mesh.normals = FreshNormals(mesh, upload.kept.normals);
+  return WriteMesh(upload, std::move(mesh), labels, *format, output, ridges, lost);
 }
 
 }  // namespace meshsmooth::client

@@ -38,6 +38,8 @@ struct Upload {
   std::shared_ptr<GltfScene> gltf;
   // The upload carries a per-vertex strength, the attribute kStrengthAttribute (client/strength.h).
   bool strength = false;
+  // For a job run in memory (no `draco`): the strength's values, one per vertex of `kept`.
+  std::vector<float> strength_values;
 };
 
 // True for a path whose extension is .gltf or .glb (case-insensitive).
@@ -58,8 +60,13 @@ bool IsGltfPath(const std::string& path);
 // kStrengthAttribute (replacing an input property of that name), whatever `with_attributes`;
 // InvalidArgument naming the flag for a Draco or glTF input, which the CLI does not read as a
 // mesh of its own, and for VertexStrength's errors.
+//
+// `in_memory` (a mesh file or builtin:NAME, without `with_attributes`): the mesh goes to a job in
+// this process as it is (server::MeshUpload over `kept`, the strength in `strength_values`)
+// instead of being encoded; the same checks as the encoder's (CheckPositionsEncodable), with
+// the same errors, so that the local run fails where the upload would.
 absl::StatusOr<Upload> PrepareUpload(const std::string& input, bool with_attributes = true, bool gltf_draco = false,
-                                     const StrengthOptions& strength = {});
+                                     const StrengthOptions& strength = {}, bool in_memory = false);
 
 // OK when `output` can be written once the job is done: a format the CLI writes (.obj, .ply,
 // .off, .stl, .drc, and .gltf/.glb for a glTF input) in a folder that exists and is writable,
@@ -85,5 +92,12 @@ absl::Status CheckOutputPath(const std::string& output);
 absl::Status WriteResult(Upload& upload, const std::string& result, const std::string& output, bool ridges,
                          std::vector<std::string>* dropped = nullptr, bool gltf_draco = false,
                          const DracoOptions& draco = {});
+
+// WriteResult for a job run in memory on an upload of a mesh file or builtin:NAME: `points`, one
+// per vertex of the upload, are the result's positions (the float32 the service would send) and
+// `labels` (when `ridges`) its ridge labels, one per vertex; everything else as WriteResult with
+// an output other than .drc and glTF (InvalidArgument for those).
+absl::Status WriteResultPoints(Upload& upload, std::vector<Vec3> points, const std::vector<uint8_t>& labels,
+                               const std::string& output, bool ridges, std::vector<std::string>* dropped = nullptr);
 
 }  // namespace meshsmooth::client

@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <numeric>
 #include <utility>
 
@@ -82,6 +83,45 @@ Welded WeldPoints(const std::vector<Vec3>& points) {
     }
   }
   return w;
+}
+
+WeldedMesh WeldMesh(const std::vector<Vec3>& points, std::vector<Triangle> point_faces) {
+  Welded w = WeldPoints(points);
+  WeldedMesh out;
+  out.mesh.positions = std::move(w.positions);
+  out.merged = w.merged;
+  out.mesh.triangles = std::move(point_faces);
+  for (Triangle& t : out.mesh.triangles) {
+    for (int32_t& v : t) v = w.point_to_vertex[v];
+  }
+  bool identity = w.merged == 0;
+  for (size_t p = 0; identity && p < w.point_to_vertex.size(); ++p) {
+    identity = w.point_to_vertex[p] == static_cast<int32_t>(p);
+  }
+  if (!identity) out.point_to_vertex = std::move(w.point_to_vertex);
+  return out;
+}
+
+std::vector<float> VertexMinimum(const std::vector<float>& per_point, const WeldedMesh& weld, int64_t vertices) {
+  std::vector<float> values(vertices, std::numeric_limits<float>::infinity());
+  std::vector<uint8_t> seen(vertices, 0);
+  for (size_t p = 0; p < per_point.size(); ++p) {
+    const float value = per_point[p];
+    float& v = values[weld.VertexOf(p)];
+    uint8_t& first = seen[weld.VertexOf(p)];
+    v = !first || std::isnan(value) ? value : std::isnan(v) ? v : std::min(v, value);
+    first = 1;
+  }
+  return values;
+}
+
+std::vector<Vec3> FirstPointPositions(const std::vector<Vec3>& points, const WeldedMesh& weld, int64_t vertices) {
+  std::vector<Vec3> positions;
+  positions.reserve(vertices);
+  for (size_t p = 0; p < points.size(); ++p) {
+    if (weld.VertexOf(p) == static_cast<int32_t>(positions.size())) positions.push_back(points[p]);
+  }
+  return positions;
 }
 
 }  // namespace meshsmooth

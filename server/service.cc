@@ -45,7 +45,9 @@ grpc::Status MeshSmootherService::Authenticate(const grpc::CallbackServerContext
                       "missing or wrong bearer token (send metadata 'authorization: Bearer <token>')");
 }
 
-std::string MeshSmootherService::NewJobId() { return absl::StrFormat("%x-%d", start_tag_, next_job_.fetch_add(1)); }
+std::string JobIdOf(uint64_t start_tag, uint64_t n) { return absl::StrFormat("%x-%d", start_tag, n); }
+
+std::string MeshSmootherService::NewJobId() { return JobIdOf(start_tag_, next_job_.fetch_add(1)); }
 
 grpc::ServerBidiReactor<v1::SmoothRequest, v1::SmoothResponse>* MeshSmootherService::Smooth(
     grpc::CallbackServerContext* context) {

@@ -15,6 +15,10 @@
 
 namespace meshsmooth::server {
 
+// The id the service gives the `n`th job (from 1) without one of its own: "TAG-N", TAG the
+// service's start in seconds since the epoch, in hex.
+std::string JobIdOf(uint64_t start_tag, uint64_t n);
+
 class MeshSmootherService final : public v1::MeshSmoother::CallbackService {
  public:
   // Its events go to `metrics`, which must outlive it.

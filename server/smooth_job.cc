@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
@@ -39,9 +40,9 @@ Clock::time_point Deadline(Clock::time_point start, double seconds) {
 
 // JobSpec.strength_attribute's values, one per vertex of the upload (empty when the spec names
 // none); InvalidArgument naming the field for an attribute the job cannot take.
-absl::StatusOr<std::vector<float>> ReadStrength(const DracoMesh& draco, const std::string& name) {
+absl::StatusOr<std::vector<float>> ReadStrength(const JobMesh& upload, const std::string& name) {
   if (name.empty()) return std::vector<float>{};
-  absl::StatusOr<std::vector<float>> values = draco.VertexValues(name);
+  absl::StatusOr<std::vector<float>> values = upload.VertexValues(name);
   absl::Status s = values.status();
   if (s.ok()) s = ValidateStrength(*values, static_cast<int32_t>(values->size()));
   if (!s.ok()) return absl::InvalidArgumentError(absl::StrCat("strength_attribute '", name, "': ", s.message()));
@@ -49,6 +50,10 @@ absl::StatusOr<std::vector<float>> ReadStrength(const DracoMesh& draco, const st
 }
 
 }  // namespace
+
+void JobSink::OnMeshResult(MeshResult, const v1::Summary&) {
+  OnError(absl::InternalError("a job on a mesh in memory reached a sink that takes Draco bytes only"));
+}
 
 SmoothJob::SmoothJob(std::string id, JobParams params, std::string upload, BudgetHold hold, Clock::time_point received,
                      const ServerOptions& options, JobSink* sink, std::string peer, ServiceMetrics& metrics)
@@ -63,6 +68,19 @@ SmoothJob::SmoothJob(std::string id, JobParams params, std::string upload, Budge
       metrics_(metrics),
       sink_(sink) {}
 
+SmoothJob::SmoothJob(std::string id, JobParams params, MeshUpload upload, Clock::time_point received,
+                     const ServerOptions& options, JobSink* sink)
+    : id_(std::move(id)),
+      params_(std::move(params)),
+      memory_upload_(std::move(upload)),
+      received_(received),
+      submitted_(received),
+      options_(options),
+      metrics_(NoMetrics()),
+      sink_(sink) {}
+
+SmoothJob::~SmoothJob() = default;
+
 template <typename Fn>
 void SmoothJob::Emit(Fn&& fn) {
   std::lock_guard<std::mutex> lock(mu_);
@@ -74,6 +92,7 @@ void SmoothJob::Detach() {
   std::lock_guard<std::mutex> lock(mu_);
   sink_ = nullptr;
   std::string().swap(upload_);
+  memory_upload_.reset();
   upload_hold_.Release();
 }
 
@@ -111,18 +130,25 @@ absl::Status SmoothJob::CheckQuadraticWork(const Topology& topo) const {
       ring2 ? "use ADAPTIVE_MODE_RING1" : "ask for sequential output"));
 }
 
-absl::StatusOr<DracoMesh> SmoothJob::DecodeUpload(const StopToken& stop) {
+absl::StatusOr<std::unique_ptr<JobMesh>> SmoothJob::DecodeUpload(const StopToken& stop) {
   std::string upload;
+  std::optional<MeshUpload> memory;
   BudgetHold hold;
   {
     std::lock_guard<std::mutex> lock(mu_);
     upload.swap(upload_);
+    memory.swap(memory_upload_);
     hold = std::move(upload_hold_);
+  }
+  if (memory.has_value()) {
+    if (absl::Status s = stop.Check(); !s.ok()) return s;
+    return JobMeshInMemory(*std::move(memory));
   }
   absl::StatusOr<DracoMesh> draco = DracoMesh::Decode(upload, stop, options_.max_vertices);
   std::string().swap(upload);  // the bytes are not needed past decoding
   hold.Release();
-  return draco;
+  if (!draco.ok()) return draco.status();
+  return JobMeshOf(*std::move(draco));
 }
 
 void SmoothJob::SendAccepted(const ValidationReport& validation, int64_t seam_points) {
@@ -176,7 +202,7 @@ absl::StatusOr<std::vector<GenericAttribute>> SmoothJob::DetectFeaturesIfAsked(c
   return attributes;
 }
 
-absl::StatusOr<std::string> SmoothJob::EncodeAndMeasure(DracoMesh& draco, const Mesh& mesh, const Topology& topo,
+absl::StatusOr<std::string> SmoothJob::EncodeAndMeasure(JobMesh& upload, const Mesh& mesh, const Topology& topo,
                                                         const std::vector<Vec3>& input,
                                                         const std::vector<GenericAttribute>& attributes,
                                                         const StopToken& stop, JobReport& report) const {
@@ -189,7 +215,7 @@ absl::StatusOr<std::string> SmoothJob::EncodeAndMeasure(DracoMesh& draco, const 
   report.after = ComputeMetricsBeside(
       mesh, topo,
       [&] {
-        encoded = draco.Encode(mesh, params_.output, attributes, stop);
+        encoded = upload.Encode(mesh, params_.output, attributes, stop);
         displacement = CompareMeshes(input, mesh, report.flow.displacement_bound);
       },
       options_.threads_per_job, stop);
@@ -213,12 +239,13 @@ void SmoothJob::Run() {
     return;
   }
 
-  absl::StatusOr<DracoMesh> draco = DecodeUpload(stop);
-  if (!draco.ok()) {
+  absl::StatusOr<std::unique_ptr<JobMesh>> upload = DecodeUpload(stop);
+  if (!upload.ok()) {
     report.decode_seconds = Seconds(start, Clock::now());
-    return Fail(report, StepStatus(draco.status(), "decoding the upload"));
+    return Fail(report, StepStatus(upload.status(), "decoding the upload"));
   }
-  Mesh mesh = draco->TakeWelded();
+  JobMesh& uploaded = **upload;
+  Mesh mesh = uploaded.TakeWelded();
   report.vertices = mesh.num_vertices();
   if (mesh.num_vertices() > options_.max_vertices) {
     report.decode_seconds = Seconds(start, Clock::now());
@@ -226,13 +253,13 @@ void SmoothJob::Run() {
                                                                   " vertices, above this server's limit of ",
                                                                   options_.max_vertices, " (--max-vertices)")));
   }
-  absl::StatusOr<std::vector<float>> strength = ReadStrength(*draco, params_.strength_attribute);
+  absl::StatusOr<std::vector<float>> strength = ReadStrength(uploaded, params_.strength_attribute);
   if (!strength.ok()) {
     report.decode_seconds = Seconds(start, Clock::now());
     return Fail(report, strength.status());
   }
   // An output the encoder would refuse is refused before the smoothing it would waste.
-  if (absl::Status s = draco->CheckEncodable(params_.output); !s.ok()) {
+  if (absl::Status s = uploaded.CheckEncodable(params_.output); !s.ok()) {
     report.decode_seconds = Seconds(start, Clock::now());
     return Fail(report, s);
   }
@@ -253,7 +280,7 @@ void SmoothJob::Run() {
   const Clock::time_point decoded = Clock::now();
   report.decode_seconds = Seconds(start, decoded);
   if (absl::Status s = stop.Check(); !s.ok()) return Fail(report, StepStatus(s, "validating the mesh"));
-  SendAccepted(validation, draco->seam_points());
+  SendAccepted(validation, uploaded.seam_points());
 
   absl::StatusOr<FlowResult> result = SmoothMesh(mesh, topo, decoded, stop, *std::move(strength), report);
   const Clock::time_point smoothed = Clock::now();
@@ -278,8 +305,8 @@ void SmoothJob::Run() {
     Emit([&](JobSink& sink) { sink.OnProgress(writing); });
   }
   // The input's positions for the displacement, made anew rather than kept through the run.
-  const std::vector<Vec3> input = draco->InputPositions();
-  absl::StatusOr<std::string> encoded = EncodeAndMeasure(*draco, mesh, topo, input, *attributes, stop, report);
+  const std::vector<Vec3> input = uploaded.InputPositions();
+  absl::StatusOr<std::string> encoded = EncodeAndMeasure(uploaded, mesh, topo, input, *attributes, stop, report);
   const Clock::time_point done = Clock::now();
   report.encode_seconds = Seconds(smoothed, done);
   if (!encoded.ok()) return Fail(report, encoded.status());
@@ -287,6 +314,12 @@ void SmoothJob::Run() {
   report.result_bytes = encoded->size();
   const v1::Summary summary = MakeSummary(report, params_);
   Log(report);
+  if (std::optional<WeldedMesh> weld = uploaded.TakeWeld()) {
+    MeshResult out{*std::move(weld), *std::move(attributes)};
+    out.smoothed.mesh = std::move(mesh);
+    Emit([&](JobSink& sink) { sink.OnMeshResult(std::move(out), summary); });
+    return;
+  }
   Emit([&](JobSink& sink) { sink.OnResult(std::move(*encoded), summary); });
 }
 

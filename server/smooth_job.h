@@ -1,11 +1,13 @@
 // One smoothing job, free of gRPC: decode the upload, validate, smooth, encode, and report
-// each step to a sink (the RPC's reactor). Runs on a worker of the pool.
+// each step to a sink (the RPC's reactor). Runs on a worker of the pool; a job on a mesh in
+// memory (MeshUpload: the CLI's local run) runs the same steps without the codec.
 #pragma once
 
 #include <atomic>
 #include <chrono>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -19,19 +21,23 @@
 #include "meshsmooth/v1/smoothing.pb.h"
 #include "server/admission.h"
 #include "server/convert.h"
+#include "server/job_mesh.h"
 #include "server/metrics.h"
 #include "server/options.h"
 
 namespace meshsmooth::server {
 
-// Receives a job's events, in this order: OnAccepted, OnProgress*, then OnResult or OnError
-// (OnError may also come first). Called from the worker thread.
+// Receives a job's events, in this order: OnAccepted, OnProgress*, then OnResult (a job on
+// Draco bytes) or OnMeshResult (a job on a MeshUpload) or OnError (OnError may also come
+// first). Called from the worker thread.
 class JobSink {
  public:
   virtual ~JobSink() = default;
   virtual void OnAccepted(const v1::Accepted& accepted) = 0;
   virtual void OnProgress(const v1::Progress& progress) = 0;
   virtual void OnResult(std::string draco_bytes, const v1::Summary& summary) = 0;
+  // Only a job constructed with a MeshUpload calls it; by default that is an internal error.
+  virtual void OnMeshResult(MeshResult result, const v1::Summary& summary);
   virtual void OnError(const absl::Status& status) = 0;
 };
 
@@ -44,6 +50,10 @@ class SmoothJob {
   // job's end goes to `metrics` (which must outlive the job).
   SmoothJob(std::string id, JobParams params, std::string upload, BudgetHold hold, Clock::time_point received,
             const ServerOptions& options, JobSink* sink, std::string peer = "", ServiceMetrics& metrics = NoMetrics());
+  // A job on a mesh in memory (MeshUpload), which ends with OnMeshResult.
+  SmoothJob(std::string id, JobParams params, MeshUpload upload, Clock::time_point received,
+            const ServerOptions& options, JobSink* sink);
+  ~SmoothJob();
 
   const std::string& id() const { return id_; }
   void set_queue_position(int position) { queue_position_ = position; }
@@ -78,7 +88,8 @@ class SmoothJob {
 
   // The steps of Run(), in order; each stops early once `stop` (the job's cancel flag and
   // --max-job-seconds) fires.
-  absl::StatusOr<DracoMesh> DecodeUpload(const StopToken& stop);  // takes the upload and frees it
+  // Decodes Draco bytes or welds a MeshUpload; takes the upload and frees the bytes.
+  absl::StatusOr<std::unique_ptr<JobMesh>> DecodeUpload(const StopToken& stop);
   void SendAccepted(const ValidationReport& validation, int64_t seam_points);
   // The flow with what is left of the job's time and the per-vertex `strength` (empty: none),
   // progress throttled to ~10/s; the iterations done so far go to `report` as they complete.
@@ -88,7 +99,7 @@ class SmoothJob {
   absl::StatusOr<std::vector<GenericAttribute>> DetectFeaturesIfAsked(const Mesh& mesh, const Topology& topo,
                                                                       const StopToken& stop, JobReport& report) const;
   // The result's Draco bytes; the after metrics and the displacement go to `report`.
-  absl::StatusOr<std::string> EncodeAndMeasure(DracoMesh& draco, const Mesh& mesh, const Topology& topo,
+  absl::StatusOr<std::string> EncodeAndMeasure(JobMesh& upload, const Mesh& mesh, const Topology& topo,
                                                const std::vector<Vec3>& input,
                                                const std::vector<GenericAttribute>& attributes, const StopToken& stop,
                                                JobReport& report) const;
@@ -96,6 +107,7 @@ class SmoothJob {
   const std::string id_;
   const JobParams params_;
   std::string upload_;
+  std::optional<MeshUpload> memory_upload_;  // instead of upload_
   BudgetHold upload_hold_;
   const Clock::time_point received_;
   std::atomic<Clock::time_point> submitted_;
@@ -105,7 +117,7 @@ class SmoothJob {
   const std::string peer_;
   ServiceMetrics& metrics_;
   std::atomic<bool> cancel_{false};
-  std::mutex mu_;  // guards sink_, upload_ and upload_hold_
+  std::mutex mu_;  // guards sink_, upload_, memory_upload_ and upload_hold_
   JobSink* sink_;
 };
 

@@ -40,6 +40,13 @@ absl::Status CheckCoordinates(const Vec3& p, const char* what, int64_t index) {
   return absl::OkStatus();
 }
 
+absl::Status CheckSequentialPoints(int64_t points, int64_t faces) {
+  if (points <= 3 * faces) return absl::OkStatus();
+  return absl::InvalidArgumentError(
+      absl::StrCat("Draco's sequential encoding cannot hold more than 3 points per face: ", points, " points, ", faces,
+                   " faces with every index in range (remove the unreferenced vertices)"));
+}
+
 absl::Status CheckDracoOptions(const DracoOptions& options) {
   if (options.quantization_bits < 0 || options.quantization_bits > kMaxQuantizationBits) {
     return absl::InvalidArgumentError(absl::StrCat("quantization bits must be 0 (lossless) or 1..",

@@ -19,6 +19,10 @@ namespace meshsmooth {
 // is not finite or above kMaxCoordinate in magnitude.
 absl::Status CheckCoordinates(const Vec3& p, const char* what, int64_t index);
 
+// InvalidArgument when Draco's sequential encoding would hold more than 3 of `points` a face of
+// `faces` (its decoder takes that for corrupt data and refuses the bytes).
+absl::Status CheckSequentialPoints(int64_t points, int64_t faces);
+
 // InvalidArgument for quantization bits or a speed out of range.
 absl::Status CheckDracoOptions(const DracoOptions& options);
 

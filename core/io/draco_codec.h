@@ -81,6 +81,13 @@ DracoPoints SplitAtSeams(const Mesh& mesh);
 // distinct indices uses).
 absl::StatusOr<std::string> EncodeDraco(const Mesh& mesh, const DracoOptions& options = {});
 
+// OK when EncodeDraco() would encode the positions and faces of `mesh` (without its attributes)
+// with `options`; otherwise its InvalidArgument: an empty mesh, bad options, a coordinate out of
+// range, and for sequential output more than 3 vertices a face (counting the faces with every
+// index in range). Edgebreaker's dropped vertices are not checked. For a caller that hands the
+// mesh on in memory where it would have encoded it (the CLI's local run).
+absl::Status CheckPositionsEncodable(const Mesh& mesh, const DracoOptions& options = {});
+
 // InvalidArgument with a clear message for corrupt bytes, a point cloud, an empty mesh, a mesh
 // with no or several POSITION attributes, an attribute without a value for some point, a face
 // naming a point past the point count, and a coordinate that is not finite or above

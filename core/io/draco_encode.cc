@@ -100,6 +100,20 @@ void AddAttributes(const Mesh& mesh, const DracoPoints& points, draco::Mesh& dm)
   }
 }
 
+// EncodeDraco's first checks: a mesh with vertices and faces, options in range, coordinates
+// finite and within kMaxCoordinate.
+absl::Status CheckMeshAndOptions(const Mesh& mesh, const DracoOptions& options) {
+  const int32_t n = mesh.num_vertices();
+  if (n == 0 || mesh.triangles.empty()) {
+    return absl::InvalidArgumentError("cannot encode an empty mesh (no vertices or no faces)");
+  }
+  if (absl::Status s = CheckDracoOptions(options); !s.ok()) return s;
+  for (int32_t i = 0; i < n; ++i) {
+    if (absl::Status s = CheckCoordinates(mesh.positions[i], "vertex", i); !s.ok()) return s;
+  }
+  return absl::OkStatus();
+}
+
 }  // namespace
 
 DracoPoints SplitAtSeams(const Mesh& mesh) {
@@ -145,15 +159,18 @@ DracoPoints SplitAtSeams(const Mesh& mesh) {
   return out;
 }
 
-absl::StatusOr<std::string> EncodeDraco(const Mesh& mesh, const DracoOptions& options) {
+absl::Status CheckPositionsEncodable(const Mesh& mesh, const DracoOptions& options) {
+  if (absl::Status s = CheckMeshAndOptions(mesh, options); !s.ok()) return s;
   const int32_t n = mesh.num_vertices();
-  if (n == 0 || mesh.triangles.empty()) {
-    return absl::InvalidArgumentError("cannot encode an empty mesh (no vertices or no faces)");
-  }
-  if (absl::Status s = CheckDracoOptions(options); !s.ok()) return s;
-  for (int32_t i = 0; i < n; ++i) {
-    if (absl::Status s = CheckCoordinates(mesh.positions[i], "vertex", i); !s.ok()) return s;
-  }
+  if (options.method != DracoMethod::kSequential) return absl::OkStatus();
+  const auto faces = std::count_if(mesh.triangles.begin(), mesh.triangles.end(),
+                                   [n](const Triangle& t) { return !IndexOutOfRange(t, n); });
+  return CheckSequentialPoints(n, faces);
+}
+
+absl::StatusOr<std::string> EncodeDraco(const Mesh& mesh, const DracoOptions& options) {
+  if (absl::Status s = CheckMeshAndOptions(mesh, options); !s.ok()) return s;
+  const int32_t n = mesh.num_vertices();
   const bool attributes = mesh.has_attributes() || !mesh.colors.empty();
   const DracoPoints points = attributes ? SplitAtSeams(mesh) : DracoPoints{};
   draco::Mesh dm;
@@ -172,10 +189,8 @@ absl::StatusOr<std::string> EncodeWithOptions(const draco::Mesh& dm, const Draco
   if (absl::Status s = CheckDracoOptions(options); !s.ok()) return s;
   // Draco's sequential decoder takes more than three points per face for corrupt data and
   // refuses the bytes: write none rather than a file that nothing can read.
-  if (options.method == DracoMethod::kSequential && dm.num_points() > 3ull * dm.num_faces()) {
-    return absl::InvalidArgumentError(absl::StrCat(
-        "Draco's sequential encoding cannot hold more than 3 points per face: ", dm.num_points(), " points, ",
-        dm.num_faces(), " faces with every index in range (remove the unreferenced vertices)"));
+  if (options.method == DracoMethod::kSequential) {
+    if (absl::Status s = CheckSequentialPoints(dm.num_points(), dm.num_faces()); !s.ok()) return s;
   }
   draco::Encoder encoder;
   encoder.SetSpeedOptions(options.speed, options.speed);

@@ -17,18 +17,13 @@ namespace meshsmooth {
 
 struct DracoMesh::Impl {
   std::unique_ptr<draco::Mesh> draco;
-  Mesh welded;
-  int64_t num_vertices = 0;  // of welded, also once it has been taken
-  // Per point, its vertex; empty when every point is its own vertex (no seam, the same order):
-  // 4 bytes a vertex fewer at the job's peak.
-  std::vector<int32_t> point_to_vertex;
-  int32_t VertexOf(uint32_t p) const { return point_to_vertex.empty() ? static_cast<int32_t>(p) : point_to_vertex[p]; }
-  int64_t seam_points = 0;
+  WeldedMesh weld;           // the mesh (taken by TakeWelded) and each point's vertex
+  int64_t num_vertices = 0;  // of weld.mesh, also once it has been taken
+  int32_t VertexOf(uint32_t p) const { return weld.VertexOf(p); }
   int64_t edgebreaker_drops = 0;  // vertices none of whose points Edgebreaker keeps
 
-  // Takes the vertices of the points' weld and the faces over points, renumbered to them, as
-  // `welded`, and counts the vertices Edgebreaker would drop.
-  void SetWelded(Welded w, std::vector<Triangle> point_faces);
+  // Counts the vertices Edgebreaker would drop.
+  void CountEdgebreakerDrops();
   // The steps of Encode(): each vertex value of `g` written to every point of the vertex, as a
   // one-component GENERIC attribute named g.name that replaces any of that name (InvalidArgument
   // when `g` has not one value per vertex); the positions; the normals.
@@ -37,24 +32,11 @@ struct DracoMesh::Impl {
   void RecomputeNormals(const std::vector<Vec3>& positions);
 };
 
-void DracoMesh::Impl::SetWelded(Welded w, std::vector<Triangle> point_faces) {
-  welded.positions = std::move(w.positions);
-  num_vertices = welded.num_vertices();
-  point_to_vertex = std::move(w.point_to_vertex);
-  seam_points = w.merged;
-  welded.triangles = std::move(point_faces);
-  for (Triangle& t : welded.triangles) {
-    for (int32_t& v : t) v = point_to_vertex[v];
-  }
+void DracoMesh::Impl::CountEdgebreakerDrops() {
   std::vector<uint8_t> kept(num_vertices, 0);
   const std::vector<uint8_t> used = PointsEdgebreakerKeeps(*draco);
-  for (size_t p = 0; p < used.size(); ++p) kept[point_to_vertex[p]] |= used[p];
+  for (size_t p = 0; p < used.size(); ++p) kept[VertexOf(p)] |= used[p];
   edgebreaker_drops = std::count(kept.begin(), kept.end(), 0);
-  bool identity = seam_points == 0;
-  for (size_t p = 0; identity && p < point_to_vertex.size(); ++p) {
-    identity = point_to_vertex[p] == static_cast<int32_t>(p);
-  }
-  if (identity) std::vector<int32_t>().swap(point_to_vertex);
 }
 
 absl::Status DracoMesh::Impl::AddGeneric(const GenericAttribute& g, size_t vertices) {
@@ -154,9 +136,10 @@ absl::StatusOr<DracoMesh> DracoMesh::Decode(std::string_view bytes, const StopTo
   if (absl::Status s = stop.Check(); !s.ok()) return s;
   auto impl = std::make_unique<Impl>();
   impl->draco = std::move(dm).value();
-  Welded welded = WeldPoints(points->positions);
+  impl->weld = WeldMesh(points->positions, std::move(points->triangles));
+  impl->num_vertices = impl->weld.mesh.num_vertices();
   if (absl::Status s = stop.Check(); !s.ok()) return s;
-  impl->SetWelded(std::move(welded), std::move(points->triangles));
+  impl->CountEdgebreakerDrops();
   return DracoMesh(std::move(impl));
 }
 
@@ -168,23 +151,15 @@ absl::Status DracoMesh::CheckEncodable(const DracoOptions& options) const {
   return absl::OkStatus();
 }
 
-const Mesh& DracoMesh::welded() const { return impl_->welded; }
-Mesh DracoMesh::TakeWelded() { return std::exchange(impl_->welded, Mesh{}); }
+const Mesh& DracoMesh::welded() const { return impl_->weld.mesh; }
+Mesh DracoMesh::TakeWelded() { return std::exchange(impl_->weld.mesh, Mesh{}); }
 int64_t DracoMesh::num_points() const { return impl_->draco->num_points(); }
 
 std::vector<Vec3> DracoMesh::InputPositions() const {
-  // Decode() checked every point's position. WeldPoints numbers the vertices in the order their
-  // first points appear and gives each that point's position: a point whose vertex is the next
-  // number is that first point.
-  const std::vector<Vec3> points = PointPositions(*impl_->draco).value();
-  std::vector<Vec3> positions;
-  positions.reserve(impl_->num_vertices);
-  for (size_t p = 0; p < points.size(); ++p) {
-    if (impl_->VertexOf(p) == static_cast<int32_t>(positions.size())) positions.push_back(points[p]);
-  }
-  return positions;
+  // Decode() checked every point's position.
+  return FirstPointPositions(PointPositions(*impl_->draco).value(), impl_->weld, impl_->num_vertices);
 }
-int64_t DracoMesh::seam_points() const { return impl_->seam_points; }
+int64_t DracoMesh::seam_points() const { return impl_->weld.merged; }
 
 absl::StatusOr<std::vector<float>> DracoMesh::VertexValues(std::string_view name) const {
   const draco::Mesh& dm = *impl_->draco;
@@ -197,21 +172,14 @@ absl::StatusOr<std::vector<float>> DracoMesh::VertexValues(std::string_view name
     return absl::InvalidArgumentError(
         absl::StrCat(what, " has ", static_cast<int>(a.num_components()), " components a point; it needs one"));
   }
-  std::vector<float> values(impl_->num_vertices, std::numeric_limits<float>::infinity());
-  std::vector<uint8_t> seen(impl_->num_vertices, 0);
+  std::vector<float> per_point(dm.num_points());
   for (uint32_t p = 0; p < dm.num_points(); ++p) {
     const draco::AttributeValueIndex avi = a.mapped_index(draco::PointIndex(p));
-    float value = 0.0f;
-    if (avi.value() >= a.size() || !a.ConvertValue<float>(avi, 1, &value)) {
+    if (avi.value() >= a.size() || !a.ConvertValue<float>(avi, 1, &per_point[p])) {
       return absl::InvalidArgumentError(absl::StrCat(what, " has no value for point ", p));
     }
-    float& v = values[impl_->VertexOf(p)];
-    uint8_t& first = seen[impl_->VertexOf(p)];
-    // NaN stays NaN, so that a check of the values finds it.
-    v = !first || std::isnan(value) ? value : std::isnan(v) ? v : std::min(v, value);
-    first = 1;
   }
-  return values;
+  return VertexMinimum(per_point, impl_->weld, impl_->num_vertices);
 }
 
 absl::StatusOr<std::string> DracoMesh::Encode(const Mesh& smoothed, const DracoOptions& options,
