@@ -52,7 +52,8 @@ constexpr int kExitUsage = 2;
 constexpr char kUsage[] =
     "usage: meshsmooth_time_to_quality [--meshes a,b,...] [--sigmas 0.1,0.2,0.3] [--seed 1] [--runs 3]\n"
     "                                  [--peers a,b,...] [--counts 1,2,3,...] [--smooth-shape-time T]\n"
-    "                                  [--scale] [--scale-only] [--scale-sigma 0.2] [--cli PATH]\n"
+    "                                  [--scale] [--scale-only] [--scale-sigma 0.2] [--scale-level 9]\n"
+    "                                  [--cli PATH]\n"
     "                                  [--peer-program PATH] [--shared DIR] [--workdir DIR]\n"
     "Time to a good mesh: for each mesh and sigma, the quality benchmark's noisy input (Gaussian noise\n"
     "of sigma h along the normals, h the mean edge length, from --seed; bench/quality_inputs.h),\n"
@@ -80,9 +81,10 @@ constexpr char kUsage[] =
     "  --counts       the iteration counts of the peers' sweep (default\n"
     "                 1,2,3,5,8,12,20,32,50,80,128,200)\n"
     "  --smooth-shape-time T  cgal_smooth_shape's time step in h^2 (default 0.03)\n"
-    "  --scale        also the default job on an icosphere of 2,621,442 vertices with Gaussian noise\n"
+    "  --scale        also the default job on an icosphere (--scale-level) with Gaussian noise\n"
     "                 of --scale-sigma h along the normals: time and peak memory per vertex, beside\n"
     "                 the dragon's at the same sigma when this run has it; --scale-only: only that\n"
+    "  --scale-level N  the icosphere's subdivision level, 1..11 (default 9; 10: 10,485,762 vertices)\n"
     "  --cli PATH     the meshsmooth CLI (default: ../client/meshsmooth beside this program)\n"
     "  --peer-program PATH  the program that runs every peer (default: meshsmooth_peer_LIBRARY beside\n"
     "                 this program, the one linking only the peer's own library)\n"
@@ -96,7 +98,6 @@ const std::vector<std::string> kDefaultTtqMeshes = {"fandisk", "turbine", "stanf
                                                     "stanford-dragon"};
 const std::vector<std::string> kDefaultPeers = {"open3d_laplacian", "open3d_taubin", "openmesh_c0", "openmesh_c1",
                                                 "cgal_smooth_shape"};
-constexpr int kScaleLevel = 9;  // Icosphere(9): 2,621,442 vertices
 
 struct Options {
   std::vector<std::string> meshes = kDefaultTtqMeshes;
@@ -108,6 +109,7 @@ struct Options {
   double smooth_shape_time = kSmoothShapeTime;
   bool scale = false;
   double scale_sigma = 0.2;
+  int scale_level = 9;  // Icosphere(9): 2,621,442 vertices
   fs::path cli, workdir;
   fs::path peer_program;  // empty: meshsmooth_peer_LIBRARY beside this program, per peer (PeerProgram)
   fs::path shared = fs::path(MESHSMOOTH_SOURCE_DIR) / ".." / "shared";
@@ -508,8 +510,8 @@ void SummaryTable(const std::vector<CaseResult>& cases) {
 
 // False when the CLI failed or the input could not be written.
 bool ScaleSection(Spawner& spawner, const Options& opt, const std::vector<CaseResult>& jobs, const fs::path& dir) {
-  std::fprintf(stderr, "scale: icosphere level %d\n", kScaleLevel);
-  Mesh clean = Icosphere(kScaleLevel);
+  std::fprintf(stderr, "scale: icosphere level %d\n", opt.scale_level);
+  Mesh clean = Icosphere(opt.scale_level);
   Mesh noisy = clean;
   AddNormalNoise(noisy, opt.scale_sigma, opt.seed);
   const fs::path input = dir / "icosphere-scale.ply", output = dir / "icosphere-scale-out.ply";
@@ -549,7 +551,7 @@ bool ScaleSection(Spawner& spawner, const Options& opt, const std::vector<CaseRe
   row.smooth_s = Median(smooth);
   row.process_s = Median(process);
   row.rss_bytes = Median(rss);
-  print(absl::StrFormat("icosphere level %d", kScaleLevel), n, row);
+  print(absl::StrFormat("icosphere level %d", opt.scale_level), n, row);
   for (const CaseResult& j : jobs) {
     if (j.mesh == "stanford-dragon" && j.sigma == opt.scale_sigma && !j.failed()) {
       print(absl::StrFormat("stanford-dragon, sigma = %g h", j.sigma), j.vertices, j.row);
@@ -642,6 +644,9 @@ int Main(int argc, char** argv) {
     } else if (a == "--scale-sigma") {
       opt.scale_sigma = std::atof(v.c_str());
       if (!(opt.scale_sigma > 0.0)) return Usage("--scale-sigma must be above 0");
+    } else if (a == "--scale-level") {
+      if (!ParseCount(v, 1, number) || number > 11) return Usage("--scale-level needs a whole number in 1..11");
+      opt.scale_level = static_cast<int>(number);
     } else if (a == "--cli") {
       opt.cli = v;
     } else if (a == "--peer-program") {
