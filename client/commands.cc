@@ -209,6 +209,15 @@ int RunSmooth(const SmoothOptions& o, const ConnectionOptions& c) {
   }
   absl::StatusOr<MeshFormat> out_format = gltf_out ? MeshFormat::kDraco : FormatFromPath(o.output);
   if (!out_format.ok()) return Fail("", out_format.status());
+  // Edgebreaker orders the result's points its own way; a mesh file written from the input's own
+  // connectivity (every input but a .drc) needs them in the input's order.
+  const absl::StatusOr<MeshFormat> in_format = FormatFromPath(o.input);
+  const bool draco_in = in_format.ok() && *in_format == MeshFormat::kDraco;
+  if (o.edgebreaker && !gltf_out && *out_format != MeshFormat::kDraco && !draco_in) {
+    std::cerr << "meshsmooth: --edgebreaker reorders the result's vertices; it applies to a .drc or glTF output (or a "
+                 ".drc input): give -o FILE.drc, or leave --edgebreaker out\n";
+    return kExitUsage;
+  }
   // Before the upload: a typo in the output's folder must not cost the job.
   if (absl::Status s = CheckOutputPath(o.output); !s.ok()) {
     std::cerr << "meshsmooth: " << s.message() << "\n";

@@ -245,7 +245,9 @@ void AddSmoothOptions(CLI::App* smooth, SmoothOptions& so) {
                    "result positions: 0 = lossless (exact float32), 1..24 = quantized")
       ->capture_default_str()
       ->check(CLI::Range(0, meshsmooth::kMaxQuantizationBits));
-  smooth->add_flag("--edgebreaker", so.edgebreaker, "encode the result with Edgebreaker (reorders vertices)");
+  smooth->add_flag(
+      "--edgebreaker", so.edgebreaker,
+      "encode the result with Edgebreaker (reorders vertices: for a .drc or glTF output, or a .drc input)");
   smooth->add_flag("--gltf-draco", so.gltf_draco,
                    "glTF output: Draco-compress every primitive (KHR_draco_mesh_compression; positions and texture "
                    "coordinates quantized to 16 bits, normals to 12). Default: plain float32 accessors, every value "

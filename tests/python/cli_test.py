@@ -198,6 +198,8 @@ def cli_checks(a, check, tmp):
             (["builtin:noisy-sphere", "-o", out, "--timeout", "0"], ["--timeout"]),
             (["builtin:noisy-sphere", "-o", out, "--timeout", "-1"], ["--timeout"]),
             (["builtin:noisy-sphere", "-o", out, "--timeout", "nan"], ["--timeout"]),
+            # Edgebreaker's order of the result's points would be written over the input's faces.
+            (["builtin:noisy-sphere", "-o", out, "--edgebreaker"], ["--edgebreaker", ".drc"]),
         ]
         for args, words in cases:
             r = run([cli, "smooth", *args])
@@ -212,7 +214,7 @@ def cli_checks(a, check, tmp):
         r = run([cli, "smooth", "builtin:noisy-sphere", "-o", out, "--timeout", "0.5", "--iterations", "1"])
         assert r.returncode == 0, (r.returncode, r.stderr)
     check("an unknown output format, a step out of range, an unknown builtin, a missing token file, --timeout 0 "
-          "or -1: exit 2 naming it", usage_errors_exit_2)
+          "or -1, --edgebreaker for a .ply: exit 2 naming it", usage_errors_exit_2)
 
     def readme_promises_what_the_cli_offers():
         readme = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "README.md")
