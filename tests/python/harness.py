@@ -18,6 +18,7 @@ import subprocess
 import sys
 import tempfile
 import threading
+import time
 import traceback
 
 # ----------------------------------------------------------------------------------------------
@@ -115,6 +116,21 @@ def run_checks(body, tmp_prefix=None):
 def run(cmd, timeout=120, **kw):
     """cmd run to its end (at most timeout seconds), its output captured as text."""
     return subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, **kw)
+
+
+def interrupt_long_job(cmd, out):
+    """cmd (a long smooth writing `out`) sent SIGINT 1.5 s in: it must exit 130 within 5 s,
+    say it was interrupted and write no file. Returns its stderr."""
+    p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    time.sleep(1.5)
+    p.send_signal(signal.SIGINT)
+    t0 = time.time()
+    _, err = p.communicate(timeout=10)
+    assert p.returncode == 130, (p.returncode, err)
+    assert time.time() - t0 < 5
+    assert "interrupted" in err, err
+    assert not os.path.exists(out)
+    return err
 
 
 # The flags tests/CMakeLists.txt gives several tests, with the same meaning in each.
