@@ -360,10 +360,22 @@ int RunRender(const RenderCommand& r) {
   options.width = w;
   options.height = h;
   options.shading = r.shading == "flat" ? Shading::kFlat : Shading::kGouraud;
+  if (absl::Status s = CheckStrengthOptions(r.strength); !s.ok()) {
+    std::cerr << "meshsmooth: " << s.message() << "\n";
+    return kExitUsage;
+  }
   absl::StatusOr<Mesh> mesh = LoadInput(r.input);
   if (!mesh.ok()) {
     std::cerr << "meshsmooth: " << mesh.status().message() << "\n";
     return kExitFailure;
+  }
+  if (r.strength.any()) {
+    absl::StatusOr<std::vector<float>> strength = VertexStrength(*mesh, r.strength);
+    if (!strength.ok()) {
+      std::cerr << "meshsmooth: " << strength.status().message() << "\n";
+      return kExitFailure;
+    }
+    mesh->colors = StrengthColours(*strength);
   }
   absl::StatusOr<Image> image = Render(*mesh, options);
   if (!image.ok()) {

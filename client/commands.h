@@ -59,6 +59,8 @@ absl::StatusOr<DisplacementBoundOption> ParseMaxDisplacement(const std::string& 
 // `meshsmooth render`.
 struct RenderCommand {
   std::string input = "builtin:noisy-sphere", output, view = "30,20", size = "800x800", shading = "gouraud";
+  // When given, the vertices are coloured by this strength (StrengthColours) instead of their own colours.
+  StrengthOptions strength;
 };
 
 // The flow and output options of `meshsmooth smooth` checked as the server checks a JobSpec

@@ -126,6 +126,25 @@ std::string StepUnits(const std::vector<FlowInfo>& flows) {
   return absl::StrJoin(parts, ", ");
 }
 
+// The per-vertex strength flags (client/strength.h), on `smooth` and on `render`.
+void AddStrengthOptions(CLI::App* app, StrengthOptions& st) {
+  app->add_option("--weight", st.weight,
+                  "per-vertex strength from a PLY vertex property: PROP (values in [0, 1]) or PROP:LO,HI (LO -> 0, "
+                  "HI -> 1, clamped), e.g. --weight quality:0,255. 0 = the vertex does not move, 1 = the flow as "
+                  "it is, between = its moves scaled; combined with --region and --fixed by product");
+  app->add_option("--fixed", st.fixed,
+                  "a file of vertex indices (0-based, as the input file numbers them; separated by spaces, commas "
+                  "or lines; # starts a comment) held fixed: strength 0");
+  app->add_option("--region", st.region,
+                  "box:x0,y0,z0,x1,y1,z1 (two opposite corners) or sphere:cx,cy,cz,r, in the input's coordinates: "
+                  "strength 1 inside, 0 outside");
+  app->add_flag("--outside", st.outside, "with --region: strength 0 inside the region, 1 outside");
+  app->add_option("--falloff", st.falloff,
+                  "with --region: over this distance (mesh units) outside the region's edge the strength goes "
+                  "smoothly (smoothstep) from the region's value to the other one; 0 = a sharp edge")
+      ->capture_default_str();
+}
+
 void AddSmoothOptions(CLI::App* smooth, SmoothOptions& so) {
   const std::vector<FlowInfo> flows = DescribeFlows();
   smooth
@@ -273,23 +292,7 @@ void AddSmoothOptions(CLI::App* smooth, SmoothOptions& so) {
                      "the job's id in the server's log and the summary (1-128 printable ASCII characters, no "
                      "spaces); default: the server makes one up. Retries send the same id");
   // Per-vertex strength (client/strength.h), sent as JobSpec.strength_attribute.
-  StrengthOptions& st = so.strength;
-  smooth->add_option("--weight", st.weight,
-                     "per-vertex strength from a PLY vertex property: PROP (values in [0, 1]) or PROP:LO,HI (LO -> 0, "
-                     "HI -> 1, clamped), e.g. --weight quality:0,255. 0 = the vertex does not move, 1 = the flow as "
-                     "it is, between = its moves scaled; combined with --region and --fixed by product");
-  smooth->add_option("--fixed", st.fixed,
-                     "a file of vertex indices (0-based, as the input file numbers them; separated by spaces, commas "
-                     "or lines; # starts a comment) held fixed: strength 0");
-  smooth->add_option("--region", st.region,
-                     "box:x0,y0,z0,x1,y1,z1 (two opposite corners) or sphere:cx,cy,cz,r, in the input's coordinates: "
-                     "strength 1 inside, 0 outside");
-  smooth->add_flag("--outside", st.outside, "with --region: strength 0 inside the region, 1 outside");
-  smooth
-      ->add_option("--falloff", st.falloff,
-                   "with --region: over this distance (mesh units) outside the region's edge the strength goes "
-                   "smoothly (smoothstep) from the region's value to the other one; 0 = a sharp edge")
-      ->capture_default_str();
+  AddStrengthOptions(smooth, so.strength);
 }
 
 void AddConnectionOptions(CLI::App* app, ConnectionOptions& c) {
@@ -380,7 +383,10 @@ int main(int argc, char** argv) {
       ->capture_default_str();
 
   RenderCommand rc;
-  CLI::App* render = app.add_subcommand("render", "Render a mesh to a PNG picture (locally; vertex colours shown)");
+  CLI::App* render = app.add_subcommand(
+      "render",
+      "Render a mesh to a PNG picture (locally; vertex colours shown, or with --weight, --fixed or --region the "
+      "per-vertex strength smooth would send: grey where 0, orange where 1)");
   render->add_option("input", rc.input, "mesh file or builtin:NAME")->capture_default_str()->check(KnownInput());
   render->add_option("-o,--output", rc.output, "output .png")->required();
   render
@@ -391,6 +397,7 @@ int main(int argc, char** argv) {
   render->add_option("--shading", rc.shading, "gouraud (smooth) | flat (one shade per face)")
       ->check(CLI::IsMember({"gouraud", "flat"}))
       ->capture_default_str();
+  AddStrengthOptions(render, rc.strength);
 
   try {
     app.parse(argc, argv);

@@ -1,7 +1,9 @@
 #include "client/strength.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdint>
 #include <fstream>
 #include <sstream>
 #include <utility>
@@ -188,6 +190,18 @@ absl::StatusOr<std::vector<float>> VertexStrength(const Mesh& mesh, const Streng
     if (absl::Status s = HoldFixed(o.fixed, strength); !s.ok()) return s;
   }
   return strength;
+}
+
+std::vector<Rgb> StrengthColours(const std::vector<float>& strength) {
+  constexpr std::array<double, 3> kZero = {180, 180, 180}, kOne = {235, 125, 35};
+  std::vector<Rgb> colours(strength.size());
+  for (size_t v = 0; v < strength.size(); ++v) {
+    auto mix = [s = static_cast<double>(strength[v])](double a, double b) {
+      return static_cast<uint8_t>(std::lround(a + (b - a) * s));
+    };
+    colours[v] = {mix(kZero[0], kOne[0]), mix(kZero[1], kOne[1]), mix(kZero[2], kOne[2])};
+  }
+  return colours;
 }
 
 }  // namespace meshsmooth::client

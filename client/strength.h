@@ -62,4 +62,8 @@ double SignedDistance(const RegionSpec& region, const Vec3& p);
 // and an index that is not one or out of range.
 absl::StatusOr<std::vector<float>> VertexStrength(const Mesh& mesh, const StrengthOptions& o);
 
+// Colours that show a strength in a picture (meshsmooth render): grey (the renderer's base colour)
+// at 0, orange at 1, linear between.
+std::vector<Rgb> StrengthColours(const std::vector<float>& strength);
+
 }  // namespace meshsmooth::client

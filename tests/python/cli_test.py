@@ -377,6 +377,26 @@ def cli_checks(a, check, tmp):
             assert word in r.stdout, f"'{word}' missing from render --help"
     check("render with a bad --size or --view exits 2 naming the option; --help lists them", render_bad_usage)
 
+    def render_strength():
+        png = os.path.join(tmp, "strength.png")
+        # The unit sphere seen from the front (+x to the right): strength 1 where x >= 0.
+        r = run([cli, "render", "builtin:sphere", "-o", png, "--size", "320x200", "--view", "front",
+                 "--region", "box:0,-2,-2,2,2,2"])
+        assert r.returncode == 0, (r.returncode, r.stderr)
+        _, _, rows = read_png(png)
+        left, right = rows[100][160 - 45], rows[100][160 + 45]
+        assert left[0] == left[1] == left[2] and left != (255, 255, 255), f"strength 0 at {left}, not grey"
+        assert right[0] > right[1] + 40 and right[1] > right[2] + 40, f"strength 1 at {right}, not orange"
+        r = run([cli, "render", "builtin:sphere", "-o", png, "--falloff", "0.1"])
+        assert r.returncode == 2 and "--falloff" in r.stderr, (r.returncode, r.stderr)
+        r = run([cli, "render", "builtin:sphere", "-o", png, "--weight", "nope"])
+        assert r.returncode == 1 and "--weight" in r.stderr, (r.returncode, r.stderr)
+        r = run([cli, "render", "--help"])
+        for word in ("--weight", "--fixed", "--region", "--outside", "--falloff"):
+            assert word in r.stdout, f"'{word}' missing from render --help"
+    check("render --region colours strength 0 grey and 1 orange; its flags are checked as smooth's",
+          render_strength)
+
     if a.shared and os.path.isdir(os.path.join(a.shared, "data", "meshes")):
         def info_beetle():
             r = run([cli, "info", os.path.join(a.shared, "data", "meshes", "beetle.obj")])
