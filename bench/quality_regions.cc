@@ -1,0 +1,346 @@
+// The quality benchmark's rows with a region (docs/quality-regions.md): the default job given a
+// per-vertex strength (FlowParams::strength) of 0 on part of a noisy mesh and 1 on the rest, against
+// the same job on the whole mesh, both measured on the part that may move. A row holds when the
+// part of strength 0 comes back bit for bit and the rest is within kMaxRatio of the whole-mesh
+// job's error there.
+//
+//   build/bench/meshsmooth_quality_regions [--shared DIR] [--seeds N] > docs/quality-regions.md
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <functional>
+#include <limits>
+#include <map>
+#include <numbers>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "bench/bench_common.h"
+#include "bench/quality_inputs.h"
+#include "core/job/default_job.h"
+#include "core/measure/evaluation.h"
+#include "core/topology.h"
+
+namespace meshsmooth::bench {
+namespace {
+
+constexpr double kMaxRatio = 1.05;
+// The synthetic cases' held-out seeds, as meshsmooth_quality --held-out takes them.
+constexpr uint64_t kFirstSeed = 1001;
+// A rim: the vertices within this many edges of a boundary.
+constexpr int kRimRings = 3;
+// A sphere around the front-most vertex with this share of the bounding box's diagonal as radius.
+constexpr double kSphereShare = 0.25;
+// The edge of the free part: its vertices within this many edges of a held one, whose
+// neighbours keep their noise whatever the job does.
+constexpr int kEdgeRings = 3;
+
+// One kind of input with a region: strength 0 where the region keeps the input.
+struct RegionCase {
+  std::string mesh, region;
+  Case noise;
+  std::function<std::vector<float>(const GroundTruth&)> strength;
+};
+
+// The clean mesh's faces grouped across edges whose dihedral angle is below kCreaseAngleDeg (a
+// CAD part's faces); strength 0 on the vertices of the group with the most faces.
+std::vector<float> LargestSmoothPatchFixed(const GroundTruth& truth) {
+  const Mesh& m = truth.mesh();
+  const auto& tris = m.triangles;
+  std::vector<Vec3> normal(tris.size());
+  for (size_t f = 0; f < tris.size(); ++f) {
+    const Vec3 c =
+        Cross(m.positions[tris[f][1]] - m.positions[tris[f][0]], m.positions[tris[f][2]] - m.positions[tris[f][0]]);
+    normal[f] = SquaredNorm(c) > 0.0 ? Normalized(c) : Vec3{};
+  }
+  std::map<std::pair<int32_t, int32_t>, std::vector<int32_t>> edge_faces;
+  for (int32_t f = 0; f < static_cast<int32_t>(tris.size()); ++f) {
+    for (int k = 0; k < 3; ++k) {
+      const int32_t a = tris[f][k], b = tris[f][(k + 1) % 3];
+      edge_faces[{std::min(a, b), std::max(a, b)}].push_back(f);
+    }
+  }
+  // Union-find over faces.
+  std::vector<int32_t> parent(tris.size());
+  for (size_t f = 0; f < parent.size(); ++f) parent[f] = static_cast<int32_t>(f);
+  std::function<int32_t(int32_t)> root = [&](int32_t f) { return parent[f] == f ? f : parent[f] = root(parent[f]); };
+  const double cos_crease = std::cos(kCreaseAngleDeg * std::numbers::pi / 180.0);
+  for (const auto& [edge, faces] : edge_faces) {
+    if (faces.size() != 2 || Dot(normal[faces[0]], normal[faces[1]]) < cos_crease) continue;
+    parent[root(faces[0])] = root(faces[1]);
+  }
+  std::vector<int32_t> size(tris.size(), 0);
+  for (size_t f = 0; f < tris.size(); ++f) ++size[root(static_cast<int32_t>(f))];
+  const int32_t largest = static_cast<int32_t>(std::max_element(size.begin(), size.end()) - size.begin());
+  std::vector<float> strength(m.positions.size(), 1.0f);
+  for (size_t f = 0; f < tris.size(); ++f) {
+    if (root(static_cast<int32_t>(f)) != largest) continue;
+    for (int32_t v : tris[f]) strength[v] = 0.0f;
+  }
+  return strength;
+}
+
+// Strength 0 on the vertices within kRimRings edges of a boundary.
+std::vector<float> RimFixed(const GroundTruth& truth) {
+  const Topology& topo = truth.topology();
+  std::vector<int> depth(topo.num_vertices(), -1);
+  std::vector<int32_t> front;
+  for (int32_t v = 0; v < topo.num_vertices(); ++v) {
+    if (topo.kind[v] == VertexKind::kBoundary) depth[v] = 0, front.push_back(v);
+  }
+  for (int ring = 1; ring <= kRimRings; ++ring) {
+    std::vector<int32_t> next;
+    for (int32_t v : front) {
+      for (int32_t k = topo.ring_offsets[v]; k < topo.ring_offsets[v + 1]; ++k) {
+        if (depth[topo.ring[k]] < 0) depth[topo.ring[k]] = ring, next.push_back(topo.ring[k]);
+      }
+    }
+    front = std::move(next);
+  }
+  std::vector<float> strength(depth.size());
+  for (size_t v = 0; v < depth.size(); ++v) strength[v] = depth[v] >= 0 ? 0.0f : 1.0f;
+  return strength;
+}
+
+// Strength 1 in a sphere around the front-most (largest z) vertex, 0 outside.
+std::vector<float> FrontSphereSmoothed(const GroundTruth& truth) {
+  const std::vector<Vec3>& p = truth.mesh().positions;
+  Vec3 lo = p[0], hi = p[0];
+  size_t front = 0;
+  for (size_t v = 0; v < p.size(); ++v) {
+    lo = {std::min(lo.x, p[v].x), std::min(lo.y, p[v].y), std::min(lo.z, p[v].z)};
+    hi = {std::max(hi.x, p[v].x), std::max(hi.y, p[v].y), std::max(hi.z, p[v].z)};
+    if (p[v].z > p[front].z) front = v;
+  }
+  const double r = kSphereShare * Norm(hi - lo);
+  std::vector<float> strength(p.size());
+  for (size_t v = 0; v < p.size(); ++v) strength[v] = Norm(p[v] - p[front]) <= r ? 1.0f : 0.0f;
+  return strength;
+}
+
+// Strength 0 on the cap above y = 0.5 (of a unit sphere).
+std::vector<float> CapFixed(const GroundTruth& truth) {
+  const std::vector<Vec3>& p = truth.mesh().positions;
+  std::vector<float> strength(p.size());
+  for (size_t v = 0; v < p.size(); ++v) strength[v] = p[v].y > 0.5 ? 0.0f : 1.0f;
+  return strength;
+}
+
+// The vertices of strength 1 (1) and, of those, the ones more than kEdgeRings edges from any vertex
+// of strength below 1 (2); 0 for the rest.
+std::vector<uint8_t> FreeParts(const GroundTruth& truth, const std::vector<float>& strength) {
+  const Topology& topo = truth.topology();
+  std::vector<int> depth(strength.size(), -1);
+  std::vector<int32_t> front;
+  for (int32_t v = 0; v < topo.num_vertices(); ++v) {
+    if (strength[v] < 1.0f) depth[v] = 0, front.push_back(v);
+  }
+  for (int ring = 1; ring <= kEdgeRings; ++ring) {
+    std::vector<int32_t> next;
+    for (int32_t v : front) {
+      for (int32_t k = topo.ring_offsets[v]; k < topo.ring_offsets[v + 1]; ++k) {
+        if (depth[topo.ring[k]] < 0) depth[topo.ring[k]] = ring, next.push_back(topo.ring[k]);
+      }
+    }
+    front = std::move(next);
+  }
+  std::vector<uint8_t> part(strength.size());
+  for (size_t v = 0; v < part.size(); ++v) part[v] = strength[v] < 1.0f ? 0 : depth[v] < 0 ? 2 : 1;
+  return part;
+}
+
+// The error of `result` on the vertices whose `part` is at least `least`: RMS distance to the
+// clean surface (h) and the mean angle between the normals of the faces with all three corners
+// there and the clean ones (degrees).
+struct PartError {
+  double rms_h = 0.0, normal_deg = 0.0;
+};
+
+PartError ErrorOn(const GroundTruth& truth, const Mesh& result, const std::vector<uint8_t>& part, uint8_t least) {
+  double sum2 = 0.0, angles = 0.0;
+  int64_t vertices = 0, faces = 0;
+  for (size_t v = 0; v < part.size(); ++v) {
+    if (part[v] < least || truth.topology().kind[v] == VertexKind::kIsolated) continue;
+    sum2 += truth.surface().SquaredDistance(result.positions[v]);
+    ++vertices;
+  }
+  const Mesh& clean = truth.mesh();
+  for (const Triangle& t : clean.triangles) {
+    if (part[t[0]] < least || part[t[1]] < least || part[t[2]] < least) continue;
+    auto cross = [&t](const Mesh& m) {
+      return Cross(m.positions[t[1]] - m.positions[t[0]], m.positions[t[2]] - m.positions[t[0]]);
+    };
+    const Vec3 a = cross(clean), b = cross(result);
+    if (SquaredNorm(a) == 0.0 || SquaredNorm(b) == 0.0) continue;
+    angles += std::acos(std::clamp(Dot(Normalized(a), Normalized(b)), -1.0, 1.0)) * 180.0 / std::numbers::pi;
+    ++faces;
+  }
+  const double h = truth.mean_edge_length();
+  return {std::sqrt(sum2 / std::max<int64_t>(vertices, 1)) / h, angles / std::max<int64_t>(faces, 1)};
+}
+
+// One seed of a row.
+struct SeedRun {
+  PartError noisy, whole, region;           // on the whole free part
+  PartError noisy_in, whole_in, region_in;  // beyond its edge
+  int64_t fixed_moved = 0;
+  int64_t flipped_noisy = 0, flipped_whole = 0, flipped_region = 0;
+  int iterations_whole = 0, iterations_region = 0;
+};
+
+// The default job on `noisy` with `strength` (empty: the whole mesh); its iterations and the
+// result's flipped faces go to `iterations` and `flipped`. Exits on a failed job.
+Mesh DefaultJob(const GroundTruth& truth, const Mesh& noisy, const std::vector<float>& strength, int* iterations,
+                int64_t* flipped) {
+  Mesh m = noisy;
+  FlowParams p;
+  p.strength = strength;
+  absl::StatusOr<FlowResult> r = job::SmoothWithPolicy(m, truth.topology(), p, {}, job::kPolicy);
+  absl::StatusOr<Quality> q = r.ok() ? truth.Evaluate(m) : absl::StatusOr<Quality>(r.status());
+  if (!q.ok()) {
+    std::fprintf(stderr, "meshsmooth_quality_regions: %s\n", q.status().ToString().c_str());
+    std::exit(1);
+  }
+  *iterations = r->iterations_run;
+  *flipped = q->flipped_faces;
+  return m;
+}
+
+SeedRun RunSeed(const GroundTruth& truth, const Mesh& noisy, const std::vector<float>& strength) {
+  SeedRun s;
+  const std::vector<uint8_t> part = FreeParts(truth, strength);
+  s.noisy = ErrorOn(truth, noisy, part, 1);
+  s.noisy_in = ErrorOn(truth, noisy, part, 2);
+  s.flipped_noisy = truth.Evaluate(noisy)->flipped_faces;
+  const Mesh whole = DefaultJob(truth, noisy, {}, &s.iterations_whole, &s.flipped_whole);
+  const Mesh region = DefaultJob(truth, noisy, strength, &s.iterations_region, &s.flipped_region);
+  s.whole = ErrorOn(truth, whole, part, 1);
+  s.region = ErrorOn(truth, region, part, 1);
+  s.whole_in = ErrorOn(truth, whole, part, 2);
+  s.region_in = ErrorOn(truth, region, part, 2);
+  for (size_t v = 0; v < strength.size(); ++v) {
+    const Vec3 &a = region.positions[v], &b = noisy.positions[v];
+    if (strength[v] == 0.0f && (a.x != b.x || a.y != b.y || a.z != b.z)) ++s.fixed_moved;
+  }
+  return s;
+}
+
+void PrintHeader(int seeds) {
+  std::printf("# Smoothing a region\n\n");
+  std::printf(
+      "Generated by `build/bench/meshsmooth_quality_regions --seeds %d > docs/quality-regions.md` "
+      "(bench/quality_regions.cc), held-out seeds %llu to %llu.\n\n",
+      seeds, static_cast<unsigned long long>(kFirstSeed), static_cast<unsigned long long>(kFirstSeed + seeds - 1));
+  std::printf(
+      "The default job with a per-vertex strength of 0 on part of the noisy mesh and 1 on the rest "
+      "(`--fixed`, `--region` of the CLI; `JobSpec.strength_attribute`), against the same job on the "
+      "whole mesh. \"moved\" counts vertices of strength 0 whose position is not bit for bit the input's; "
+      "flipped faces are counted over the whole mesh. Errors are measured on the free part (strength 1): "
+      "RMS distance of its vertices to the clean surface (h, the clean mean edge) and the mean normal "
+      "error of its faces (degrees), on all of it and beyond its edge (the vertices more than %d edges "
+      "from a held one: next to the held part a vertex's neighbours keep their noise whatever the job "
+      "does). The ratio is region job / whole-mesh job, the worst seed. A row holds when nothing held "
+      "moved, the region job has no more flipped faces than the noisy input, and both ratios beyond the "
+      "edge are at most %.2f.\n\n",
+      kEdgeRings, kMaxRatio);
+  std::printf(
+      "| mesh | noise | region | held vertices | moved | iterations whole / region | flipped noisy / whole / "
+      "region | measured on | noisy RMS / θ | whole-mesh job RMS / θ | region job RMS / θ | worst ratio RMS / θ | "
+      "holds |\n");
+  std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+}
+
+// The two rows of a case: the free part and beyond its edge.
+void PrintRows(const RegionCase& rc, const std::vector<float>& strength, const std::vector<SeedRun>& runs) {
+  auto mean = [&runs](auto field) {
+    double sum = 0.0;
+    for (const SeedRun& r : runs) sum += static_cast<double>(field(r));
+    return sum / static_cast<double>(runs.size());
+  };
+  int64_t moved = 0;
+  bool flips_ok = true;
+  for (const SeedRun& r : runs) {
+    moved += r.fixed_moved;
+    flips_ok = flips_ok && r.flipped_region <= r.flipped_noisy;
+  }
+  for (const bool beyond : {false, true}) {
+    auto pick = [beyond](const SeedRun& r, int which) -> const PartError& {
+      const PartError* e[2][3] = {{&r.noisy, &r.whole, &r.region}, {&r.noisy_in, &r.whole_in, &r.region_in}};
+      return *e[beyond][which];
+    };
+    double worst_rms = 0.0, worst_theta = 0.0;
+    for (const SeedRun& r : runs) {
+      worst_rms = std::max(worst_rms, pick(r, 2).rms_h / pick(r, 1).rms_h);
+      worst_theta = std::max(worst_theta, pick(r, 2).normal_deg / pick(r, 1).normal_deg);
+    }
+    const bool holds = moved == 0 && flips_ok && worst_rms <= kMaxRatio && worst_theta <= kMaxRatio;
+    std::string cells[3];
+    for (int w = 0; w < 3; ++w) {
+      char buf[64];
+      std::snprintf(buf, sizeof buf, "%.4f / %.2f°", mean([&](const SeedRun& r) { return pick(r, w).rms_h; }),
+                    mean([&](const SeedRun& r) { return pick(r, w).normal_deg; }));
+      cells[w] = buf;
+    }
+    std::printf(
+        "| %s | %s | %s | %lld of %zu | %lld | %.0f / %.0f | %.0f / %.0f / %.0f | %s | %s | %s | %s | %.3f / %.3f | "
+        "%s |\n",
+        rc.mesh.c_str(), rc.noise.Name().c_str(), rc.region.c_str(),
+        static_cast<long long>(std::count(strength.begin(), strength.end(), 0.0f)), strength.size(),
+        static_cast<long long>(moved), mean([](const SeedRun& r) { return r.iterations_whole; }),
+        mean([](const SeedRun& r) { return r.iterations_region; }),
+        mean([](const SeedRun& r) { return r.flipped_noisy; }), mean([](const SeedRun& r) { return r.flipped_whole; }),
+        mean([](const SeedRun& r) { return r.flipped_region; }),
+        beyond ? ("beyond " + std::to_string(kEdgeRings) + " rings of the edge").c_str() : "the free part",
+        cells[0].c_str(), cells[1].c_str(), cells[2].c_str(), worst_rms, worst_theta,
+        beyond ? (holds ? "yes" : "**no**") : "");
+  }
+  std::fflush(stdout);
+}
+
+int Main(int argc, char** argv) {
+  std::filesystem::path shared = std::filesystem::path(MESHSMOOTH_SOURCE_DIR) / ".." / "shared";
+  int seeds = 3;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--shared" && i + 1 < argc) {
+      shared = argv[++i];
+    } else if (a == "--seeds" && i + 1 < argc) {
+      seeds = std::max(1, std::atoi(argv[++i]));
+    } else {
+      std::fprintf(stderr, "usage: meshsmooth_quality_regions [--shared DIR] [--seeds N]\n");
+      return 2;
+    }
+  }
+  const std::vector<RegionCase> cases = {
+      {"fandisk", "its largest face (a crease-bounded patch) fixed", {Noise::kNormal, 0.2}, LargestSmoothPatchFixed},
+      {"stanford-bunny", "its rim (3 rings around the 5 holes) fixed", {Noise::kNormal, 0.2}, RimFixed},
+      {"camelhead", "its rim (3 rings around the neck's opening) fixed", {Noise::kRandom, 0.2}, RimFixed},
+      {"max-planck", "only a sphere around the nose smoothed", {Noise::kNormal, 0.3}, FrontSphereSmoothed},
+      {"sphere", "the cap above y = 0.5 fixed", {Noise::kNormal, 0.3}, CapFixed},
+  };
+  PrintHeader(seeds);
+  for (const RegionCase& rc : cases) {
+    absl::StatusOr<Subject> subject = LoadSubject(rc.mesh, shared / "data" / "meshes");
+    if (!subject.ok()) {
+      std::fprintf(stderr, "meshsmooth_quality_regions: %s\n", subject.status().ToString().c_str());
+      return 1;
+    }
+    const GroundTruth& truth = *subject->truth;
+    const std::vector<float> strength = rc.strength(truth);
+    std::vector<SeedRun> runs;
+    for (int s = 0; s < seeds; ++s) {
+      const Mesh noisy = MakeNoisy(truth.mesh(), rc.noise, kFirstSeed + static_cast<uint64_t>(s));
+      runs.push_back(RunSeed(truth, noisy, strength));
+    }
+    PrintRows(rc, strength, runs);
+  }
+  std::printf("\nFigures are means over the seeds, but for the worst ratio and \"moved\" (a sum).\n");
+  return 0;
+}
+
+}  // namespace
+}  // namespace meshsmooth::bench
+
+int main(int argc, char** argv) { return meshsmooth::bench::Main(argc, argv); }
