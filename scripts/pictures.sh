@@ -16,9 +16,15 @@
 #                                  them as vertex colours
 #   docs/images/bunny-textured-after.png   that PLY after 20 iterations of median: the texture
 #                                  coordinates and colours come back on the smoothed surface
+#   docs/images/rabbit-region-before.png   the real rabbit scan (../shared/data/real, REAL=DIR) with
+#                                  the strength of a sphere around its head as colour (grey 0,
+#                                  orange 1; `render --region`)
+#   docs/images/rabbit-region-after.png    after the default job with that region: the head smoothed,
+#                                  the rest as scanned
 set -euo pipefail
 cd "$(dirname "$0")/.."
 meshes=${MESHES:-../shared/data/meshes}
+real=${REAL:-../shared/data/real}
 cli=build/client/meshsmooth
 out=docs/images
 tmp=$(mktemp -d)
@@ -59,3 +65,10 @@ PY
 $cli render "$tmp/bunny-textured.ply" -o "$out/bunny-textured-before.png" --view front --size 480x480
 $cli smooth "$tmp/bunny-textured.ply" -o "$tmp/bunny-textured-smooth.ply" --flow median --iterations 20 --quiet
 $cli render "$tmp/bunny-textured-smooth.ply" -o "$out/bunny-textured-after.png" --view front --size 480x480
+# A region: the rabbit's head (a sphere, 8 mm falloff) smoothed by the default job, the rest kept.
+region=(--region sphere:-49,-25,-1256,22 --falloff 8)
+xz -dc "$real/rabbit.obj.xz" >"$tmp/rabbit.obj"
+$cli render "$tmp/rabbit.obj" -o "$out/rabbit-region-before.png" --view front --size 480x480 --shading flat "${region[@]}"
+$cli smooth "$tmp/rabbit.obj" -o "$tmp/rabbit-region.obj" --quiet "${region[@]}"
+$cli render "$tmp/rabbit-region.obj" -o "$out/rabbit-region-after.png" --view front --size 480x480 --shading flat \
+  "${region[@]}"
