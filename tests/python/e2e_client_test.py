@@ -3,12 +3,15 @@
 
 Run (ctest does this):
   /usr/bin/python3 tests/python/e2e_client_test.py --server build/server/meshsmoothd \
-      --proto-root proto [--shared ../shared]
+      --cli build/client/meshsmooth --proto-root proto [--shared ../shared]
 
 Needs only Debian packages: python3-grpcio, python3-protobuf, python3-numpy, protobuf-compiler,
 protobuf-compiler-grpc (grpc_python_plugin) and draco (draco_encoder, draco_decoder).
 Stubs are generated from the .proto at test time, so this client is written against the
-public contract, not against the C++ code. Prints one "ok: ..." / "FAIL: ..." line per check
+public contract, not against the C++ code. The upload with a per-vertex strength
+(JobSpec.strength_attribute) needs a GENERIC Draco attribute named by its metadata, which
+draco_encoder does not write: the meshsmooth CLI makes those bytes (make_strength_upload), and
+this client sends them itself. Prints one "ok: ..." / "FAIL: ..." line per check
 and closes with "N passed, M failed"; exits 1 when anything failed.
 """
 
@@ -34,6 +37,10 @@ ERROR_DEADLINE_S = 30.0
 CHUNK_BYTES = 4 * 1024
 ICOSPHERE_VERTICES = 642
 ICOSPHERE_FACES = 1280
+# The strength upload's vertex properties (GENERIC attributes named by their metadata): the
+# strength, and a property with one value outside [0, 1].
+STRENGTH_PROPERTY = "strength"
+OUT_OF_RANGE_PROPERTY = "over"
 
 
 # ----------------------------------------------------------------------------------------------
@@ -132,6 +139,81 @@ def make_test_mesh(work_dir):
         data = f.read()
     require(len(data) > 2 * CHUNK_BYTES, f"mesh.drc is only {len(data)} bytes: too few chunks")
     return data
+
+
+def write_strength_ply(path, verts, faces, strength, over):
+    """ASCII PLY with float x, y, z and the float properties STRENGTH_PROPERTY, OUT_OF_RANGE_PROPERTY."""
+    with open(path, "w") as f:
+        f.write(f"ply\nformat ascii 1.0\nelement vertex {len(verts)}\n")
+        f.write("property float x\nproperty float y\nproperty float z\n")
+        f.write(f"property float {STRENGTH_PROPERTY}\nproperty float {OUT_OF_RANGE_PROPERTY}\n")
+        f.write(f"element face {len(faces)}\nproperty list uchar int vertex_indices\nend_header\n")
+        for (x, y, z), s, o in zip(verts, strength, over):
+            f.write(f"{x:.9g} {y:.9g} {z:.9g} {s:.9g} {o:.9g}\n")
+        for i, j, k in faces:
+            f.write(f"3 {i} {j} {k}\n")
+
+
+def ply_positions(path):
+    """The float32 (n, 3) positions of a binary little-endian PLY whose vertices are float x, y, z
+    alone (what draco_decoder writes for a mesh without normals, colours or texture coordinates)."""
+    with open(path, "rb") as f:
+        raw = f.read()
+    end = raw.index(b"end_header\n") + len(b"end_header\n")
+    header = raw[:end].decode("ascii").splitlines()
+    require("format binary_little_endian 1.0" in header, f"{path}: not binary little-endian")
+    start = next(i for i, line in enumerate(header) if line.startswith("element vertex "))
+    n = int(header[start].split()[2])
+    props = header[start + 1:start + 4]
+    require(props == ["property float x", "property float y", "property float z"]
+            and not header[start + 4].startswith("property"), f"{path}: vertex properties {header[start + 1:]}")
+    return np.frombuffer(raw, dtype="<f4", count=3 * n, offset=end).reshape(n, 3)
+
+
+def decode_positions(work_dir, name, data):
+    """data (Draco bytes) decoded by draco_decoder: the float32 positions, point i of the mesh."""
+    drc, ply = os.path.join(work_dir, f"{name}.drc"), os.path.join(work_dir, f"{name}.ply")
+    with open(drc, "wb") as f:
+        f.write(data)
+    r = run(["draco_decoder", "-i", drc, "-o", ply])
+    require(r.returncode == 0, f"draco_decoder failed ({r.returncode}): {r.stdout.strip()} {r.stderr.strip()}")
+    return ply_positions(ply)
+
+
+def make_strength_upload(work_dir, cli):
+    """The noisy icosphere with a per-vertex strength, as Draco bytes holding it in a GENERIC
+    attribute named by its metadata. Returns (bytes, float32 positions, strength, over).
+
+    Strength 0 below z = -0.3, 1 above z = 0.3, linear between; OUT_OF_RANGE_PROPERTY is 0.25
+    but at vertex 7 (1.5). Debian's draco_encoder writes no named GENERIC attributes, so the
+    meshsmooth CLI converts the PLY: its encoder writes each PLY vertex property as one, and
+    --region around a point far from the mesh gives every vertex strength 0 in its own job, so
+    the .drc it writes holds the input's positions as they were. Both are checked here rather
+    than assumed: draco_decoder reads the same float32 positions back, in order, and the bytes
+    hold each property's float32 values in vertex order (a lossless sequential encoding stores a
+    float attribute's values as they are)."""
+    verts, faces = icosphere(3)
+    rng = np.random.default_rng(1)
+    verts = (verts + rng.uniform(-0.02, 0.02, size=verts.shape)).astype(np.float32)
+    z = verts[:, 2].astype(np.float64)
+    strength = np.clip((z + 0.3) / 0.6, 0.0, 1.0).astype(np.float32)
+    over = np.full(len(verts), 0.25, dtype=np.float32)
+    over[7] = 1.5
+    ply = os.path.join(work_dir, "strength.ply")
+    drc = os.path.join(work_dir, "strength.drc")
+    write_strength_ply(ply, verts, faces, strength, over)
+    r = run([cli, "smooth", ply, "--flow", "laplacian", "--iterations", "1", "--region", "sphere:100,100,100,1",
+             "--quiet", "-o", drc])
+    require(r.returncode == 0, f"meshsmooth smooth failed ({r.returncode}): {r.stderr.strip()}")
+    with open(drc, "rb") as f:
+        data = f.read()
+    require(np.array_equal(decode_positions(work_dir, "strength_upload", data), verts),
+            "the CLI's .drc does not hold the PLY's positions bit for bit, in order")
+    for name, values in ((STRENGTH_PROPERTY, strength), (OUT_OF_RANGE_PROPERTY, over)):
+        require(values.astype("<f4").tobytes() in data, f"the CLI's .drc does not hold the values of {name!r}")
+    require((strength == 0).sum() > 100 and (strength == 1).sum() > 100,
+            f"{(strength == 0).sum()} vertices of strength 0, {(strength == 1).sum()} of strength 1")
+    return data, verts, strength, over
 
 
 def decode_counts(work_dir, name, data):
@@ -284,11 +366,81 @@ def expect_error(stub, grpc, messages, code_name, words):
     return details
 
 
+def check_strength_result(stub, pb2, grpc, work_dir, upload):
+    """laplacian, 10 iterations, with strength_attribute: status OK; returns the result's
+    float32 positions and its bytes."""
+    data = upload[0]
+    spec = pb2.JobSpec(flow="laplacian", iterations=10, strength_attribute=STRENGTH_PROPERTY)
+    responses, code, details, _ = run_smooth(stub, pb2, spec, data)
+    require(code == grpc.StatusCode.OK, f"status {code} {details!r}")
+    s = responses[-1].summary
+    require(s.parameters.flow == "laplacian" and s.parameters.iterations_run == 10,
+            f"ran {s.parameters.flow!r} for {s.parameters.iterations_run} iterations")
+    result = result_bytes_of(responses)
+    return decode_positions(work_dir, "strength_result", result), result
+
+
+def check_strength_zero_kept(upload, after):
+    _, before, strength, _ = upload
+    held = strength == 0
+    require(after.shape == before.shape, f"{len(after)} points back for {len(before)}")
+    changed = np.flatnonzero(held & np.any(after != before, axis=1))
+    require(changed.size == 0, f"{changed.size} of {held.sum()} vertices of strength 0 moved, e.g. {changed[:5]}")
+    return int(held.sum())
+
+
+def check_strength_one_moves(upload, after):
+    _, before, strength, _ = upload
+    full = strength == 1
+    moved = np.linalg.norm(after[full].astype(np.float64) - before[full], axis=1)
+    require(np.all(moved > 0), f"{(moved == 0).sum()} of {full.sum()} vertices of strength 1 did not move")
+    require(moved.mean() > 1e-3, f"vertices of strength 1 moved {moved.mean():.2e} on average")
+    return int(full.sum())
+
+
+def check_strength_control(stub, pb2, grpc, work_dir, upload):
+    """The same job without strength_attribute moves the vertices of strength 0: what keeps
+    them is the strength, not the flow."""
+    data, before, strength, _ = upload
+    responses, code, details, _ = run_smooth(stub, pb2, pb2.JobSpec(flow="laplacian", iterations=10), data)
+    require(code == grpc.StatusCode.OK, f"status {code} {details!r}")
+    after = decode_positions(work_dir, "strength_control", result_bytes_of(responses))
+    held = strength == 0
+    still = np.all(after[held] == before[held], axis=1)
+    require(not still.any(), f"{still.sum()} of {held.sum()} vertices of strength 0 did not move without it")
+
+
+def strength_messages(pb2, data, attribute):
+    return [pb2.SmoothRequest(spec=pb2.JobSpec(flow="laplacian", iterations=10, strength_attribute=attribute))] + [
+        pb2.SmoothRequest(mesh_chunk=c) for c in chunked(data, CHUNK_BYTES)]
+
+
+def run_strength_checks(checks, stub, pb2, grpc, work_dir, upload):
+    out = checks.check(f"strength: laplacian, 10 iterations, strength_attribute {STRENGTH_PROPERTY!r} ends OK",
+                       check_strength_result, stub, pb2, grpc, work_dir, upload)
+    if out is not None:
+        after, result = out
+        checks.check("strength: every vertex of strength 0 comes back bit for bit",
+                     check_strength_zero_kept, upload, after)
+        checks.check("strength: every vertex of strength 1 moves", check_strength_one_moves, upload, after)
+        checks.check("strength: the attribute comes back unchanged (its float32 values in vertex order)",
+                     lambda: require(upload[2].astype("<f4").tobytes() in result,
+                                     "the result does not hold the strength's values"))
+    checks.check("strength: without strength_attribute the vertices of strength 0 move (control)",
+                 check_strength_control, stub, pb2, grpc, work_dir, upload)
+    checks.check("error: strength_attribute naming no attribute of the upload -> INVALID_ARGUMENT naming it",
+                 expect_error, stub, grpc, strength_messages(pb2, upload[0], "no_such_attribute"),
+                 "INVALID_ARGUMENT", ["strength_attribute", "no_such_attribute"])
+    checks.check("error: strength_attribute with a value of 1.5 -> INVALID_ARGUMENT naming it",
+                 expect_error, stub, grpc, strength_messages(pb2, upload[0], OUT_OF_RANGE_PROPERTY),
+                 "INVALID_ARGUMENT", ["strength_attribute", OUT_OF_RANGE_PROPERTY])
+
+
 # ----------------------------------------------------------------------------------------------
 
 
 def main():
-    args = parser(__doc__, required=("server", "proto-root"), optional=("shared",)).parse_args()
+    args = parser(__doc__, required=("server", "cli", "proto-root"), optional=("shared",)).parse_args()
     return run_checks(lambda checks, tmp: run_all(args, checks, tmp), tmp_prefix="meshsmooth-e2e-")
 
 
@@ -331,6 +483,10 @@ def run_all(args, checks, tmp):
                                      == (ICOSPHERE_VERTICES, ICOSPHERE_FACES),
                                      "draco_decoder counts differ"))
 
+    strength_upload = checks.check(
+        "strength upload: the CLI's .drc of a PLY with float properties holds its positions bit for bit "
+        "and each property as an attribute", make_strength_upload, work_dir, args.cli)
+
     server = checks.check("server starts and prints its ready line",
                           Server, args.server, "--workers", "2")
     if server is None:
@@ -368,6 +524,9 @@ def run_all(args, checks, tmp):
                              "result_bytes matches", check_summary, responses)
                 checks.check("result decodes with draco_decoder to 642 v / 1280 f",
                              check_result_decodes, work_dir, responses)
+
+        if strength_upload is not None:
+            run_strength_checks(checks, stub, pb2, grpc, work_dir, strength_upload)
 
         spec_median = pb2.JobSpec(flow="median", iterations=10)
         checks.check("error: mesh_chunk first -> INVALID_ARGUMENT naming the spec",
