@@ -27,7 +27,7 @@ if [ "$preset" != image ]; then
   packages+=(
     grpc-proto draco libopenmesh-dev libgtest-dev libgmock-dev libbenchmark-dev libopen3d-dev libcgal-dev
     python3-grpcio python3-protobuf python3-numpy python3-scipy python3-yaml openssl
-    nginx prometheus clang-format
+    nginx prometheus clang-format nodejs
   )
 fi
 # kubectl renders deploy/kubernetes in tests/deploy/kubernetes_test.py. Debian's is
