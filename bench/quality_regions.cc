@@ -13,14 +13,17 @@
 #include <limits>
 #include <map>
 #include <numbers>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "bench/bench_common.h"
 #include "bench/quality_inputs.h"
+#include "bench/quality_scans.h"
 #include "core/job/default_job.h"
 #include "core/measure/evaluation.h"
+#include "core/measure/metrics.h"
 #include "core/topology.h"
 
 namespace meshsmooth::bench {
@@ -37,17 +40,31 @@ constexpr double kSphereShare = 0.25;
 // neighbours keep their noise whatever the job does.
 constexpr int kEdgeRings = 3;
 
-// One kind of input with a region: strength 0 where the region keeps the input.
+// Where a region keeps the input: strength 0 there, 1 elsewhere, on a mesh and its topology.
+using StrengthOf = std::function<std::vector<float>(const Mesh&, const Topology&)>;
+
+// One kind of input with a region: a noisy copy of a clean mesh (`noise`) or a simulated scan of
+// it (`scan`), and the region.
 struct RegionCase {
   std::string mesh, region;
   Case noise;
-  std::function<std::vector<float>(const GroundTruth&)> strength;
+  std::optional<ScanKind> scan;
+  StrengthOf strength;
+};
+
+// One noisy input of a row, its topology, h (the clean mesh's for a noisy copy, the scan's own
+// for a scan) and the strength of its vertices.
+struct RegionInput {
+  Mesh mesh;
+  Topology topology;
+  double h = 0.0;
+  bool copy = true;  // a noisy copy of the clean mesh: its faces are the clean mesh's
+  std::vector<float> strength;
 };
 
 // The clean mesh's faces grouped across edges whose dihedral angle is below kCreaseAngleDeg (a
 // CAD part's faces); strength 0 on the vertices of the group with the most faces.
-std::vector<float> LargestSmoothPatchFixed(const GroundTruth& truth) {
-  const Mesh& m = truth.mesh();
+std::vector<float> LargestSmoothPatchFixed(const Mesh& m, const Topology&) {
   const auto& tris = m.triangles;
   std::vector<Vec3> normal(tris.size());
   for (size_t f = 0; f < tris.size(); ++f) {
@@ -83,8 +100,7 @@ std::vector<float> LargestSmoothPatchFixed(const GroundTruth& truth) {
 }
 
 // Strength 0 on the vertices within kRimRings edges of a boundary.
-std::vector<float> RimFixed(const GroundTruth& truth) {
-  const Topology& topo = truth.topology();
+std::vector<float> RimFixed(const Mesh&, const Topology& topo) {
   std::vector<int> depth(topo.num_vertices(), -1);
   std::vector<int32_t> front;
   for (int32_t v = 0; v < topo.num_vertices(); ++v) {
@@ -105,8 +121,8 @@ std::vector<float> RimFixed(const GroundTruth& truth) {
 }
 
 // Strength 1 in a sphere around the front-most (largest z) vertex, 0 outside.
-std::vector<float> FrontSphereSmoothed(const GroundTruth& truth) {
-  const std::vector<Vec3>& p = truth.mesh().positions;
+std::vector<float> FrontSphereSmoothed(const Mesh& m, const Topology&) {
+  const std::vector<Vec3>& p = m.positions;
   Vec3 lo = p[0], hi = p[0];
   size_t front = 0;
   for (size_t v = 0; v < p.size(); ++v) {
@@ -121,8 +137,8 @@ std::vector<float> FrontSphereSmoothed(const GroundTruth& truth) {
 }
 
 // Strength 0 on the cap above y = 0.5 (of a unit sphere).
-std::vector<float> CapFixed(const GroundTruth& truth) {
-  const std::vector<Vec3>& p = truth.mesh().positions;
+std::vector<float> CapFixed(const Mesh& m, const Topology&) {
+  const std::vector<Vec3>& p = m.positions;
   std::vector<float> strength(p.size());
   for (size_t v = 0; v < p.size(); ++v) strength[v] = p[v].y > 0.5 ? 0.0f : 1.0f;
   return strength;
@@ -130,8 +146,7 @@ std::vector<float> CapFixed(const GroundTruth& truth) {
 
 // The vertices of strength 1 (1) and, of those, the ones more than kEdgeRings edges from any vertex
 // of strength below 1 (2); 0 for the rest.
-std::vector<uint8_t> FreeParts(const GroundTruth& truth, const std::vector<float>& strength) {
-  const Topology& topo = truth.topology();
+std::vector<uint8_t> FreeParts(const Topology& topo, const std::vector<float>& strength) {
   std::vector<int> depth(strength.size(), -1);
   std::vector<int32_t> front;
   for (int32_t v = 0; v < topo.num_vertices(); ++v) {
@@ -152,33 +167,52 @@ std::vector<uint8_t> FreeParts(const GroundTruth& truth, const std::vector<float
 }
 
 // The error of `result` on the vertices whose `part` is at least `least`: RMS distance to the
-// clean surface (h) and the mean angle between the normals of the faces with all three corners
-// there and the clean ones (degrees).
+// clean surface (over h) and the mean angle between the normals of the faces with all three
+// corners there and the clean ones (degrees): the same face of the clean mesh for a noisy copy,
+// the clean triangle nearest to the face's centroid for a scan.
 struct PartError {
   double rms_h = 0.0, normal_deg = 0.0;
 };
 
-PartError ErrorOn(const GroundTruth& truth, const Mesh& result, const std::vector<uint8_t>& part, uint8_t least) {
+PartError ErrorOn(const GroundTruth& truth, const RegionInput& in, const Mesh& result, const std::vector<uint8_t>& part,
+                  uint8_t least) {
   double sum2 = 0.0, angles = 0.0;
   int64_t vertices = 0, faces = 0;
   for (size_t v = 0; v < part.size(); ++v) {
-    if (part[v] < least || truth.topology().kind[v] == VertexKind::kIsolated) continue;
+    if (part[v] < least || in.topology.kind[v] == VertexKind::kIsolated) continue;
     sum2 += truth.surface().SquaredDistance(result.positions[v]);
     ++vertices;
   }
   const Mesh& clean = truth.mesh();
-  for (const Triangle& t : clean.triangles) {
+  auto cross = [](const Mesh& m, const Triangle& t) {
+    return Cross(m.positions[t[1]] - m.positions[t[0]], m.positions[t[2]] - m.positions[t[0]]);
+  };
+  for (int32_t f : in.topology.faces) {
+    const Triangle& t = result.triangles[f];
     if (part[t[0]] < least || part[t[1]] < least || part[t[2]] < least) continue;
-    auto cross = [&t](const Mesh& m) {
-      return Cross(m.positions[t[1]] - m.positions[t[0]], m.positions[t[2]] - m.positions[t[0]]);
-    };
-    const Vec3 a = cross(clean), b = cross(result);
+    const Vec3 b = cross(result, t);
+    const int32_t g =
+        in.copy ? f
+                : truth.surface().NearestTriangle(
+                      (result.positions[t[0]] + result.positions[t[1]] + result.positions[t[2]]) * (1.0 / 3.0));
+    if (g < 0) continue;
+    const Vec3 a = cross(clean, clean.triangles[g]);
     if (SquaredNorm(a) == 0.0 || SquaredNorm(b) == 0.0) continue;
     angles += std::acos(std::clamp(Dot(Normalized(a), Normalized(b)), -1.0, 1.0)) * 180.0 / std::numbers::pi;
     ++faces;
   }
-  const double h = truth.mean_edge_length();
-  return {std::sqrt(sum2 / std::max<int64_t>(vertices, 1)) / h, angles / std::max<int64_t>(faces, 1)};
+  return {std::sqrt(sum2 / std::max<int64_t>(vertices, 1)) / in.h, angles / std::max<int64_t>(faces, 1)};
+}
+
+// The faces of `result` whose normal points against the clean one (GroundTruth::Evaluate for a
+// noisy copy, EvaluateOnSurface for a scan).
+int64_t FlippedFaces(const GroundTruth& truth, const RegionInput& in, const Mesh& result) {
+  absl::StatusOr<Quality> q = in.copy ? truth.Evaluate(result) : EvaluateOnSurface(truth, result, in.topology, in.h);
+  if (!q.ok()) {
+    std::fprintf(stderr, "meshsmooth_quality_regions: %s\n", q.status().ToString().c_str());
+    std::exit(1);
+  }
+  return q->flipped_faces;
 }
 
 // One seed of a row.
@@ -188,43 +222,63 @@ struct SeedRun {
   int64_t fixed_moved = 0;
   int64_t flipped_noisy = 0, flipped_whole = 0, flipped_region = 0;
   int iterations_whole = 0, iterations_region = 0;
+  int64_t held = 0, vertices = 0;
 };
 
-// The default job on `noisy` with `strength` (empty: the whole mesh); its iterations and the
-// result's flipped faces go to `iterations` and `flipped`. Exits on a failed job.
-Mesh DefaultJob(const GroundTruth& truth, const Mesh& noisy, const std::vector<float>& strength, int* iterations,
-                int64_t* flipped) {
-  Mesh m = noisy;
+// The default job on `in` with `strength` (empty: the whole mesh); its iterations go to
+// `iterations`. Exits on a failed job.
+Mesh DefaultJob(const RegionInput& in, const std::vector<float>& strength, int* iterations) {
+  Mesh m = in.mesh;
   FlowParams p;
   p.strength = strength;
-  absl::StatusOr<FlowResult> r = job::SmoothWithPolicy(m, truth.topology(), p, {}, job::kPolicy);
-  absl::StatusOr<Quality> q = r.ok() ? truth.Evaluate(m) : absl::StatusOr<Quality>(r.status());
-  if (!q.ok()) {
-    std::fprintf(stderr, "meshsmooth_quality_regions: %s\n", q.status().ToString().c_str());
+  absl::StatusOr<FlowResult> r = job::SmoothWithPolicy(m, in.topology, p, {}, job::kPolicy);
+  if (!r.ok()) {
+    std::fprintf(stderr, "meshsmooth_quality_regions: %s\n", r.status().ToString().c_str());
     std::exit(1);
   }
   *iterations = r->iterations_run;
-  *flipped = q->flipped_faces;
   return m;
 }
 
-SeedRun RunSeed(const GroundTruth& truth, const Mesh& noisy, const std::vector<float>& strength) {
+SeedRun RunSeed(const GroundTruth& truth, const RegionInput& in) {
   SeedRun s;
-  const std::vector<uint8_t> part = FreeParts(truth, strength);
-  s.noisy = ErrorOn(truth, noisy, part, 1);
-  s.noisy_in = ErrorOn(truth, noisy, part, 2);
-  s.flipped_noisy = truth.Evaluate(noisy)->flipped_faces;
-  const Mesh whole = DefaultJob(truth, noisy, {}, &s.iterations_whole, &s.flipped_whole);
-  const Mesh region = DefaultJob(truth, noisy, strength, &s.iterations_region, &s.flipped_region);
-  s.whole = ErrorOn(truth, whole, part, 1);
-  s.region = ErrorOn(truth, region, part, 1);
-  s.whole_in = ErrorOn(truth, whole, part, 2);
-  s.region_in = ErrorOn(truth, region, part, 2);
-  for (size_t v = 0; v < strength.size(); ++v) {
-    const Vec3 &a = region.positions[v], &b = noisy.positions[v];
-    if (strength[v] == 0.0f && (a.x != b.x || a.y != b.y || a.z != b.z)) ++s.fixed_moved;
+  s.held = std::count(in.strength.begin(), in.strength.end(), 0.0f);
+  s.vertices = in.mesh.num_vertices();
+  const std::vector<uint8_t> part = FreeParts(in.topology, in.strength);
+  s.noisy = ErrorOn(truth, in, in.mesh, part, 1);
+  s.noisy_in = ErrorOn(truth, in, in.mesh, part, 2);
+  s.flipped_noisy = FlippedFaces(truth, in, in.mesh);
+  const Mesh whole = DefaultJob(in, {}, &s.iterations_whole);
+  const Mesh region = DefaultJob(in, in.strength, &s.iterations_region);
+  s.flipped_whole = FlippedFaces(truth, in, whole);
+  s.flipped_region = FlippedFaces(truth, in, region);
+  s.whole = ErrorOn(truth, in, whole, part, 1);
+  s.region = ErrorOn(truth, in, region, part, 1);
+  s.whole_in = ErrorOn(truth, in, whole, part, 2);
+  s.region_in = ErrorOn(truth, in, region, part, 2);
+  for (size_t v = 0; v < in.strength.size(); ++v) {
+    const Vec3 &a = region.positions[v], &b = in.mesh.positions[v];
+    if (in.strength[v] == 0.0f && (a.x != b.x || a.y != b.y || a.z != b.z)) ++s.fixed_moved;
   }
   return s;
+}
+
+// Seed `s` of a case: a noisy copy of the clean mesh, or a scan of it (`object`, at object scale).
+RegionInput MakeInput(const RegionCase& rc, const GroundTruth& truth, int s) {
+  RegionInput in;
+  if (rc.scan) {
+    in.mesh = MakeScan(truth.mesh(), *rc.scan, /*held_out=*/true, s);
+    in.topology = BuildTopology(in.mesh);
+    in.h = MeanEdgeLength(in.mesh, in.topology);
+    in.copy = false;
+  } else {
+    in.mesh = MakeNoisy(truth.mesh(), rc.noise, kFirstSeed + static_cast<uint64_t>(s));
+    in.topology = truth.topology();
+    in.h = truth.mean_edge_length();
+  }
+  // A copy's region is drawn on the clean mesh (the same for every seed), a scan's on the scan.
+  in.strength = rc.scan ? rc.strength(in.mesh, in.topology) : rc.strength(truth.mesh(), truth.topology());
+  return in;
 }
 
 void PrintHeader(int seeds) {
@@ -253,7 +307,7 @@ void PrintHeader(int seeds) {
 }
 
 // The two rows of a case: the free part and beyond its edge.
-void PrintRows(const RegionCase& rc, const std::vector<float>& strength, const std::vector<SeedRun>& runs) {
+void PrintRows(const RegionCase& rc, const std::vector<SeedRun>& runs) {
   auto mean = [&runs](auto field) {
     double sum = 0.0;
     for (const SeedRun& r : runs) sum += static_cast<double>(field(r));
@@ -284,10 +338,10 @@ void PrintRows(const RegionCase& rc, const std::vector<float>& strength, const s
       cells[w] = buf;
     }
     std::printf(
-        "| %s | %s | %s | %lld of %zu | %lld | %.0f / %.0f | %.0f / %.0f / %.0f | %s | %s | %s | %s | %.3f / %.3f | "
+        "| %s | %s | %s | %.0f of %.0f | %lld | %.0f / %.0f | %.0f / %.0f / %.0f | %s | %s | %s | %s | %.3f / %.3f | "
         "%s |\n",
-        rc.mesh.c_str(), rc.noise.Name().c_str(), rc.region.c_str(),
-        static_cast<long long>(std::count(strength.begin(), strength.end(), 0.0f)), strength.size(),
+        rc.mesh.c_str(), rc.scan ? "the scanner's" : rc.noise.Name().c_str(), rc.region.c_str(),
+        mean([](const SeedRun& r) { return r.held; }), mean([](const SeedRun& r) { return r.vertices; }),
         static_cast<long long>(moved), mean([](const SeedRun& r) { return r.iterations_whole; }),
         mean([](const SeedRun& r) { return r.iterations_region; }),
         mean([](const SeedRun& r) { return r.flipped_noisy; }), mean([](const SeedRun& r) { return r.flipped_whole; }),
@@ -313,12 +367,18 @@ int Main(int argc, char** argv) {
       return 2;
     }
   }
+  const Case tof{Noise::kNormal, 0.0};  // a scan's noise is the scanner's
   const std::vector<RegionCase> cases = {
-      {"fandisk", "its largest face (a crease-bounded patch) fixed", {Noise::kNormal, 0.2}, LargestSmoothPatchFixed},
-      {"stanford-bunny", "its rim (3 rings around the 5 holes) fixed", {Noise::kNormal, 0.2}, RimFixed},
-      {"camelhead", "its rim (3 rings around the neck's opening) fixed", {Noise::kRandom, 0.2}, RimFixed},
-      {"max-planck", "only a sphere around the nose smoothed", {Noise::kNormal, 0.3}, FrontSphereSmoothed},
-      {"sphere", "the cap above y = 0.5 fixed", {Noise::kNormal, 0.3}, CapFixed},
+      {"fandisk",
+       "its largest face (a crease-bounded patch) fixed",
+       {Noise::kNormal, 0.2},
+       {},
+       LargestSmoothPatchFixed},
+      {"stanford-bunny", "its rim (3 rings around the 5 holes) fixed", {Noise::kNormal, 0.2}, {}, RimFixed},
+      {"camelhead", "its rim (3 rings around the neck's opening) fixed", {Noise::kRandom, 0.2}, {}, RimFixed},
+      {"nefertiti", "a time-of-flight frame, its rim (3 rings) fixed", tof, ScanKind::kTimeOfFlight, RimFixed},
+      {"max-planck", "only a sphere around the nose smoothed", {Noise::kNormal, 0.3}, {}, FrontSphereSmoothed},
+      {"sphere", "the cap above y = 0.5 fixed", {Noise::kNormal, 0.3}, {}, CapFixed},
   };
   PrintHeader(seeds);
   for (const RegionCase& rc : cases) {
@@ -327,14 +387,12 @@ int Main(int argc, char** argv) {
       std::fprintf(stderr, "meshsmooth_quality_regions: %s\n", subject.status().ToString().c_str());
       return 1;
     }
-    const GroundTruth& truth = *subject->truth;
-    const std::vector<float> strength = rc.strength(truth);
+    // A scan is of the object at its size (ToObjectScale), measured against it.
+    const GroundTruth object(ToObjectScale(subject->truth->mesh()));
+    const GroundTruth& truth = rc.scan ? object : *subject->truth;
     std::vector<SeedRun> runs;
-    for (int s = 0; s < seeds; ++s) {
-      const Mesh noisy = MakeNoisy(truth.mesh(), rc.noise, kFirstSeed + static_cast<uint64_t>(s));
-      runs.push_back(RunSeed(truth, noisy, strength));
-    }
-    PrintRows(rc, strength, runs);
+    for (int s = 0; s < seeds; ++s) runs.push_back(RunSeed(truth, MakeInput(rc, truth, s)));
+    PrintRows(rc, runs);
   }
   std::printf("\nFigures are means over the seeds, but for the worst ratio and \"moved\" (a sum).\n");
   return 0;
