@@ -11,4 +11,10 @@ namespace meshsmooth::client {
 // JSON mapping writes it (64-bit integers as strings, fields at their default left out).
 std::string ToJson(const google::protobuf::Message& message);
 
+// The same on one line, without a newline at its end: a record of --json lines.
+std::string ToJsonLine(const google::protobuf::Message& message);
+
+// `text` as a JSON string, quoted and escaped.
+std::string JsonString(const std::string& text);
+
 }  // namespace meshsmooth::client

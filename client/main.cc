@@ -2,6 +2,7 @@
 //
 //   meshsmooth smooth IN -o OUT [--flow auto|NAME] [--iterations auto|N] [--step S] [flow options]
 //                               [--server TARGET] [--retries N] [--job-id ID]
+//   meshsmooth smooth IN... | DIR | 'GLOB' | --batch LIST  -o OUTDIR [--format EXT] [--jobs N] [...]
 //   meshsmooth flows [--server TARGET]
 //   meshsmooth info IN
 //   meshsmooth ridges IN -o OUT.ply [--threshold K]      (locally, no smoothing)
@@ -34,6 +35,8 @@
 #include "base/huge_pages.h"
 #include "base/kernel_environment.h"
 #include "base/shutdown_signals.h"
+#include "client/batch.h"
+#include "client/batch_plan.h"
 #include "client/commands.h"
 #include "client/inputs.h"
 #include "client/transfer.h"
@@ -145,17 +148,18 @@ void AddStrengthOptions(CLI::App* app, StrengthOptions& st) {
       ->capture_default_str();
 }
 
-void AddSmoothOptions(CLI::App* smooth, SmoothOptions& so) {
+void AddSmoothOptions(CLI::App* smooth, SmoothOptions& so, BatchOptions& batch) {
   const std::vector<FlowInfo> flows = DescribeFlows();
   smooth
-      ->add_option("input", so.input,
+      ->add_option("input", batch.inputs,
                    "mesh file (.obj .ply .off .stl .drc), glTF scene (.glb .gltf: every triangle primitive smoothed, "
-                   "the rest of the scene kept; the output must be a scene too) or builtin:NAME")
-      ->required()
+                   "the rest of the scene kept; the output must be a scene too) or builtin:NAME. Several inputs, a "
+                   "folder (its mesh files) or a quoted glob pattern ('scans/*.ply') make a batch: see --batch")
       ->check(KnownInput());
   smooth
       ->add_option("-o,--output", so.output,
-                   "output file, its folder and format checked before the upload; its extension picks the format "
+                   "output file (a batch: its output folder, made when missing), its folder and format checked "
+                   "before the upload; its extension picks the format "
                    "(.obj .ply .off .stl .drc, or .glb .gltf: a scene of one node, translated to a georeferenced "
                    "mesh's local origin). Texture coordinates (UV seams kept), colours and "
                    "PLY vertex properties come back where the format holds them, normals recomputed from the "
@@ -163,8 +167,7 @@ void AddSmoothOptions(CLI::App* smooth, SmoothOptions& so) {
                    "path from the output's folder to the input's .mtl, so materials and textures (named in the .mtl, "
                    "relative to it) resolve without copying. Whatever the output cannot hold is named in one "
                    "'not kept' warning and in the --json warnings")
-      ->required()
-      ->check(KnownOutputFormat());
+      ->required();
   std::vector<std::string> flow_choices = FlowNames();
   flow_choices.insert(flow_choices.begin(), "auto");
   smooth
@@ -288,11 +291,64 @@ void AddSmoothOptions(CLI::App* smooth, SmoothOptions& so) {
       "vertex leaving the ball around its input position goes back onto it after each iteration, and the "
       "flow goes on from there); the default job returns no more folded faces than it got. The "
       "summary prints how many vertices reached the bound (99.9% of it or more); 0 = no bound");
-  smooth->add_option("--job-id", so.job_id,
-                     "the job's id in the server's log and the summary (1-128 printable ASCII characters, no "
-                     "spaces); default: the server makes one up. Retries send the same id");
+  smooth->add_option(
+      "--job-id", so.job_id,
+      "the job's id in the server's log and the summary (1-128 printable ASCII characters, no "
+      "spaces); default: the server makes one up. Retries send the same id. A batch's jobs are ID-1, ID-2, ... "
+      "in input order");
   // Per-vertex strength (client/strength.h), sent as JobSpec.strength_attribute.
   AddStrengthOptions(smooth, so.strength);
+}
+
+void AddBatchOptions(CLI::App* smooth, BatchOptions& batch) {
+  smooth->add_option(
+      "--batch", batch.list_file,
+      "a batch (so do several inputs, a folder, a glob pattern, or -o ending in '/'): smooth the inputs listed in "
+      "this file too, one a line (files, folders, glob patterns, builtin:NAME; relative to the current folder; # "
+      "starts a comment line; - reads standard input), each into -o FOLDER/STEM.EXT with the options given, over one "
+      "connection; a failed file does not stop the others. Prints a progress line per file on stderr, a summary line "
+      "per file and a total on stdout (--json: one object per line; --quiet: neither), and names each failed file "
+      "with its error; exit 1 when any failed. Two inputs with the same output, an output over an input, or a glTF "
+      "input: exit 2 before any job");
+  smooth
+      ->add_option("--format", batch.format,
+                   "a batch's output format: the extension of every output; default: each input's own (ply for "
+                   "builtin:NAME)")
+      ->check(CLI::IsMember({"obj", "ply", "off", "stl", "drc", "glb", "gltf"}));
+  smooth
+      ->add_option("--jobs", batch.jobs,
+                   absl::StrCat("a batch's files in flight at once, 1..", kMaxBatchJobs,
+                                "; with --server, calls on one channel (spread over its replicas), without it jobs "
+                                "in this process"))
+      ->capture_default_str()
+      ->check(CLI::Range(1, kMaxBatchJobs));
+}
+
+// After parsing: a batch, or a single run whose -o names a format the CLI writes. 0 when the command line holds,
+// otherwise kExitUsage after saying why.
+int SettleSmoothInputs(SmoothOptions& so, const BatchOptions& batch, bool& batch_mode) {
+  if (batch.inputs.empty() && batch.list_file.empty()) {
+    std::fprintf(stderr,
+                 "input is required: a mesh file, several, a folder, a glob pattern, or --batch FILE\n"
+                 "Run with --help for more information.\n");
+    return kExitUsage;
+  }
+  batch_mode = IsBatch(batch.inputs, batch.list_file, so.output);
+  if (batch_mode) return 0;
+  so.input = batch.inputs.front();
+  if (!batch.format.empty()) {
+    std::fprintf(stderr,
+                 "meshsmooth: --format names a batch's output format (-o FOLDER); for one input, the "
+                 "extension of -o FILE picks it\n");
+    return kExitUsage;
+  }
+  // As CLI11 reports a validator's refusal.
+  std::string output = so.output;
+  if (const std::string error = KnownOutputFormat()(output); !error.empty()) {
+    std::fprintf(stderr, "--output: %s\nRun with --help for more information.\n", error.c_str());
+    return kExitUsage;
+  }
+  return 0;
 }
 
 void AddConnectionOptions(CLI::App* app, ConnectionOptions& c) {
@@ -307,7 +363,8 @@ void AddConnectionOptions(CLI::App* app, ConnectionOptions& c) {
   app->add_option("--token-file", c.token_file, "file with the bearer token the server expects")
       ->check(CLI::ExistingFile);
   app->add_option("--tls-ca", c.tls_ca, "PEM CA certificates: connect with TLS")->check(CLI::ExistingFile);
-  app->add_option("--timeout", c.timeout_seconds, "deadline of the call, seconds above 0, retries included")
+  app->add_option("--timeout", c.timeout_seconds,
+                  "deadline of the call (a batch: of each file's), seconds above 0, retries included")
       ->capture_default_str()
       ->check(PositiveSeconds());
   app->add_option(
@@ -353,8 +410,11 @@ int main(int argc, char** argv) {
   SmoothOptions so;
   so.flow = "auto";
   ConnectionOptions sc;
-  CLI::App* smooth = app.add_subcommand("smooth", "Smooth a mesh through meshsmoothd (or an in-process server)");
-  AddSmoothOptions(smooth, so);
+  BatchOptions batch;
+  CLI::App* smooth =
+      app.add_subcommand("smooth", "Smooth a mesh, or a batch of them, through meshsmoothd (or an in-process server)");
+  AddSmoothOptions(smooth, so, batch);
+  AddBatchOptions(smooth, batch);
   AddConnectionOptions(smooth, sc);
 
   ConnectionOptions fc;
@@ -404,21 +464,23 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : kExitUsage;
   }
+  bool batch_mode = false;
   if (smooth->parsed()) {
+    if (const int code = SettleSmoothInputs(so, batch, batch_mode); code != 0) return code;
     if (absl::Status s = CheckSmoothOptions(so); !s.ok()) {
       std::fprintf(stderr, "meshsmooth: %s\n", std::string(s.message()).c_str());
       return kExitUsage;
     }
   }
   // Still no thread: the huge-page re-exec (base/huge_pages.h) where the input is large enough
-  // to repay a second start of the program.
+  // to repay a second start of the program (a batch's so.input is empty: its files are read later).
   const std::string& input = smooth->parsed()   ? so.input
                              : info->parsed()   ? info_input
                              : ridges->parsed() ? ridges_input
                                                 : rc.input;
   if (HugePagesPay(input)) meshsmooth::UseHugePagesForLargeBuffers(argv);
   meshsmooth::ApplyKernelEnvironment();
-  if (smooth->parsed()) return RunSmooth(so, sc);
+  if (smooth->parsed()) return batch_mode ? RunBatch(so, sc, batch) : RunSmooth(so, sc);
   if (flows->parsed()) return RunFlows(fc, flows_json);
   if (info->parsed()) return RunInfo(info_input);
   if (ridges->parsed()) return RunRidges(ridges_input, ridges_output, ridges_threshold);

@@ -88,6 +88,12 @@ void ProgressPrinter::Done() {
   if (bar_shown_) std::fprintf(stderr, "\n");
 }
 
+void PrintRetry(const std::string& prefix, int retry, const absl::Status& status, std::chrono::milliseconds wait) {
+  std::fprintf(stderr, "meshsmooth: %sattempt %d failed (%s: %s); retrying in %.1f s\n", prefix.c_str(), retry,
+               std::string(absl::StatusCodeToString(status.code())).c_str(), std::string(status.message()).c_str(),
+               static_cast<double>(wait.count()) / 1000.0);
+}
+
 void PrintSummary(const v1::Summary& s) {
   const v1::MeshMetrics &a = s.before(), &b = s.after();
   const v1::EffectiveParameters& p = s.parameters();
@@ -134,6 +140,21 @@ void PrintSummary(const v1::Summary& s) {
   // The local run hands its result over in memory: no bytes to count.
   if (s.result_bytes() > 0) std::printf("; result %llu bytes", static_cast<unsigned long long>(s.result_bytes()));
   std::printf("\n");
+}
+
+std::string OneLineSummary(const v1::Summary& s) {
+  const v1::EffectiveParameters& p = s.parameters();
+  char line[512];
+  if (p.iterations_requested() == 0) {
+    std::snprintf(line, sizeof line, "%s, %u iterations (automatic: stopped by %s)", p.flow().c_str(),
+                  p.iterations_run(), p.stop_reason().c_str());
+  } else {
+    std::snprintf(line, sizeof line, "%s, %u of %u iterations (stopped by %s)", p.flow().c_str(), p.iterations_run(),
+                  p.iterations_requested(), p.stop_reason().c_str());
+  }
+  char moved[128];
+  std::snprintf(moved, sizeof moved, "; displacement RMS %.6g, max %.6g", s.rms_displacement(), s.max_displacement());
+  return std::string(line) + moved;
 }
 
 void PrintFlows(const v1::ListFlowsResponse& flows) {

@@ -2,7 +2,10 @@
 // flow list on stdout.
 #pragma once
 
+#include <chrono>
 #include <string>
+
+#include "absl/status/status.h"
 
 #include "meshsmooth/v1/smoothing.pb.h"
 
@@ -21,8 +24,14 @@ class ProgressPrinter {
   std::string smoothing_flow_;  // the flow of the smoothing phase reported last
 };
 
+// "meshsmooth: <prefix>attempt N failed (CODE: message); retrying in S s" on stderr.
+void PrintRetry(const std::string& prefix, int retry, const absl::Status& status, std::chrono::milliseconds wait);
+
 // The job summary as a before/after table, the displacement, features and timings.
 void PrintSummary(const v1::Summary& summary);
+
+// The job summary in one line: "FLOW, N iterations (stopped by WHY); displacement RMS R, max M".
+std::string OneLineSummary(const v1::Summary& summary);
 
 // Every flow with its parameters, defaults and ranges, then the common parameters and the
 // server's iteration limit.

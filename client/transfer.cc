@@ -198,7 +198,8 @@ absl::Status CheckOutputPath(const std::string& output) {
   }
   std::error_code error;
   if (fs::is_directory(output, error)) {
-    return absl::InvalidArgumentError(absl::StrCat("-o ", output, ": a folder, not a file"));
+    return absl::InvalidArgumentError(
+        absl::StrCat("-o ", output, ": a folder, not a file (for a batch's results, end it with '/')"));
   }
   fs::path folder = fs::path(output).parent_path();
   if (folder.empty()) folder = ".";

@@ -1,0 +1,105 @@
+// One input smoothed into one output, as `meshsmooth smooth IN -o OUT` does it and as each file
+// of a batch is: the checks made before the input is read, the job in memory or through the
+// service, the result written. Nothing here prints: the caller says what happened.
+#pragma once
+
+#include <chrono>
+#include <functional>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "absl/status/status.h"
+#include "client/commands.h"
+#include "client/connection.h"
+#include "meshsmooth/v1/smoothing.grpc.pb.h"
+
+namespace meshsmooth::client {
+
+// The JobSpec of `meshsmooth smooth`'s options (CheckSmoothOptions checks them).
+v1::JobSpec SpecFrom(const SmoothOptions& options);
+
+// The service for the jobs that do not run in memory: --server's channel, or the same service
+// started in this process when there is no --server. Connected at the first job that needs it
+// and shared by every job after it: one channel for a whole batch. Thread-safe.
+class ServiceLink {
+ public:
+  explicit ServiceLink(const ConnectionOptions& connection) : connection_(connection) {}
+
+  // The stub on the shared channel; Connect()'s errors (the same for every call).
+  absl::StatusOr<v1::MeshSmoother::StubInterface*> Stub();
+  bool embedded();  // the in-process server, which has no network to retry over
+  const ConnectionOptions& connection() const { return connection_; }
+
+ private:
+  const ConnectionOptions& connection_;
+  std::mutex mu_;  // guards the members below
+  bool tried_ = false;
+  absl::Status status_;
+  std::unique_ptr<server::Server> embedded_;
+  std::shared_ptr<grpc::Channel> channel_;
+  std::unique_ptr<v1::MeshSmoother::Stub> stub_;
+};
+
+// Ctrl-C for the jobs in flight: once Cancel() is called, every job registered then and every
+// job registered afterwards is cancelled. Thread-safe.
+class JobCancels {
+ public:
+  // Registers `cancel` until the returned id is unregistered; calls it at once when Cancel()
+  // came before.
+  int Register(std::function<void()> cancel);
+  void Unregister(int id);
+  void Cancel();
+  bool cancelled();
+
+ private:
+  std::mutex mu_;  // guards the members below
+  bool cancelled_ = false;
+  int next_id_ = 0;
+  std::map<int, std::function<void()>> jobs_;
+};
+
+// What a file's job tells its caller along the way; any may be empty.
+struct FileHooks {
+  std::function<void(const v1::Progress&)> progress;
+  // Called with the CLI's warnings about the input, once it is read, before the job starts.
+  std::function<void(const std::vector<std::string>&)> upload_warnings;
+  std::function<void()> job_done;  // the job ended, before the result is written
+  // A failed attempt of the call through the service, before the wait for its retry.
+  std::function<void(int retry, const absl::Status& status, std::chrono::milliseconds wait)> retry;
+  // A Ctrl-C watcher of its own around the job (a single run); a batch watches for all its jobs.
+  bool watch_interrupt = false;
+};
+
+// How a file's job ended.
+struct FileOutcome {
+  int exit_code = 0;                         // 0, kExitFailure, kExitUnavailable or kExitInterrupted
+  std::string error;                         // what failed, as "meshsmooth: " + error says it
+  v1::Summary summary;                       // the job's
+  std::vector<std::string> upload_warnings;  // the CLI's, about the input
+  std::vector<std::string> dropped;          // what the output does not hold, one phrase each
+};
+
+// The summary as --json gives it: the CLI's warnings (about the input, then "not kept: ..."),
+// then the job's summary with its own.
+v1::Summary SummaryWithWarnings(const FileOutcome& outcome);
+
+// True when --edgebreaker may encode the result of `input` written to `output`: a .drc or glTF
+// output, or a .drc input (Edgebreaker reorders the points; any other output is written over the
+// input's own faces in the input's order).
+bool EdgebreakerFits(const std::string& input, const std::string& output);
+
+// The checks of options.input and options.output made before the input is read, as a single
+// run makes them: InvalidArgument with the message (exit 2) for a glTF input written to another
+// format, --edgebreaker for an output written over the input's faces, an output CheckOutputPath
+// refuses. A warning for `--ridges` with an output that does not keep them goes to `warnings`.
+absl::Status CheckInputOutput(const SmoothOptions& options, std::vector<std::string>& warnings);
+
+// Smooths options.input into options.output (checked with CheckInputOutput): in memory without
+// --server where the output allows it, else through `service`; the job is registered with
+// `cancels` while it runs.
+FileOutcome SmoothFile(const SmoothOptions& options, ServiceLink& service, JobCancels& cancels, const FileHooks& hooks);
+
+}  // namespace meshsmooth::client
