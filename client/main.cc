@@ -13,7 +13,7 @@
 // This file is the command line; the commands are in commands.cc. The flows' names, defaults
 // and which flow takes which option come from the flow table (DescribeFlows()).
 //
-// Exit codes: 0 success; 1 the job or the input failed; 2 bad command line; 3 the server
+// Exit codes: 0 success; 1 the job or the input failed (a batch: any file); 2 bad command line; 3 the server
 // could not be reached; 130 interrupted (Ctrl-C cancels the job on the server).
 #include <algorithm>
 #include <cstdint>
@@ -402,8 +402,8 @@ int main(int argc, char** argv) {
   CLI::App app{"meshsmooth: smooth noisy triangle meshes while making them more regular"};
   app.require_subcommand(1);
   std::string footer =
-      "Exit codes: 0 success, 1 the job or the input failed, 2 bad command line, 3 server unreachable, "
-      "130 interrupted.\nBuilt-in inputs (use as builtin:NAME):";
+      "Exit codes: 0 success, 1 the job or the input failed (a batch: any file), 2 bad command line, 3 server "
+      "unreachable, 130 interrupted.\nBuilt-in inputs (use as builtin:NAME):";
   for (const auto& [name, what] : BuiltinInputs()) footer += "\n  " + name + ": " + what;
   app.footer(footer);
 

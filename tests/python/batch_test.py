@@ -218,6 +218,18 @@ def batch_checks(a, check, tmp):
     check("--batch FILE (comments, blanks, globs, builtin:NAME) with --format obj; a quoted glob; -o FOLDER/",
           lists_and_globs)
 
+    def help_documents_batches():
+        r = run([cli, "smooth", "--help"])
+        assert r.returncode == 0, r.returncode
+        text = " ".join(r.stdout.split())
+        for words in ("--batch", "--jobs", "--format", "ID-1, ID-2", "a failed file does not stop the others",
+                      "exit 1 when any failed"):
+            assert words in text, f"'{words}' missing from smooth --help"
+        r = run([cli, "--help"])
+        assert "(a batch: any file)" in " ".join(r.stdout.split()), r.stdout
+    check("smooth --help documents --batch, --jobs, --format, the batch's job ids and exit status",
+          help_documents_batches)
+
     def refusals_exit_2():
         other = os.path.join(tmp, "other")
         os.makedirs(other)
