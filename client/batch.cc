@@ -18,6 +18,7 @@
 #include "client/report.h"
 #include "client/smooth_file.h"
 #include "client/transfer.h"
+#include "server/log.h"
 
 namespace meshsmooth::client {
 namespace {
@@ -147,9 +148,10 @@ void BatchRun::Report(size_t i, const FileOutcome& f, const std::vector<std::str
   for (const std::string& w : own) std::fprintf(stderr, "meshsmooth: warning: %s: %s\n", file.input.c_str(), w.c_str());
   const bool ok = f.exit_code == 0;
   if (options_.json) {
-    std::string record = absl::StrCat("{\"input\":", JsonString(file.input), ",\"output\":", JsonString(file.output),
-                                      ",\"ok\":", ok ? "true" : "false");
-    if (!ok) absl::StrAppend(&record, ",\"exit_code\":", f.exit_code, ",\"error\":", JsonString(f.error));
+    std::string record =
+        absl::StrCat("{\"input\":", server::JsonQuote(file.input), ",\"output\":", server::JsonQuote(file.output),
+                     ",\"ok\":", ok ? "true" : "false");
+    if (!ok) absl::StrAppend(&record, ",\"exit_code\":", f.exit_code, ",\"error\":", server::JsonQuote(f.error));
     absl::StrAppend(&record, ",\"seconds\":", seconds);
     if (ok) absl::StrAppend(&record, ",\"summary\":", ToJsonLine(SummaryWithWarnings(f)));
     std::printf("%s}\n", record.c_str());
@@ -185,7 +187,7 @@ int BatchRun::Finish(double seconds) {
   }
   if (options_.json) {
     std::vector<std::string> names;
-    for (size_t i : failed) names.push_back(JsonString(files_[i].input));
+    for (size_t i : failed) names.push_back(server::JsonQuote(files_[i].input));
     std::printf(
         "{\"files\":%zu,\"succeeded\":%zu,\"failed\":%zu,\"failed_inputs\":[%s],\"interrupted\":%s,"
         "\"seconds\":%g}\n",

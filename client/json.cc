@@ -1,6 +1,5 @@
 #include "client/json.h"
 
-#include <google/protobuf/struct.pb.h>
 #include <google/protobuf/util/json_util.h>
 
 namespace meshsmooth::client {
@@ -21,11 +20,5 @@ std::string Print(const google::protobuf::Message& message, bool whitespace) {
 std::string ToJson(const google::protobuf::Message& message) { return Print(message, true); }
 
 std::string ToJsonLine(const google::protobuf::Message& message) { return Print(message, false); }
-
-std::string JsonString(const std::string& text) {
-  google::protobuf::Value value;
-  value.set_string_value(text);
-  return Print(value, false);
-}
 
 }  // namespace meshsmooth::client

@@ -14,7 +14,4 @@ std::string ToJson(const google::protobuf::Message& message);
 // The same on one line, without a newline at its end: a record of --json lines.
 std::string ToJsonLine(const google::protobuf::Message& message);
 
-// `text` as a JSON string, quoted and escaped.
-std::string JsonString(const std::string& text);
-
 }  // namespace meshsmooth::client
