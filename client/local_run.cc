@@ -1,6 +1,9 @@
 #include "client/local_run.h"
 
+#include <atomic>
+#include <chrono>
 #include <condition_variable>
+#include <cstdint>
 #include <string>
 #include <thread>
 #include <utility>
@@ -65,6 +68,15 @@ LocalOutcome ResultPerVertex(server::MeshResult& r, const v1::Summary& summary, 
 
 }  // namespace
 
+// The id of this process's nth local job without one of its own, numbered as the service numbers
+// its jobs ("TAG-N", TAG the first local job's start): the jobs of a local batch differ.
+std::string NextLocalJobId() {
+  static const uint64_t tag = static_cast<uint64_t>(
+      std::chrono::duration_cast<std::chrono::seconds>(std::chrono::system_clock::now().time_since_epoch()).count());
+  static std::atomic<uint64_t> next{1};
+  return server::JobIdOf(tag, next.fetch_add(1));
+}
+
 server::ServerOptions LocalServerOptions() {
   server::ServerOptions o;
   o.log_jobs = false;
@@ -82,10 +94,7 @@ absl::StatusOr<LocalOutcome> LocalJob::Run(const v1::JobSpec& spec, server::Mesh
   absl::StatusOr<server::JobParams> params = server::FromProto(spec, options.max_iterations);
   if (!params.ok()) return as_received(params.status());
   const size_t vertices = upload.positions->size();
-  const auto now = std::chrono::system_clock::now().time_since_epoch();
-  const std::string id = !params->job_id.empty()
-                             ? params->job_id
-                             : server::JobIdOf(std::chrono::duration_cast<std::chrono::seconds>(now).count(), 1);
+  const std::string id = !params->job_id.empty() ? params->job_id : NextLocalJobId();
   Collector sink(on_progress);
   server::SmoothJob job(id, *std::move(params), std::move(upload), server::Clock::now(), options, &sink);
   {

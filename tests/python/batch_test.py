@@ -193,11 +193,14 @@ def batch_checks(a, check, tmp):
 
     def local_batch_equals_local_runs():
         one_file_runs(os.path.join(tmp, "local-single"))
-        r = smooth(inputs, "-o", os.path.join(tmp, "local"), *FLOW, "--jobs", "2")
+        r = smooth(inputs, "-o", os.path.join(tmp, "local"), *FLOW, "--jobs", "2", "--json")
         assert r.returncode == 1, (r.returncode, r.stderr)
         same_outputs(os.path.join(tmp, "local"), os.path.join(tmp, "local-single"))
-    check("without --server (jobs in this process), --jobs 2: the outputs are the one-file runs'",
-          local_batch_equals_local_runs)
+        ids = [json.loads(line)["summary"]["job_id"] for line in r.stdout.splitlines()[:-1]
+               if json.loads(line)["ok"]]
+        assert len(ids) == 49 and len(set(ids)) == 49, f"job ids repeat: {sorted(ids)[:4]}"
+    check("without --server (jobs in this process), --jobs 2: the outputs are the one-file runs', "
+          "each job its own id", local_batch_equals_local_runs)
 
     def lists_and_globs():
         listing = write_text(os.path.join(tmp, "list.txt"),
