@@ -66,9 +66,9 @@ int64_t MoveOutliersBack(Mesh& mesh, const Topology& topo, const FlowParams& p, 
   if (!ChoosesFlow(p) || !noise.reliable || noise.outlier_share <= policy.impulsive_share) return 0;
   std::vector<uint8_t> moved(mesh.positions.size(), 0);
   for (int pass = 0; pass < 2 && noise.reliable; ++pass) {
-    RemoveOutliers(mesh, topo, h, OutlierThresholdH(noise), policy.outlier_rounds, moved, p.threads, control.stop,
-                   p.locked.empty() ? nullptr : p.locked.data(), policy.unfold_rounds);
-    noise = EstimateNoise(mesh, topo, h, p.threads, control.stop, NotMeasured(p));
+    RemoveOutliers(mesh, topo, h, OutlierThresholdH(noise, policy.noise), policy.outlier_rounds, moved, p.threads,
+                   control.stop, p.locked.empty() ? nullptr : p.locked.data(), policy.unfold_rounds, policy.noise);
+    noise = EstimateNoise(mesh, topo, h, p.threads, control.stop, NotMeasured(p), policy.noise);
   }
   int64_t outliers = 0;
   for (uint8_t m : moved) outliers += m;
@@ -84,7 +84,7 @@ absl::StatusOr<FlowResult> SmoothAutomatic(Mesh& mesh, const Topology& topo, con
   if (!ChoosesFlow(p)) q.flow = p.flow.value_or(kDefaultFlow);
   // 1. Every thread the job may use, whatever the mesh's size: the fits are independent and costly.
   ReportPhase(control, Phase::kNoiseEstimate, q.flow.value_or(kDefaultFlow));
-  NoiseEstimate noise = EstimateNoise(mesh, topo, h, p.threads, control.stop, NotMeasured(p));
+  NoiseEstimate noise = EstimateNoise(mesh, topo, h, p.threads, control.stop, NotMeasured(p), policy.noise);
   // 2.
   const int64_t outliers = MoveOutliersBack(mesh, topo, q, control, h, policy, noise);
   if (absl::Status s = control.stop.Check(); !s.ok()) return s;

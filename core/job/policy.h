@@ -1,8 +1,8 @@
 // Every number the default job was tuned with, one line each; the section of docs/decisions.md
 // named beside a group has the figures that chose them and the ablations. docs/quality-method.md
-// says why the method is the one it is. The noise estimator's own constants are measure's
-// (core/measure/noise.h); the candidates' list, the sample's threshold and the small holes'
-// size are the catalogue's (core/flows/catalogue.h), which the help texts quote.
+// says why the method is the one it is. The noise estimator's numbers are its NoiseParams
+// (core/measure/noise.h), held here as `noise`; the candidates' list, the sample's threshold and
+// the small holes' size are the catalogue's (core/flows/catalogue.h), which the help texts quote.
 #pragma once
 
 #include <cmath>
@@ -58,6 +58,9 @@ struct JobPolicy {
   double risk_turn_share = 0.75;             // the risk's result turned less than this share: the turn rule runs
   double discrepancy_turn_share = 1.25;      // the turn rule's target, times the predicted turn
   int32_t max_whole_turn_vertices = 200000;  // the turn rule chooses on the whole mesh up to this size
+
+  // The noise estimator's numbers ("The noise estimator's numbers in the policy").
+  NoiseParams noise;
 };
 
 // Today's policy: the one every job runs with. A benchmark's ablation runs another
@@ -99,6 +102,21 @@ void VisitPolicy(JobPolicy& policy, Visit visit) {
   visit("risk_turn_share", policy.risk_turn_share);
   visit("discrepancy_turn_share", policy.discrepancy_turn_share);
   visit("max_whole_turn_vertices", policy.max_whole_turn_vertices);
+  visit("noise.max_fits", policy.noise.max_fits);
+  visit("noise.min_fit_points", policy.noise.min_fit_points);
+  visit("noise.min_well_posed", policy.noise.min_well_posed);
+  visit("noise.well_posed_share", policy.noise.well_posed_share);
+  visit("noise.crease_sharp_deg", policy.noise.crease_sharp_deg);
+  visit("noise.crease_flat_deg", policy.noise.crease_flat_deg);
+  visit("noise.max_crease_share", policy.noise.max_crease_share);
+  visit("noise.outlier_scales", policy.noise.outlier_scales);
+  visit("noise.outlier_floor_h", policy.noise.outlier_floor_h);
+  visit("noise.lmeds_triples", policy.noise.lmeds_triples);
+  visit("noise.lmeds_inlier_scales", policy.noise.lmeds_inlier_scales);
+  visit("noise.lmeds_floor_h", policy.noise.lmeds_floor_h);
+  visit("noise.max_wide_fits", policy.noise.max_wide_fits);
+  visit("noise.noise_wide_ratio", policy.noise.noise_wide_ratio);
+  visit("noise.detail_wide_ratio", policy.noise.detail_wide_ratio);
 }
 
 // The sigma the risk estimate works with, in h: the noise's deviation taken risk_sigma_margin high.

@@ -201,7 +201,7 @@ double SurfaceArea(const std::vector<Vec3>& pos, const Mesh& mesh, const Topolog
 
 void RemoveOutliers(Mesh& mesh, const Topology& topo, double h, double threshold_h, int rounds,
                     std::vector<uint8_t>& moved, int threads, const StopToken& stop, const uint8_t* keep,
-                    int unfold_rounds) {
+                    int unfold_rounds, const NoiseParams& fit_params) {
   const int32_t n = topo.num_vertices();
   moved.resize(n, 0);
   if (!(h > 0.0) || !std::isfinite(h) || n == 0) return;
@@ -217,7 +217,7 @@ void RemoveOutliers(Mesh& mesh, const Topology& topo, double h, double threshold
     // leave the vertex beside its place, with faces turned over.
 #pragma omp parallel num_threads(threads) if (threads > 1 && n >= kMinParallelFits)
     {
-      LocalFit fit;
+      LocalFit fit(fit_params);
 #pragma omp for schedule(static, 128)
       for (int32_t v = 0; v < n; ++v) {
         moves[v] = 0;
@@ -236,7 +236,7 @@ void RemoveOutliers(Mesh& mesh, const Topology& topo, double h, double threshold
     }
 #pragma omp parallel num_threads(threads) if (threads > 1 && n >= kMinParallelFits)
     {
-      LocalFit fit;
+      LocalFit fit(fit_params);
 #pragma omp for schedule(static, 128)
       for (int32_t v = 0; v < n; ++v) {
         if (!moves[v]) continue;

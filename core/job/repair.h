@@ -129,9 +129,11 @@ int64_t KeepNoMoreFolds(Vec3* pos, const Vec3* input, const Mesh& mesh, const To
 // is left (a thrown vertex pulls its neighbours' fits, so the first round can leave some). Then
 // the folds the throws leave (UnfoldFans, `unfold_rounds` rounds at most). Vertices where `keep`
 // (per vertex) is non-zero stay; `moved` (one entry per vertex) is set where a vertex moved.
-// Deterministic for any thread count; stops early once `stop` fires.
+// Deterministic for any thread count; stops early once `stop` fires. `fit`: the local fits'
+// numbers (JobPolicy::noise).
 void RemoveOutliers(Mesh& mesh, const Topology& topo, double h, double threshold_h, int rounds,
                     std::vector<uint8_t>& moved, int threads = 0, const StopToken& stop = {},
-                    const uint8_t* keep = nullptr, int unfold_rounds = kPolicy.unfold_rounds);
+                    const uint8_t* keep = nullptr, int unfold_rounds = kPolicy.unfold_rounds,
+                    const NoiseParams& fit = kPolicy.noise);
 
 }  // namespace meshsmooth::job

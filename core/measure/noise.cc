@@ -20,8 +20,6 @@ namespace {
 
 constexpr int kTerms = 10;
 
-// A fit needs more points than its 6 unknowns to say anything about the noise.
-constexpr int kMinFitPoints = 14;
 // A fit whose design is this ill-conditioned (its pivots relative to the largest) says
 // nothing: a ring that spans a line, or points that coincide.
 constexpr double kMinRelativePivot = 1e-9;
@@ -33,42 +31,10 @@ constexpr double kTrimSigmas = 3.0;
 constexpr double kTrimmedSecondMoment = 0.97071;
 // Marks a vertex whose fit was tried but not well posed.
 constexpr double kUnusable = -1.0;
-// At most about this many vertices are fitted (every k-th vertex of a larger mesh): the median
-// of n residuals has a relative standard error of ~1.17 / sqrt(n), 0.8% at 20,000. Against
-// 50,000 fits, the deviation of the benchmark's noisy bunny, nefertiti and dragon moves by
-// 0.1-1.0% and every default row of docs/quality.md on the meshes above 20,000 vertices stays
-// within 1.005x, at less than half the cost (docs/decisions.md).
-constexpr int32_t kMaxFits = 20000;
-// The least number of well-posed fits, absolute and as a share of the vertices tried, for the
-// median to be an estimate.
-constexpr int64_t kMinWellPosed = 25;
-// A second ring is gathered from at most this many ring entries (regular meshes: ~40).
+// A second ring is gathered from at most this many ring entries (regular meshes: ~40)...
 constexpr size_t kMaxGather = 1024;
 // ... and a third ring, for the wide fits, from this many times as many.
 constexpr size_t kWideGather = 4;
-constexpr int64_t kMinWellPosedPerTried = 4;  // one in four
-// The robust plane (RobustPlaneNormal) is chosen among this many planes through three of the
-// points, drawn at random: with a quarter of a dozen points thrown, 50 draws all miss a clean
-// triple with probability 0.62^50 (4e-11).
-constexpr int64_t kLmedsTriples = 50;
-// ... and refitted to the points within this many robust scales of the best one (Rousseeuw and
-// Leroy 1987: 2.5, a Gaussian's 98.8%) or within kLmedsFloorH mean edges, whichever is more: a
-// second ring reaches about 2 h from its vertex, so a surface whose curvature radius is 2 h or
-// more sags by at most 1 h below its tangent plane there, and those points are the surface (the
-// plane through half of a curved ring's points leaves the rest further off than 2.5 scales).
-constexpr double kLmedsInlierScales = 2.5;
-constexpr double kLmedsFloorH = 1.0;
-// The wide fits (first to third rings) of the detail-free estimate run on at most about this
-// many of the vertices tried (every k-th one): each median then has a relative standard error of
-// ~3.7%, and the pair's errors largely cancel (a vertex's two residuals correlate 0.6-0.9). They
-// cost ~1.5 us each, twice a narrow fit.
-constexpr int32_t kMaxWideFits = 1000;
-// Under pure noise a wide fit's normalised residual has this share of a narrow one's robust
-// scale (0.89-1.04 on the benchmark's smooth meshes with noise, numpy)...
-constexpr double kNoiseWideRatio = 0.94;
-// ... and a clean mesh's misfit this multiple of it (1.9-2.9 on the detailed clean scans, more
-// on smooth ones).
-constexpr double kDetailWideRatio = 2.0;
 
 // The fit at vertex v (header comment): its residual r (v's height above the fitted surface, in
 // h), the fit's own variance g at v, and the frame's normal n.
@@ -88,21 +54,26 @@ struct FitScratch {
 // An interior vertex's fan (v and consecutive ring entries), from one walk around it: the sum
 // of its faces' cross products (RingNormal's, the same bits), and whether v lies on a crease
 // between smooth parts: two or more pairs of consecutive faces meet at a sharp edge (their
-// normals more than kCreaseSharpDeg apart) and every other pair meets flat (less than
-// kCreaseFlatDeg). A fan of fewer than three faces, or with a face of no area, is not on a
+// normals more than crease_sharp_deg apart) and every other pair meets flat (less than
+// crease_flat_deg, NoiseParams). A fan of fewer than three faces, or with a face of no area, is not on a
 // crease.
 struct Fan {
   Vec3 normal;
   bool on_crease = false;
 };
 
-Fan FanAt(const Vec3* pos, const Topology& topo, int32_t v) {
-  // Compared squared, without a root or a division: a . b < c |a| |b| with c > 0 holds when
-  // a . b < 0 or (a . b)^2 < c^2 |a|^2 |b|^2, and a . b > c |a| |b| when a . b > 0 and
-  // (a . b)^2 > c^2 |a|^2 |b|^2.
-  static const double kCosSharp = std::cos(kCreaseSharpDeg * std::numbers::pi / 180.0);
-  static const double kCosFlat = std::cos(kCreaseFlatDeg * std::numbers::pi / 180.0);
-  static const double kSharp2 = kCosSharp * kCosSharp, kFlat2 = kCosFlat * kCosFlat;
+// The squared cosines of NoiseParams' crease angles: compared squared, without a root or a
+// division, a . b < c |a| |b| with c > 0 holds when a . b < 0 or (a . b)^2 < c^2 |a|^2 |b|^2, and
+// a . b > c |a| |b| when a . b > 0 and (a . b)^2 > c^2 |a|^2 |b|^2.
+struct CreaseCosines {
+  explicit CreaseCosines(const NoiseParams& p)
+      : sharp2(Squared(std::cos(p.crease_sharp_deg * std::numbers::pi / 180.0))),
+        flat2(Squared(std::cos(p.crease_flat_deg * std::numbers::pi / 180.0))) {}
+  static double Squared(double c) { return c * c; }
+  double sharp2, flat2;
+};
+
+Fan FanAt(const Vec3* pos, const Topology& topo, int32_t v, const CreaseCosines& cosines) {
   const int32_t begin = topo.ring_offsets[v], end = topo.ring_offsets[v + 1];
   Fan fan;
   if (end == begin) return fan;
@@ -125,9 +96,9 @@ Fan FanAt(const Vec3* pos, const Topology& topo, int32_t v) {
     const double dot = Dot(before, cur), lengths2 = before2 * cur2;
     if (!(before2 > 0.0) || !(cur2 > 0.0)) {
       flat_or_sharp = false;
-    } else if (dot < 0.0 || dot * dot < kSharp2 * lengths2) {
+    } else if (dot < 0.0 || dot * dot < cosines.sharp2 * lengths2) {
       ++sharp;
-    } else if (!(dot * dot > kFlat2 * lengths2)) {
+    } else if (!(dot * dot > cosines.flat2 * lengths2)) {
       flat_or_sharp = false;
     }
     before = cur, before2 = cur2;
@@ -140,7 +111,7 @@ Fan FanAt(const Vec3* pos, const Topology& topo, int32_t v) {
 // posed (or v's second ring is too large to gather: a fan's rim around a centre of huge
 // valence, skipped in bounded time).
 std::optional<Fit> FitAt(const Mesh& mesh, const Topology& topo, int32_t v, const Vec3& normal, double inv_h,
-                         FitScratch& s, bool wide = false) {
+                         FitScratch& s, int32_t min_points, bool wide = false) {
   const Vec3* pos = mesh.positions.data();
   const double len = Norm(normal);
   if (!(len > 0.0) || !std::isfinite(len)) return std::nullopt;
@@ -187,7 +158,7 @@ std::optional<Fit> FitAt(const Mesh& mesh, const Topology& topo, int32_t v, cons
       }
     }
   }
-  if (static_cast<int>(ring2.size()) < kMinFitPoints) return std::nullopt;
+  if (static_cast<int32_t>(ring2.size()) < min_points) return std::nullopt;
 
   // The ring in the tangent plane, whitened: mapped linearly so that its second moment about v
   // is the identity (by the Cholesky factor of that moment). A cubic in (x, y) is a cubic in any
@@ -257,8 +228,8 @@ std::optional<Fit> FitAt(const Mesh& mesh, const Topology& topo, int32_t v, cons
 
 // The normalised residual r / sqrt(1 + g) of vertex v, or NaN when its fit is not well posed.
 double NormalisedResidual(const Mesh& mesh, const Topology& topo, int32_t v, const Vec3& normal, double inv_h,
-                          FitScratch& scratch, bool wide = false) {
-  const std::optional<Fit> fit = FitAt(mesh, topo, v, normal, inv_h, scratch, wide);
+                          FitScratch& scratch, int32_t min_points, bool wide = false) {
+  const std::optional<Fit> fit = FitAt(mesh, topo, v, normal, inv_h, scratch, min_points, wide);
   return fit ? fit->r / std::sqrt(1.0 + fit->g) : std::numeric_limits<double>::quiet_NaN();
 }
 
@@ -318,12 +289,13 @@ std::optional<Vec3> TrimmedPlaneNormal(const Vec3* pos, std::vector<int32_t>& id
 }
 
 // The normal of the plane through pos[ids] that resists points thrown off it: least median of
-// squares (Rousseeuw 1984) over kLmedsTriples planes through three of the points (drawn with a
+// squares (Rousseeuw 1984) over lmeds_triples planes through three of the points (drawn with a
 // generator seeded by v), then the least-squares plane of the points within
-// kLmedsInlierScales robust scales of it or kLmedsFloorH mean edges `h`. A least-squares plane
+// lmeds_inlier_scales robust scales of it or lmeds_floor_h mean edges `h` (NoiseParams). A least-squares plane
 // through a rim's dozen points, three of them thrown 2 h, leans by ~45 degrees; least median of
 // squares ignores up to half. `ids` keeps the points of the last fit.
-std::optional<Vec3> RobustPlaneNormal(const Vec3* pos, std::vector<int32_t>& ids, int32_t v, double h, RingScratch& s) {
+std::optional<Vec3> RobustPlaneNormal(const Vec3* pos, std::vector<int32_t>& ids, int32_t v, double h, RingScratch& s,
+                                      const NoiseParams& params) {
   const auto n = static_cast<int64_t>(ids.size());
   if (n < 3) return std::nullopt;
   if (n == 3) return PlaneNormal(pos, ids);
@@ -351,12 +323,12 @@ std::optional<Vec3> RobustPlaneNormal(const Vec3* pos, std::vector<int32_t>& ids
       best_normal = unit;
     }
   };
-  for (int t = 0; t < kLmedsTriples; ++t) {
+  for (int32_t t = 0; t < params.lmeds_triples; ++t) {
     const int64_t i = draw(), j = draw(), k = draw();
     if (i != j && j != k && i != k) try_plane(i, j, k);
   }
   if (!std::isfinite(best)) return PlaneNormal(pos, ids);
-  const double cut = std::max(kLmedsInlierScales * kMadToSigma * best, kLmedsFloorH * h);
+  const double cut = std::max(params.lmeds_inlier_scales * kMadToSigma * best, params.lmeds_floor_h * h);
   size_t kept = 0;
   for (int32_t u : ids) {
     if (std::abs(Dot(pos[u] - best_point, best_normal)) <= cut) ids[kept++] = u;
@@ -373,7 +345,7 @@ std::optional<Vec3> RobustPlaneNormal(const Vec3* pos, std::vector<int32_t>& ids
 // `robust_h` > 0, the plane RobustPlaneNormal fits with that floor instead. None for a degenerate
 // ring.
 std::optional<double> RingMedianHeight(const Vec3* pos, const Topology& topo, int32_t v, const uint8_t* skip,
-                                       double robust_h, RingScratch& s, Vec3* axis) {
+                                       double robust_h, RingScratch& s, Vec3* axis, const NoiseParams& params) {
   const int32_t first = topo.ring_offsets[v], last = topo.ring_offsets[v + 1];
   if (last - first < 3) return std::nullopt;
   int32_t inliers = 0;
@@ -394,7 +366,7 @@ std::optional<double> RingMedianHeight(const Vec3* pos, const Topology& topo, in
   std::sort(ids.begin(), ids.end());
   ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
   const std::optional<Vec3> normal =
-      robust_h > 0.0 ? RobustPlaneNormal(pos, ids, v, robust_h, s) : TrimmedPlaneNormal(pos, ids, s);
+      robust_h > 0.0 ? RobustPlaneNormal(pos, ids, v, robust_h, s, params) : TrimmedPlaneNormal(pos, ids, s);
   if (!normal) return std::nullopt;
   const Vec3 unit = *normal;
   s.heights.clear();
@@ -408,21 +380,24 @@ std::optional<double> RingMedianHeight(const Vec3* pos, const Topology& topo, in
 }  // namespace
 
 NoiseEstimate EstimateNoise(const Mesh& mesh, const Topology& topo, double h, int threads, const StopToken& stop,
-                            const uint8_t* skip) {
+                            const uint8_t* skip, const NoiseParams& params) {
   NoiseEstimate estimate;
   const int32_t n = topo.num_vertices();
   if (!(h > 0.0) || !std::isfinite(h) || n == 0) return estimate;
   if (threads <= 0) threads = omp_get_max_threads();
   const double inv_h = 1.0 / h;
-  const int32_t stride = std::max<int32_t>(1, (n + kMaxFits - 1) / kMaxFits);
-  // One entry per vertex tried (every stride-th one): bounded by ~kMaxFits, whatever the mesh.
+  // At most about max_fits vertices are fitted: the median of n residuals has a relative standard
+  // error of ~1.17 / sqrt(n), 0.8% at 20,000.
+  const int32_t stride = std::max<int32_t>(1, (n + params.max_fits - 1) / params.max_fits);
+  // One entry per vertex tried (every stride-th one): bounded by ~max_fits, whatever the mesh.
   std::vector<double> residual((n + stride - 1) / stride, std::numeric_limits<double>::quiet_NaN());
   bool stopped = false;
   const auto tried = static_cast<int32_t>(residual.size());
   // The wide fits' residuals, on every wide_stride-th vertex tried (NaN elsewhere).
-  const int32_t wide_stride = std::max<int32_t>(1, (tried + kMaxWideFits - 1) / kMaxWideFits);
+  const int32_t wide_stride = std::max<int32_t>(1, (tried + params.max_wide_fits - 1) / params.max_wide_fits);
   std::vector<double> wide(residual.size(), std::numeric_limits<double>::quiet_NaN());
   int64_t creases = 0;  // tried vertices on a crease (FanAt; an integer sum: any order)
+  const CreaseCosines cosines(params);
 #pragma omp parallel num_threads(threads) if (threads > 1 && tried >= kMinParallelFits) reduction(+ : creases)
   {
     FitScratch fit_scratch;
@@ -437,12 +412,13 @@ NoiseEstimate EstimateNoise(const Mesh& mesh, const Topology& topo, double h, in
       give_up = stopped;
       const int32_t v = i * stride;
       if (give_up || topo.kind[v] != VertexKind::kInterior || (skip != nullptr && skip[v] != 0)) continue;
-      const Fan fan = FanAt(mesh.positions.data(), topo, v);
+      const Fan fan = FanAt(mesh.positions.data(), topo, v, cosines);
       creases += fan.on_crease;
-      residual[i] = std::abs(NormalisedResidual(mesh, topo, v, fan.normal, inv_h, fit_scratch));
+      residual[i] = std::abs(NormalisedResidual(mesh, topo, v, fan.normal, inv_h, fit_scratch, params.min_fit_points));
       if (std::isnan(residual[i])) residual[i] = kUnusable;
       if (i % wide_stride == 0 && residual[i] >= 0.0) {
-        wide[i] = std::abs(NormalisedResidual(mesh, topo, v, fan.normal, inv_h, fit_scratch, /*wide=*/true));
+        wide[i] = std::abs(
+            NormalisedResidual(mesh, topo, v, fan.normal, inv_h, fit_scratch, params.min_fit_points, /*wide=*/true));
       }
     }
   }
@@ -462,9 +438,9 @@ NoiseEstimate EstimateNoise(const Mesh& mesh, const Topology& topo, double h, in
   residual.erase(std::remove_if(residual.begin(), residual.end(), [](double r) { return !(r >= 0.0); }),
                  residual.end());
   estimate.vertices_used = static_cast<int64_t>(residual.size());
-  if (estimate.vertices_used < kMinWellPosed ||
-      estimate.vertices_used * kMinWellPosedPerTried < estimate.vertices_tried ||
-      estimate.crease_share > kMaxCreaseShare) {
+  if (estimate.vertices_used < params.min_well_posed ||
+      estimate.vertices_used * params.well_posed_share < estimate.vertices_tried ||
+      estimate.crease_share > params.max_crease_share) {
     return estimate;
   }
   const size_t mid = residual.size() / 2;
@@ -480,13 +456,14 @@ NoiseEstimate EstimateNoise(const Mesh& mesh, const Topology& topo, double h, in
   for (double r : residual) sum += r <= cut ? r * r : 0.0;
   estimate.deviation_h = std::sqrt(sum / static_cast<double>(residual.size()) / kTrimmedSecondMoment);
   estimate.detail_free_h = estimate.sigma_h;
-  if (static_cast<int64_t>(narrow_pair.size()) >= kMinWellPosed) {
+  if (static_cast<int64_t>(narrow_pair.size()) >= params.min_well_posed) {
     const double narrow = kMadToSigma * Median(narrow_pair), far = kMadToSigma * Median(wide_pair);
-    const double k2 = kDetailWideRatio * kDetailWideRatio, c2 = kNoiseWideRatio * kNoiseWideRatio;
+    const double k2 = params.detail_wide_ratio * params.detail_wide_ratio,
+                 c2 = params.noise_wide_ratio * params.noise_wide_ratio;
     estimate.detail_free_h = std::sqrt(std::max(0.0, (k2 * narrow * narrow - far * far) / (k2 - c2)));
   }
   estimate.normal_turn = PredictedNormalNoise(mesh, topo, estimate.sigma);
-  const double outlier = OutlierThresholdH(estimate);
+  const double outlier = OutlierThresholdH(estimate, params);
   int64_t outliers = 0;
   for (double r : residual) outliers += r > outlier;
   estimate.outlier_share = static_cast<double>(outliers) / static_cast<double>(residual.size());
@@ -498,24 +475,24 @@ struct LocalFit::Buffers {
   RingScratch ring;
 };
 
-LocalFit::LocalFit() : buffers_(std::make_unique<Buffers>()) {}
+LocalFit::LocalFit(const NoiseParams& params) : params_(params), buffers_(std::make_unique<Buffers>()) {}
 LocalFit::~LocalFit() = default;
 
 std::optional<double> LocalFit::ResidualH(const Mesh& mesh, const Topology& topo, int32_t v, double h) {
   const std::optional<Fit> fit =
-      FitAt(mesh, topo, v, RingNormal(topo, mesh.positions.data(), v), 1.0 / h, buffers_->fit);
+      FitAt(mesh, topo, v, RingNormal(topo, mesh.positions.data(), v), 1.0 / h, buffers_->fit, params_.min_fit_points);
   if (!fit) return std::nullopt;
   return std::abs(fit->r) / std::sqrt(1.0 + fit->g);
 }
 
 std::optional<double> LocalFit::RingHeight(const Vec3* pos, const Topology& topo, int32_t v, const uint8_t* skip,
                                            Vec3* axis) {
-  return RingMedianHeight(pos, topo, v, skip, 0.0, buffers_->ring, axis);
+  return RingMedianHeight(pos, topo, v, skip, 0.0, buffers_->ring, axis, params_);
 }
 
 std::optional<double> LocalFit::RobustRingHeight(const Vec3* pos, const Topology& topo, int32_t v, double h,
                                                  const uint8_t* skip, Vec3* axis) {
-  return RingMedianHeight(pos, topo, v, skip, h, buffers_->ring, axis);
+  return RingMedianHeight(pos, topo, v, skip, h, buffers_->ring, axis, params_);
 }
 
 }  // namespace meshsmooth

@@ -14,7 +14,7 @@
 // A mesh of more than 20,000 vertices is sampled: every k-th vertex is fitted.
 //
 // A mesh whose vertices lie almost all on creases has no estimate: when more than
-// kMaxCreaseShare of the vertices tried sit on a crease between smooth parts (FanAt in
+// NoiseParams::max_crease_share of the vertices tried sit on a crease between smooth parts (FanAt in
 // noise.cc: a fan of flat runs of faces meeting at sharp edges), the estimate is not reliable.
 // Such a mesh (a CAD exporter's strips of slivers from one feature line to the next, fans of
 // needles on flat caps) samples its surface along its creases only: every fit spans a crease,
@@ -26,7 +26,7 @@
 // Fine detail one or two edges wide (a scan decimated to a few thousand vertices) is not
 // followed by a cubic either, and reads as noise. A second, wide fit over the first to third
 // rings on a subsample tells them apart: its residual's robust scale s3 is about
-// kNoiseWideRatio times the narrow one's, s2, under pure noise, and about kDetailWideRatio
+// NoiseParams::noise_wide_ratio times the narrow one's, s2, under pure noise, and about NoiseParams::detail_wide_ratio
 // times it for detail (the wider fit misses more of it). Taking s2^2 = sigma^2 + d^2 and
 // s3^2 = c^2 sigma^2 + k^2 d^2, the detail-free estimate is
 // sigma^2 = (k^2 s2^2 - s3^2) / (k^2 - c^2) (NoiseEstimate::detail_free_h; zero when negative).
@@ -50,6 +50,32 @@
 
 namespace meshsmooth {
 
+// The estimator's tuned numbers, one line each (the default job's copy is JobPolicy::noise,
+// core/job/policy.h; docs/decisions.md has the figures that chose them). What noise.cc keeps as
+// constants is mathematics (a Gaussian's quantiles and moments) or a bound on work.
+struct NoiseParams {
+  // Fits.
+  int32_t max_fits = 20000;      // at most about this many vertices fitted (every k-th of a larger mesh)
+  int32_t min_fit_points = 14;   // a fit needs this many second-ring points (its unknowns: 6)
+  int32_t min_well_posed = 25;   // fewer well-posed fits: no estimate...
+  int32_t well_posed_share = 4;  // ... nor with fewer than one in this many of those tried
+  // Creases (FanAt in noise.cc; see above).
+  double crease_sharp_deg = 45.0;  // two faces of a fan this far apart meet at a sharp edge...
+  double crease_flat_deg = 20.0;   // ... and this close, flat
+  double max_crease_share = 0.75;  // more of the vertices tried on a crease: no estimate
+  // Outliers (NoiseEstimate::outlier_share, OutlierThresholdH).
+  double outlier_scales = 5.0;   // a residual above this many robust scales...
+  double outlier_floor_h = 0.5;  // ... and this many h is an outlier
+  // The robust plane of LocalFit::RobustRingHeight (least median of squares).
+  int32_t lmeds_triples = 50;        // planes through three points tried
+  double lmeds_inlier_scales = 2.5;  // refitted to the points within this many robust scales...
+  double lmeds_floor_h = 1.0;        // ... or this many h of the best plane
+  // The detail-free estimate (the wide fits; see above).
+  int32_t max_wide_fits = 1000;    // wide fits on at most about this many vertices
+  double noise_wide_ratio = 0.94;  // a wide fit's robust scale over a narrow one's under noise...
+  double detail_wide_ratio = 2.0;  // ... and under a clean mesh's fine detail
+};
+
 struct NoiseEstimate {
   double sigma = 0.0;    // in the mesh's units
   double sigma_h = 0.0;  // relative to the mean edge length h
@@ -60,8 +86,8 @@ struct NoiseEstimate {
   double deviation_h = 0.0;
   int64_t vertices_used = 0;   // interior vertices with a well-posed fit
   int64_t vertices_tried = 0;  // interior vertices fitted (every k-th one of a large mesh)
-  // The share of the well-posed fits whose normalised residual exceeds kOutlierScales robust
-  // scales and kOutlierFloorH: a few percent on clean CAD parts (creases a cubic cannot follow)
+  // The share of the well-posed fits whose normalised residual exceeds outlier_scales robust
+  // scales and outlier_floor_h (NoiseParams): a few percent on clean CAD parts (creases a cubic cannot follow)
   // and under Gaussian noise, about the thrown share under impulsive noise (a scanner's outliers).
   double outlier_share = 0.0;
   // The share of the vertices tried that lie on a crease between smooth parts (see above).
@@ -75,7 +101,7 @@ struct NoiseEstimate {
   double normal_turn = 0.0;
   // False when too few fits were well posed for the median to mean anything (fewer than 25,
   // or fewer than a quarter of those tried: e.g. a fan whose rim vertices all see one circle),
-  // or when more than kMaxCreaseShare of the vertices tried lie on a crease; sigma is then 0.
+  // or when more than max_crease_share of the vertices tried lie on a crease; sigma is then 0.
   bool reliable = false;
 };
 
@@ -85,23 +111,11 @@ struct NoiseEstimate {
 // Vertices where `skip` (per vertex; null: none) is non-zero are not fitted (the default job's
 // vertices of strength 0, which no run moves); they still serve in their neighbours' fits.
 NoiseEstimate EstimateNoise(const Mesh& mesh, const Topology& topo, double h, int threads = 0,
-                            const StopToken& stop = {}, const uint8_t* skip = nullptr);
+                            const StopToken& stop = {}, const uint8_t* skip = nullptr, const NoiseParams& params = {});
 
-// Two faces of a fan meet at a sharp edge when their normals are more than kCreaseSharpDeg apart,
-// flat when less than kCreaseFlatDeg; a mesh with more than kMaxCreaseShare of the vertices tried
-// on a crease has no estimate.
-inline constexpr double kCreaseSharpDeg = 45.0;
-inline constexpr double kCreaseFlatDeg = 20.0;
-inline constexpr double kMaxCreaseShare = 0.75;
-
-// A vertex is an outlier when its normalised residual exceeds this many robust scales...
-inline constexpr double kOutlierScales = 5.0;
-// ... and this many h (a cubic misses a clean crease by less: 0.05% of fandisk's vertices and
-// 1.6% of the turbine's narrow strips exceed it).
-inline constexpr double kOutlierFloorH = 0.5;
-// The outlier threshold of `estimate`, in h.
-inline double OutlierThresholdH(const NoiseEstimate& estimate) {
-  return std::max(kOutlierScales * estimate.sigma_h, kOutlierFloorH);
+// The outlier threshold of `estimate`, in h (NoiseParams::outlier_scales, outlier_floor_h).
+inline double OutlierThresholdH(const NoiseEstimate& estimate, const NoiseParams& params = {}) {
+  return std::max(params.outlier_scales * estimate.sigma_h, params.outlier_floor_h);
 }
 
 // Fewer fits than this run on one thread: a fit costs ~1 us, so below it waking a second thread
@@ -112,7 +126,7 @@ inline constexpr int32_t kMinParallelFits = 2000;
 // (core/job/repair.h). Holds buffers: one per thread.
 class LocalFit {
  public:
-  LocalFit();
+  explicit LocalFit(const NoiseParams& params = {});
   ~LocalFit();
   LocalFit(const LocalFit&) = delete;
   LocalFit& operator=(const LocalFit&) = delete;
@@ -140,6 +154,7 @@ class LocalFit {
 
  private:
   struct Buffers;
+  NoiseParams params_;
   std::unique_ptr<Buffers> buffers_;
 };
 

@@ -86,6 +86,22 @@ def main() -> int:
     visited = re.findall(r'visit\("(\w+)",\s*policy\.(\w+)\)', policy_h)
     if not fields or [name for name, _ in visited] != fields or any(n != m for n, m in visited):
         bad.append(f"core/job/policy.h: VisitPolicy visits {[n for n, _ in visited]}, JobPolicy has {fields}")
+    # The noise estimator's tuned numbers are the fields of NoiseParams (core/measure/noise.h), which
+    # VisitPolicy visits as noise.NAME, in order; noise.cc names no other constant but mathematics
+    # and bounds on work.
+    noise_h = (args.root / "core" / "measure" / "noise.h").read_text(errors="replace")
+    nstruct = re.search(r"struct NoiseParams \{(.*?)\n\};", noise_h, re.S)
+    nfields = re.findall(r"^\s+(?:double|int|int32_t)\s+(\w+)\s*=", nstruct.group(1), re.M) if nstruct else []
+    nvisited = re.findall(r'visit\("noise\.(\w+)",\s*policy\.noise\.(\w+)\)', policy_h)
+    if not nfields or [name for name, _ in nvisited] != nfields or any(n != m for n, m in nvisited):
+        bad.append(f"core/job/policy.h: VisitPolicy visits noise.{[n for n, _ in nvisited]}, NoiseParams has {nfields}")
+    allowed = {"kTerms", "kMinRelativePivot", "kMadToSigma", "kTrimSigmas", "kTrimmedSecondMoment", "kUnusable",
+               "kMaxGather", "kWideGather", "kMinParallelFits"}
+    for name in ("noise.h", "noise.cc"):
+        for line in (args.root / "core" / "measure" / name).read_text(errors="replace").splitlines():
+            m = re.match(r"\s*(?:static\s+|inline\s+)*constexpr\s+[\w:]+\s+(\w+)\s*=", line)
+            if m and m.group(1) not in allowed:
+                bad.append(f"core/measure/{name}: a tuned constant outside NoiseParams: {line.strip()}")
     for line in bad:
         print(line)
     print(f"check_layers: {len(bad)} problem(s)")

@@ -117,7 +117,7 @@ TEST(NoiseEstimateTest, MeshOfCreasesHasNoEstimate) {
     const NoiseEstimate e = EstimateNoise(noisy, topo, h);
     std::printf("shaft, sigma %.1f h: %.1f%% on a crease, estimate %.3f h\n", sigma, 100 * e.crease_share, e.sigma_h);
     EXPECT_TRUE(e.reliable) << sigma;
-    EXPECT_LT(e.crease_share, kMaxCreaseShare) << sigma;
+    EXPECT_LT(e.crease_share, NoiseParams{}.max_crease_share) << sigma;
   }
   const Mesh tube = Cylinder(1.0, 20.0, 48, 6);  // slivers 4 long and 0.13 wide, no crease
   const Topology tube_topo = BuildTopology(tube);
@@ -128,7 +128,7 @@ TEST(NoiseEstimateTest, MeshOfCreasesHasNoEstimate) {
     AddNormalNoise(noisy, sigma, 5);
     const NoiseEstimate e = EstimateNoise(noisy, tube_topo, tube_h);
     EXPECT_TRUE(e.reliable) << sigma;
-    EXPECT_LT(e.crease_share, kMaxCreaseShare) << sigma;
+    EXPECT_LT(e.crease_share, NoiseParams{}.max_crease_share) << sigma;
   }
   Mesh sphere = Icosphere(4);
   AddNormalNoise(sphere, 0.3, 7);
