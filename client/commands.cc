@@ -6,7 +6,6 @@
 #include <cstdio>
 #include <functional>
 #include <iostream>
-#include <limits>
 #include <map>
 #include <memory>
 #include <string>
@@ -26,7 +25,6 @@
 #include "core/render/png.h"
 #include "core/render/render.h"
 #include "core/topology.h"
-#include "server/convert.h"
 
 namespace meshsmooth::client {
 namespace {
@@ -43,30 +41,6 @@ int Fail(const std::string& what, const absl::Status& s) {
 }
 
 }  // namespace
-
-absl::StatusOr<DisplacementBoundOption> ParseMaxDisplacement(const std::string& text) {
-  DisplacementBoundOption bound;
-  if (text.empty()) return bound;
-  std::string number = text;
-  if (number.back() == 'h') {
-    bound.in_h = true;
-    number.pop_back();
-  }
-  if (!absl::SimpleAtod(number, &bound.value) || !std::isfinite(bound.value) || bound.value < 0.0) {
-    return absl::InvalidArgumentError(absl::StrCat(
-        "--max-displacement: '", text,
-        "' is not a bound; give a finite number >= 0 in mesh units (0.02) or in mean edge lengths (0.5h)"));
-  }
-  return bound;
-}
-
-absl::Status CheckSmoothOptions(const SmoothOptions& options) {
-  if (absl::Status s = CheckStrengthOptions(options.strength); !s.ok()) return s;
-  if (absl::Status s = ParseMaxDisplacement(options.max_displacement).status(); !s.ok()) return s;
-  v1::JobSpec spec = SpecFrom(options);
-  spec.clear_job_id();
-  return server::FromProto(spec, std::numeric_limits<int>::max()).status();
-}
 
 int RunSmooth(const SmoothOptions& o, const ConnectionOptions& c) {
   std::vector<std::string> warnings;

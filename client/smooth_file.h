@@ -3,72 +3,24 @@
 // service, the result written. Nothing here prints: the caller says what happened.
 #pragma once
 
-#include <chrono>
 #include <functional>
-#include <map>
-#include <memory>
-#include <mutex>
 #include <string>
 #include <vector>
 
 #include "absl/status/status.h"
 #include "client/commands.h"
 #include "client/connection.h"
-#include "meshsmooth/v1/smoothing.grpc.pb.h"
+#include "client/job_run.h"
+#include "meshsmooth/v1/smoothing.pb.h"
 
 namespace meshsmooth::client {
 
-// The JobSpec of `meshsmooth smooth`'s options (CheckSmoothOptions checks them).
-v1::JobSpec SpecFrom(const SmoothOptions& options);
-
-// The service for the jobs that do not run in memory: --server's channel, or the same service
-// started in this process when there is no --server. Connected at the first job that needs it
-// and shared by every job after it: one channel for a whole batch. Thread-safe.
-class ServiceLink {
- public:
-  explicit ServiceLink(const ConnectionOptions& connection) : connection_(connection) {}
-
-  // The stub on the shared channel; Connect()'s errors (the same for every call).
-  absl::StatusOr<v1::MeshSmoother::StubInterface*> Stub();
-  bool embedded();  // the in-process server, which has no network to retry over
-  const ConnectionOptions& connection() const { return connection_; }
-
- private:
-  const ConnectionOptions& connection_;
-  std::mutex mu_;  // guards the members below
-  bool tried_ = false;
-  absl::Status status_;
-  std::unique_ptr<server::Server> embedded_;
-  std::shared_ptr<grpc::Channel> channel_;
-  std::unique_ptr<v1::MeshSmoother::Stub> stub_;
-};
-
-// Ctrl-C for the jobs in flight: once Cancel() is called, every job registered then and every
-// job registered afterwards is cancelled. Thread-safe.
-class JobCancels {
- public:
-  // Registers `cancel` until the returned id is unregistered; calls it at once when Cancel()
-  // came before.
-  int Register(std::function<void()> cancel);
-  void Unregister(int id);
-  void Cancel();
-  bool cancelled();
-
- private:
-  std::mutex mu_;  // guards the members below
-  bool cancelled_ = false;
-  int next_id_ = 0;
-  std::map<int, std::function<void()>> jobs_;
-};
-
-// What a file's job tells its caller along the way; any may be empty.
-struct FileHooks {
-  std::function<void(const v1::Progress&)> progress;
+// What a file's job tells its caller along the way (the job's own hooks, and these); any may be
+// empty.
+struct FileHooks : JobHooks {
   // Called with the CLI's warnings about the input, once it is read, before the job starts.
   std::function<void(const std::vector<std::string>&)> upload_warnings;
   std::function<void()> job_done;  // the job ended, before the result is written
-  // A failed attempt of the call through the service, before the wait for its retry.
-  std::function<void(int retry, const absl::Status& status, std::chrono::milliseconds wait)> retry;
   // A Ctrl-C watcher of its own around the job (a single run); a batch watches for all its jobs.
   bool watch_interrupt = false;
 };

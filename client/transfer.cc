@@ -157,6 +157,55 @@ absl::StatusOr<std::string> EncodeWithStrength(Mesh& mesh, const std::vector<flo
   return bytes;
 }
 
+// The end of an upload of a mesh read in double (`double_read`: its file held double), in its
+// own coordinates, with its strength (VertexStrength) computed: faces naming a vertex that does
+// not exist left out, the positions moved to the local origin, then the mesh kept for a job in
+// memory or encoded (with its attributes or bare).
+absl::Status FinishUpload(Upload& upload, Mesh mesh, std::vector<float> weights, bool double_read, bool with_attributes,
+                          bool in_memory) {
+  // Faces naming a vertex that does not exist cannot be sent (Draco cannot store them); the
+  // server checks the rest of the mesh. Only this count is needed here: the full validation
+  // builds the topology, 11% of the CLI's whole process on the dragon.
+  const int32_t n = mesh.num_vertices();
+  auto out_of_range = [n](const Triangle& t) { return IndexOutOfRange(t, n); };
+  const auto bad_faces = std::count_if(mesh.triangles.begin(), mesh.triangles.end(), out_of_range);
+  if (bad_faces > 0) {
+    upload.warnings.push_back(
+        absl::StrCat(bad_faces, " faces reference vertices that do not exist; they cannot be sent and are left out"));
+    DropTriangles(mesh, out_of_range);  // out of step with the result's faces otherwise
+  }
+  upload.strength = !weights.empty();
+  upload.origin = LocalOrigin(mesh.positions);
+  // PLY output in double when float could not hold the input: a vertex the job leaves where it
+  // is must come back as it went in.
+  upload.double_positions =
+      double_read || upload.origin != Vec3{} ||
+      std::any_of(mesh.positions.begin(), mesh.positions.end(), [](const Vec3& p) { return RoundToFloat(p) != p; });
+  if (upload.origin != Vec3{}) Translate(mesh.positions, -upload.origin);
+  upload.num_vertices = mesh.num_vertices();
+  if (in_memory) {
+    if (absl::Status s = CheckPositionsEncodable(mesh); !s.ok()) return s;
+    upload.strength_values = std::move(weights);
+    upload.kept = std::move(mesh);
+    return absl::OkStatus();
+  }
+  absl::StatusOr<std::string> bytes;
+  if (with_attributes) {
+    bytes = EncodeWithStrength(mesh, weights);
+  } else {  // the positions and faces lent to a mesh of their own, then given back
+    Mesh bare;
+    bare.positions = std::move(mesh.positions);
+    bare.triangles = std::move(mesh.triangles);
+    bytes = EncodeWithStrength(bare, weights);
+    mesh.positions = std::move(bare.positions);
+    mesh.triangles = std::move(bare.triangles);
+  }
+  if (!bytes.ok()) return bytes.status();
+  upload.draco = std::move(*bytes);
+  upload.kept = std::move(mesh);
+  return absl::OkStatus();
+}
+
 absl::Status AboutResult(const absl::Status& s) {
   return absl::Status(s.code(), absl::StrCat("the result: ", s.message()));
 }
@@ -188,6 +237,31 @@ absl::Status WriteMesh(const Upload& upload, Mesh mesh, const std::vector<uint8_
   WriteOptions options;
   options.ply_double = upload.double_positions;
   return meshsmooth::WriteMesh(output, mesh, options);
+}
+
+// The ridge labels of the service's result, one per point (`ridges`); empty without.
+absl::StatusOr<std::vector<uint8_t>> ResultLabels(const std::string& result, bool ridges) {
+  if (!ridges) return std::vector<uint8_t>();
+  absl::StatusOr<std::vector<float>> values = DecodeDracoAttribute(result, kFeatureLabelAttribute);
+  if (!values.ok()) return AboutResult(values.status());
+  return std::vector<uint8_t>(values->begin(), values->end());
+}
+
+// The result of a mesh file's upload (one point per vertex, relative to the origin) with the
+// input's triangles and attributes around it: each vertex the job did not move at its position
+// as sent, in double; normals recomputed from the smoothed positions. Moves them out of
+// `upload.kept`.
+Mesh AroundPoints(Upload& upload, std::vector<Vec3> points) {
+  Mesh mesh;
+  mesh.positions = std::move(points);
+  KeepUnmoved(upload.kept.positions, mesh.positions);
+  mesh.triangles = std::move(upload.kept.triangles);
+  mesh.colors = std::move(upload.kept.colors);
+  mesh.uvs = std::move(upload.kept.uvs);
+  mesh.properties = std::move(upload.kept.properties);
+  mesh.obj_directives = std::move(upload.kept.obj_directives);
+  if (!upload.kept.normals.empty()) mesh.normals = FreshNormals(mesh, upload.kept.normals);
+  return mesh;
 }
 
 }  // namespace
@@ -252,49 +326,27 @@ absl::StatusOr<Upload> PrepareUpload(const std::string& input, bool with_attribu
   if (!mesh.ok()) return mesh.status();
   upload.dropped = std::move(info.dropped);
   if (info.polygons_fanned > 0) upload.dropped.push_back(absl::StrCat(info.polygons_fanned, " polygons triangulated"));
-  // Faces naming a vertex that does not exist cannot be sent (Draco cannot store them); the
-  // server checks the rest of the mesh. Only this count is needed here: the full validation
-  // builds the topology, 11% of the CLI's whole process on the dragon.
-  const int32_t n = mesh->num_vertices();
-  auto out_of_range = [n](const Triangle& t) { return IndexOutOfRange(t, n); };
-  const auto bad_faces = std::count_if(mesh->triangles.begin(), mesh->triangles.end(), out_of_range);
-  if (bad_faces > 0) {
-    upload.warnings.push_back(
-        absl::StrCat(bad_faces, " faces reference vertices that do not exist; they cannot be sent and are left out"));
-    DropTriangles(*mesh, out_of_range);  // out of step with the result's faces otherwise
-  }
   // In the file's own coordinates, before the shift to the local origin.
   absl::StatusOr<std::vector<float>> weights = VertexStrength(*mesh, strength);
   if (!weights.ok()) return weights.status();
-  upload.strength = !weights->empty();
-  upload.origin = LocalOrigin(mesh->positions);
-  // PLY output in double when float could not hold the input: a vertex the job leaves where it
-  // is must come back as it went in.
-  upload.double_positions =
-      info.double_positions || upload.origin != Vec3{} ||
-      std::any_of(mesh->positions.begin(), mesh->positions.end(), [](const Vec3& p) { return RoundToFloat(p) != p; });
-  if (upload.origin != Vec3{}) Translate(mesh->positions, -upload.origin);
-  upload.num_vertices = mesh->num_vertices();
-  if (in_memory) {
-    if (absl::Status s = CheckPositionsEncodable(*mesh); !s.ok()) return s;
-    upload.strength_values = *std::move(weights);
-    upload.kept = std::move(*mesh);
-    return upload;
+  if (absl::Status s = FinishUpload(upload, *std::move(mesh), *std::move(weights), info.double_positions,
+                                    with_attributes, in_memory);
+      !s.ok()) {
+    return s;
   }
-  absl::StatusOr<std::string> bytes;
-  if (with_attributes) {
-    bytes = EncodeWithStrength(*mesh, *weights);
-  } else {  // the positions and faces lent to a mesh of their own, then given back
-    Mesh bare;
-    bare.positions = std::move(mesh->positions);
-    bare.triangles = std::move(mesh->triangles);
-    bytes = EncodeWithStrength(bare, *weights);
-    mesh->positions = std::move(bare.positions);
-    mesh->triangles = std::move(bare.triangles);
+  return upload;
+}
+
+absl::StatusOr<Upload> UploadMesh(Mesh mesh, std::vector<float> strength, bool in_memory) {
+  if (!strength.empty() && strength.size() != mesh.positions.size()) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("strength: ", strength.size(), " values for ", mesh.positions.size(), " vertices"));
   }
-  if (!bytes.ok()) return bytes.status();
-  upload.draco = std::move(*bytes);
-  upload.kept = std::move(*mesh);
+  Upload upload;
+  upload.input = "a mesh in memory";
+  if (absl::Status s = FinishUpload(upload, std::move(mesh), std::move(strength), false, false, in_memory); !s.ok()) {
+    return s;
+  }
   return upload;
 }
 
@@ -337,23 +389,34 @@ absl::Status WriteResult(Upload& upload, const std::string& result, const std::s
     if (!bytes.ok()) return bytes.status();
     return WriteFileBytes(output, *bytes);
   }
+  if (!upload.draco_input) {
+    absl::StatusOr<ResultPoints> points = DecodeResultPoints(upload, result, ridges);
+    if (!points.ok()) return points.status();
+    return WriteResultPoints(upload, std::move(points->points), points->labels, output, ridges, &lost);
+  }
   // Only a Draco input's attributes come from the result; the others' are the input's own.
-  absl::StatusOr<Mesh> decoded = DecodeDraco(result, upload.draco_input ? &lost : nullptr, upload.draco_input);
+  absl::StatusOr<Mesh> decoded = DecodeDraco(result, &lost, true);
+  if (!decoded.ok()) return AboutResult(decoded.status());
+  absl::StatusOr<std::vector<uint8_t>> labels = ResultLabels(result, ridges);
+  if (!labels.ok()) return labels.status();
+  return WriteMesh(upload, *std::move(decoded), *labels, *format, output, ridges, lost);
+}
+
+absl::StatusOr<ResultPoints> DecodeResultPoints(const Upload& upload, const std::string& result, bool ridges) {
+  absl::StatusOr<Mesh> decoded = DecodeDraco(result, nullptr, false);
   if (!decoded.ok()) return AboutResult(decoded.status());
   // Vertex i is point i of the result (SplitAtSeams puts the seams' points after them).
-  if (!upload.draco_input && decoded->num_vertices() < upload.num_vertices) {
+  if (decoded->num_vertices() < upload.num_vertices) {
     return AboutResult(absl::DataLossError(
         absl::StrCat("it has ", decoded->num_vertices(), " points for ", upload.num_vertices, " vertices")));
   }
-  std::vector<uint8_t> labels;
-  if (ridges) {
-    absl::StatusOr<std::vector<float>> values = DecodeDracoAttribute(result, kFeatureLabelAttribute);
-    if (!values.ok()) return AboutResult(values.status());
-    labels.assign(values->begin(), values->end());
-  }
-  if (upload.draco_input) return WriteMesh(upload, *std::move(decoded), labels, *format, output, ridges, lost);
-  decoded->positions.resize(upload.num_vertices);
-  return WriteResultPoints(upload, std::move(decoded->positions), labels, output, ridges, &lost);
+  ResultPoints out;
+  absl::StatusOr<std::vector<uint8_t>> labels = ResultLabels(result, ridges);
+  if (!labels.ok()) return labels.status();
+  out.labels = *std::move(labels);
+  out.points = std::move(decoded->positions);
+  out.points.resize(upload.num_vertices);
+  return out;
 }
 
 absl::Status WriteResultPoints(Upload& upload, std::vector<Vec3> points, const std::vector<uint8_t>& labels,
@@ -366,16 +429,16 @@ absl::Status WriteResultPoints(Upload& upload, std::vector<Vec3> points, const s
       static_cast<int64_t>(points.size()) != upload.num_vertices) {
     return absl::InvalidArgumentError("the result of a job run in memory is written from a mesh file's upload only");
   }
-  Mesh mesh;
-  mesh.positions = std::move(points);
-  KeepUnmoved(upload.kept.positions, mesh.positions);
-  mesh.triangles = std::move(upload.kept.triangles);
-  mesh.colors = std::move(upload.kept.colors);
-  mesh.uvs = std::move(upload.kept.uvs);
-  mesh.properties = std::move(upload.kept.properties);
-  mesh.obj_directives = std::move(upload.kept.obj_directives);
-  if (!upload.kept.normals.empty()) mesh.normals = FreshNormals(mesh, upload.kept.normals);
-  return WriteMesh(upload, std::move(mesh), labels, *format, output, ridges, lost);
+  return WriteMesh(upload, AroundPoints(upload, std::move(points)), labels, *format, output, ridges, lost);
+}
+
+absl::StatusOr<Mesh> ResultMesh(Upload& upload, std::vector<Vec3> points) {
+  if (upload.draco_input || upload.gltf != nullptr || static_cast<int64_t>(points.size()) != upload.num_vertices) {
+    return absl::InvalidArgumentError("a result mesh is made from a mesh's upload and one point per vertex");
+  }
+  Mesh mesh = AroundPoints(upload, std::move(points));
+  if (upload.origin != Vec3{}) Translate(mesh.positions, upload.origin);
+  return mesh;
 }
 
 }  // namespace meshsmooth::client

@@ -68,6 +68,15 @@ bool IsGltfPath(const std::string& path);
 absl::StatusOr<Upload> PrepareUpload(const std::string& input, bool with_attributes = true, bool gltf_draco = false,
                                      const StrengthOptions& strength = {}, bool in_memory = false);
 
+// A mesh in memory (positions in double, in its own coordinates; the Python package's input)
+// made into an upload as PrepareUpload makes a mesh file's: faces naming a vertex that does not
+// exist left out with a warning, the positions moved to their local origin, `strength` (empty,
+// or one value per vertex) as the attribute kStrengthAttribute; kept for a job in memory with
+// `in_memory`, else encoded bare (positions, faces and strength: the attributes stay in `kept`
+// and come back with ResultMesh). InvalidArgument for a strength of another length and for what
+// the encoder refuses (CheckPositionsEncodable).
+absl::StatusOr<Upload> UploadMesh(Mesh mesh, std::vector<float> strength, bool in_memory);
+
 // OK when `output` can be written once the job is done: a format the CLI writes (.obj, .ply,
 // .off, .stl, .drc, and .gltf/.glb for a glTF input) in a folder that exists and is writable,
 // and not a folder itself. InvalidArgument otherwise, naming what is wrong: checked before the
@@ -92,6 +101,25 @@ absl::Status CheckOutputPath(const std::string& output);
 absl::Status WriteResult(Upload& upload, const std::string& result, const std::string& output, bool ridges,
                          std::vector<std::string>* dropped = nullptr, bool gltf_draco = false,
                          const DracoOptions& draco = {});
+
+// The result's points, one per vertex of the upload (relative to its origin, the float32 the
+// service sent), and its ridge labels, one per vertex, when `ridges`.
+struct ResultPoints {
+  std::vector<Vec3> points;
+  std::vector<uint8_t> labels;
+};
+
+// The points of `result` (the service's Draco bytes for an upload of a mesh file, builtin:NAME or
+// UploadMesh: not a .drc or glTF input), as WriteResult reads them. Errors about the result
+// itself start with "the result: ".
+absl::StatusOr<ResultPoints> DecodeResultPoints(const Upload& upload, const std::string& result, bool ridges);
+
+// The result mesh as WriteResultPoints writes it, in the input's coordinates: `points` (one per
+// vertex of the upload) moved back by the upload's origin, each vertex the job did not move at its
+// position as read, with the input's triangles and attributes (moved out of `upload.kept`), normals
+// recomputed from the smoothed positions. InvalidArgument for a .drc or glTF upload and for a
+// count of points other than the upload's vertices.
+absl::StatusOr<Mesh> ResultMesh(Upload& upload, std::vector<Vec3> points);
 
 // WriteResult for a job run in memory on an upload of a mesh file or builtin:NAME: `points`, one
 // per vertex of the upload, are the result's positions (the float32 the service would send) and
