@@ -1,10 +1,13 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages meshsmooth needs (only when one is missing), then configures
 # and builds one CMake preset.
-# Usage: scripts/setup.sh [dev|asan|fuzz|image] [--packages-only]   (default: dev)
+# Usage: scripts/setup.sh [dev|asan|fuzz|image|python] [--packages-only]   (default: dev)
 # fuzz also installs clang, libFuzzer and LLVM's OpenMP runtime (clang's -fopenmp needs it).
 # image is what docker/Dockerfile builds: only the packages that build the two binaries (no test
 # or benchmark tools), preset dev with tests and benchmarks off, only meshsmoothd and meshsmooth.
+# python installs the Python package for /usr/bin/python3 (docs/python.md): the packages that
+# build the binaries and pybind11, preset python (build-python/), then
+# `cmake --install build-python --component python` into /usr/local/lib/python3/dist-packages.
 # --packages-only installs the packages and stops (the Dockerfile does that in a layer of its own,
 # which a rebuild after a source change reuses).
 set -euo pipefail
@@ -14,7 +17,7 @@ packages_only=false
 case "${2:-}" in
   "") ;;
   --packages-only) packages_only=true ;;
-  *) echo "usage: scripts/setup.sh [dev|asan|fuzz|image] [--packages-only]" >&2; exit 2 ;;
+  *) echo "usage: scripts/setup.sh [dev|asan|fuzz|image|python] [--packages-only]" >&2; exit 2 ;;
 esac
 
 # What builds meshsmoothd and meshsmooth; the rest is for the tests, benchmarks and fuzzers.
@@ -23,7 +26,11 @@ packages=(
   libgrpc++-dev libgrpc-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler
   libdraco-dev libabsl-dev libcli11-dev libeigen3-dev libpng-dev prometheus-cpp-dev nlohmann-json3-dev
 )
-if [ "$preset" != image ]; then
+# The Python package (python/): pybind11 and the headers of Debian's python3, numpy at run time.
+if [ "$preset" != image ] && [ "$preset" != asan ] && [ "$preset" != fuzz ]; then
+  packages+=(python3-pybind11 python3-dev python3-numpy)
+fi
+if [ "$preset" != image ] && [ "$preset" != python ]; then
   packages+=(
     grpc-proto draco libopenmesh-dev libgtest-dev libgmock-dev libbenchmark-dev libopen3d-dev libcgal-dev
     python3-grpcio python3-protobuf python3-numpy python3-scipy python3-yaml openssl
@@ -32,16 +39,18 @@ if [ "$preset" != image ]; then
 fi
 # kubectl renders deploy/kubernetes in tests/deploy/kubernetes_test.py. Debian's is
 # kubernetes-client; a kubectl already on PATH (from another package) is used as it is.
-if [ "$preset" != image ] && ! command -v kubectl >/dev/null; then packages+=(kubernetes-client); fi
+if [ "$preset" != image ] && [ "$preset" != python ] && ! command -v kubectl >/dev/null; then
+  packages+=(kubernetes-client)
+fi
 if [ "$preset" = fuzz ]; then packages+=(clang libfuzzer-14-dev libomp-dev); fi
+sudo_cmd=()
+[ "$(id -u)" -eq 0 ] || sudo_cmd=(sudo)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
 done
 if [ ${#missing[@]} -gt 0 ]; then
   echo "setup: installing ${#missing[@]} missing Debian packages: ${missing[*]}"
-  sudo_cmd=()
-  [ "$(id -u)" -eq 0 ] || sudo_cmd=(sudo)
   "${sudo_cmd[@]}" apt-get update -qq
   # Debian starts a packaged service as it installs it (nginx: a system daemon on port 80;
   # prometheus on 9090). The tests run their own, unprivileged; a policy-rc.d that refuses every
@@ -62,6 +71,12 @@ if [ "$preset" = image ]; then
   [ -f build/CMakeCache.txt ] || \
     cmake --preset dev -DMESHSMOOTH_BUILD_TESTS=OFF -DMESHSMOOTH_BUILD_BENCH=OFF >/dev/null
   cmake --build --preset dev --target meshsmoothd meshsmooth
+  exit 0
+fi
+if [ "$preset" = python ]; then
+  [ -f build-python/CMakeCache.txt ] || cmake --preset python >/dev/null
+  cmake --build --preset python
+  "${sudo_cmd[@]}" cmake --install build-python --component python
   exit 0
 fi
 build_dir=build

@@ -11,7 +11,7 @@ The rooms, lowest first (a file may include its own room and any lower layer, no
   base                                    process-wide plumbing the programs link
   server                                  the gRPC service
   client                                  the CLI and its client library
-  bench, fuzz                             tools on top of everything
+  bench, fuzz, python                     tools on top of everything; python the Python package's extension
   tests                                   the tests, which may test the tools' own generators
 
 Exit status 1 and one line per offending include when a file breaks the order.
@@ -30,11 +30,11 @@ LAYERS = [
     ["base"],
     ["server"],
     ["client"],
-    ["bench", "fuzz"],
+    ["bench", "fuzz", "python"],
     ["tests"],
 ]
 RANK = {room: rank for rank, rooms in enumerate(LAYERS) for room in rooms}
-TOP = {"core", "base", "server", "client", "bench", "fuzz", "tests"}
+TOP = {"core", "base", "server", "client", "bench", "fuzz", "python", "tests"}
 INCLUDE = re.compile(r'^\s*#\s*include\s+"([^"]+)"', re.MULTILINE)
 
 
