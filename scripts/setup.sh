@@ -30,10 +30,12 @@ packages=(
 if [ "$preset" != image ] && [ "$preset" != asan ] && [ "$preset" != fuzz ]; then
   packages+=(python3-pybind11 python3-dev python3-numpy)
 fi
+# python3-open3d: Open3D's Python module, for the test of meshsmooth.smooth_open3d (the package
+# itself does not need it).
 if [ "$preset" != image ] && [ "$preset" != python ]; then
   packages+=(
     grpc-proto draco libopenmesh-dev libgtest-dev libgmock-dev libbenchmark-dev libopen3d-dev libcgal-dev
-    python3-grpcio python3-protobuf python3-numpy python3-scipy python3-yaml openssl
+    python3-grpcio python3-protobuf python3-numpy python3-scipy python3-yaml python3-open3d openssl
     nginx prometheus clang-format nodejs
   )
 fi
