@@ -133,7 +133,14 @@ def batch_checks(a, check, tmp):
               "file fails alone, named with its error in '1 of 50 files failed'", fifty_over_two_replicas)
 
         def one_channel_both_replicas():
-            time.sleep(0.3)  # the replicas log a job as it ends
+            # The replicas log a job as it ends, through their stderr pipes: wait (10 s at most) until
+            # the logs hold the 49 jobs, not a fixed time, which a loaded machine can outrun.
+            deadline = time.monotonic() + 10.0
+            while time.monotonic() < deadline:
+                logged = sum(1 for rep in (one, two) for line in rep.stderr_lines() if "job=night-" in line)
+                if logged >= len(names) - 1:
+                    break
+                time.sleep(0.1)
             jobs = {}
             for rep in (one, two):
                 peers = set()
