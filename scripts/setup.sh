@@ -7,7 +7,7 @@
 # or benchmark tools), preset dev with tests and benchmarks off, only meshsmoothd and meshsmooth.
 # python installs the Python package for /usr/bin/python3 (docs/python.md): the packages that
 # build the binaries and pybind11, preset python (build-python/), then
-# `cmake --install build-python --component python` into /usr/local/lib/python3/dist-packages.
+# `cmake --install build-python --component python` into /usr/local/lib/python3.X/dist-packages (X: python3's minor version).
 # --packages-only installs the packages and stops (the Dockerfile does that in a layer of its own,
 # which a rebuild after a source change reuses).
 set -euo pipefail
