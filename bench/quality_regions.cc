@@ -99,24 +99,32 @@ std::vector<float> LargestSmoothPatchFixed(const Mesh& m, const Topology&) {
   return strength;
 }
 
-// Strength 0 on the vertices within kRimRings edges of a boundary.
-std::vector<float> RimFixed(const Mesh&, const Topology& topo) {
-  std::vector<int> depth(topo.num_vertices(), -1);
+// The vertices within `rings` edges of one where `seed` holds (breadth-first over the one-rings).
+template <typename Seed>
+std::vector<uint8_t> WithinRings(const Topology& topo, int rings, Seed seed) {
+  std::vector<uint8_t> near(topo.num_vertices(), 0);
   std::vector<int32_t> front;
   for (int32_t v = 0; v < topo.num_vertices(); ++v) {
-    if (topo.kind[v] == VertexKind::kBoundary) depth[v] = 0, front.push_back(v);
+    if (seed(v)) near[v] = 1, front.push_back(v);
   }
-  for (int ring = 1; ring <= kRimRings; ++ring) {
+  for (int ring = 1; ring <= rings; ++ring) {
     std::vector<int32_t> next;
     for (int32_t v : front) {
       for (int32_t k = topo.ring_offsets[v]; k < topo.ring_offsets[v + 1]; ++k) {
-        if (depth[topo.ring[k]] < 0) depth[topo.ring[k]] = ring, next.push_back(topo.ring[k]);
+        if (!near[topo.ring[k]]) near[topo.ring[k]] = 1, next.push_back(topo.ring[k]);
       }
     }
     front = std::move(next);
   }
-  std::vector<float> strength(depth.size());
-  for (size_t v = 0; v < depth.size(); ++v) strength[v] = depth[v] >= 0 ? 0.0f : 1.0f;
+  return near;
+}
+
+// Strength 0 on the vertices within kRimRings edges of a boundary.
+std::vector<float> RimFixed(const Mesh&, const Topology& topo) {
+  const std::vector<uint8_t> rim =
+      WithinRings(topo, kRimRings, [&topo](int32_t v) { return topo.kind[v] == VertexKind::kBoundary; });
+  std::vector<float> strength(rim.size());
+  for (size_t v = 0; v < rim.size(); ++v) strength[v] = rim[v] ? 0.0f : 1.0f;
   return strength;
 }
 
@@ -147,22 +155,10 @@ std::vector<float> CapFixed(const Mesh& m, const Topology&) {
 // The vertices of strength 1 (1) and, of those, the ones more than kEdgeRings edges from any vertex
 // of strength below 1 (2); 0 for the rest.
 std::vector<uint8_t> FreeParts(const Topology& topo, const std::vector<float>& strength) {
-  std::vector<int> depth(strength.size(), -1);
-  std::vector<int32_t> front;
-  for (int32_t v = 0; v < topo.num_vertices(); ++v) {
-    if (strength[v] < 1.0f) depth[v] = 0, front.push_back(v);
-  }
-  for (int ring = 1; ring <= kEdgeRings; ++ring) {
-    std::vector<int32_t> next;
-    for (int32_t v : front) {
-      for (int32_t k = topo.ring_offsets[v]; k < topo.ring_offsets[v + 1]; ++k) {
-        if (depth[topo.ring[k]] < 0) depth[topo.ring[k]] = ring, next.push_back(topo.ring[k]);
-      }
-    }
-    front = std::move(next);
-  }
+  const std::vector<uint8_t> edge =
+      WithinRings(topo, kEdgeRings, [&strength](int32_t v) { return strength[v] < 1.0f; });
   std::vector<uint8_t> part(strength.size());
-  for (size_t v = 0; v < part.size(); ++v) part[v] = strength[v] < 1.0f ? 0 : depth[v] < 0 ? 2 : 1;
+  for (size_t v = 0; v < part.size(); ++v) part[v] = strength[v] < 1.0f ? 0 : edge[v] ? 1 : 2;
   return part;
 }
 

@@ -44,6 +44,11 @@ class Error(Exception):
         self.message = message
 
 
+def _fields_of(cls: Any, d: Mapping[str, Any]) -> Any:
+    """An instance of the dataclass `cls` from the dict of a protobuf message (None where absent)."""
+    return cls(**{f.name: d.get(f.name) for f in dataclasses.fields(cls)})
+
+
 @dataclasses.dataclass(frozen=True)
 class Progress:
     """A job's progress (meshsmooth.v1.Progress): iterations done of `total`, the last
@@ -61,7 +66,7 @@ class Progress:
 
     @classmethod
     def _from_dict(cls, d: Mapping[str, Any]) -> "Progress":
-        return cls(**{f.name: d.get(f.name) for f in dataclasses.fields(cls)})
+        return _fields_of(cls, d)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -89,7 +94,7 @@ class Summary:
 
     @classmethod
     def _from_dict(cls, d: Mapping[str, Any]) -> "Summary":
-        return cls(**{f.name: d.get(f.name) for f in dataclasses.fields(cls)})
+        return _fields_of(cls, d)
 
 
 @dataclasses.dataclass(frozen=True)

@@ -79,22 +79,19 @@ def main() -> int:
             for line in f.read_text(errors="replace").splitlines():
                 if re.match(r"\s*(static\s+|inline\s+)*constexpr\s", line):
                     bad.append(f"{f.relative_to(args.root).as_posix()}: a constant outside JobPolicy: {line.strip()}")
-    # ... and VisitPolicy (the benchmark's --policy and --list-policy) visits every one, in order.
+    # ... and VisitPolicy (the benchmark's --policy and --list-policy) visits every one, in order; the
+    # noise estimator's tuned numbers are the fields of NoiseParams (core/measure/noise.h), which it
+    # visits as noise.NAME, and noise.{h,cc} name no other constant but mathematics and bounds on work.
     policy_h = (args.root / "core" / "job" / "policy.h").read_text(errors="replace")
-    struct = re.search(r"struct JobPolicy \{(.*?)\n\};", policy_h, re.S)
-    fields = re.findall(r"^\s+(?:double|int|int32_t)\s+(\w+)\s*=", struct.group(1), re.M) if struct else []
-    visited = re.findall(r'visit\("(\w+)",\s*policy\.(\w+)\)', policy_h)
-    if not fields or [name for name, _ in visited] != fields or any(n != m for n, m in visited):
-        bad.append(f"core/job/policy.h: VisitPolicy visits {[n for n, _ in visited]}, JobPolicy has {fields}")
-    # The noise estimator's tuned numbers are the fields of NoiseParams (core/measure/noise.h), which
-    # VisitPolicy visits as noise.NAME, in order; noise.cc names no other constant but mathematics
-    # and bounds on work.
     noise_h = (args.root / "core" / "measure" / "noise.h").read_text(errors="replace")
-    nstruct = re.search(r"struct NoiseParams \{(.*?)\n\};", noise_h, re.S)
-    nfields = re.findall(r"^\s+(?:double|int|int32_t)\s+(\w+)\s*=", nstruct.group(1), re.M) if nstruct else []
-    nvisited = re.findall(r'visit\("noise\.(\w+)",\s*policy\.noise\.(\w+)\)', policy_h)
-    if not nfields or [name for name, _ in nvisited] != nfields or any(n != m for n, m in nvisited):
-        bad.append(f"core/job/policy.h: VisitPolicy visits noise.{[n for n, _ in nvisited]}, NoiseParams has {nfields}")
+    for struct_name, text, member in (("JobPolicy", policy_h, ""), ("NoiseParams", noise_h, "noise.")):
+        struct = re.search(r"struct %s \{(.*?)\n\};" % struct_name, text, re.S)
+        fields = re.findall(r"^\s+(?:double|int|int32_t)\s+(\w+)\s*=", struct.group(1), re.M) if struct else []
+        visited = re.findall(r'visit\("%s(\w+)",\s*policy\.%s(\w+)\)' % (re.escape(member), re.escape(member)),
+                             policy_h)
+        if not fields or [name for name, _ in visited] != fields or any(n != m for n, m in visited):
+            bad.append(f"core/job/policy.h: VisitPolicy visits {member}{[n for n, _ in visited]}, "
+                       f"{struct_name} has {fields}")
     allowed = {"kTerms", "kMinRelativePivot", "kMadToSigma", "kTrimSigmas", "kTrimmedSecondMoment", "kUnusable",
                "kMaxGather", "kWideGather", "kMinParallelFits"}
     for name in ("noise.h", "noise.cc"):
