@@ -12,7 +12,7 @@ import struct
 import sys
 import zlib
 
-from harness import Server, interrupt_long_job, parser, ply_counts, run, run_checks, write_text
+from harness import Server, interrupt_long_job, parser, ply_counts, run, run_checks, shared_file, write_text
 
 
 def flow_names(cli, *server):
@@ -397,9 +397,10 @@ def cli_checks(a, check, tmp):
     check("render --region colours strength 0 grey and 1 orange; its flags are checked as smooth's",
           render_strength)
 
-    if a.shared and os.path.isdir(os.path.join(a.shared, "data", "meshes")):
+    beetle = shared_file(a.shared, "meshes", "beetle.obj")
+    if beetle:
         def info_beetle():
-            r = run([cli, "info", os.path.join(a.shared, "data", "meshes", "beetle.obj")])
+            r = run([cli, "info", beetle])
             assert r.returncode == 0, r.stderr
             assert "non-manifold edges: 47" in r.stdout and "non-manifold vertices: 45" in r.stdout, r.stdout
         check("info reports the beetle's non-manifold edges and vertices", info_beetle)

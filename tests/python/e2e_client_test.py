@@ -22,7 +22,7 @@ import sys
 
 import numpy as np
 
-from harness import Server, parser, ply_counts, require, run, run_checks
+from harness import Server, parser, ply_counts, require, run, run_checks, shared_file
 
 PROTO_FILE = "meshsmooth/v1/smoothing.proto"
 GRPC_PYTHON_PLUGIN = "/usr/bin/grpc_python_plugin"
@@ -547,8 +547,8 @@ def run_all(args, checks, tmp):
                      expect_error, stub, grpc,
                      [pb2.SmoothRequest(spec=spec_median), pb2.SmoothRequest(spec=spec_median)],
                      "INVALID_ARGUMENT", ["spec"])
-        cube_pc = os.path.join(args.shared, "data", "draco", "cube_pc.drc") if args.shared else None
-        if cube_pc and os.path.isfile(cube_pc):
+        cube_pc = shared_file(args.shared, "draco", "cube_pc.drc")
+        if cube_pc:
             with open(cube_pc, "rb") as f:
                 pc = f.read()
             checks.check("error: Draco point cloud -> INVALID_ARGUMENT naming it",
@@ -556,9 +556,6 @@ def run_all(args, checks, tmp):
                          [pb2.SmoothRequest(spec=spec_median)]
                          + [pb2.SmoothRequest(mesh_chunk=c) for c in chunked(pc, CHUNK_BYTES)],
                          "INVALID_ARGUMENT", ["point cloud"])
-        else:
-            print("skip: Draco point cloud case (no --shared or no data/draco/cube_pc.drc)",
-                  flush=True)
     finally:
         if channel is not None:
             channel.close()

@@ -109,6 +109,20 @@ def run_checks(body, tmp_prefix=None):
     return status
 
 
+def shared_file(shared, *parts):
+    """The path of shared/data/PARTS under the --shared folder, or None when it is absent (the
+    checks on it are left out, and a line says so). Under CI=true an absent file raises
+    CheckFailed instead: CI has the folder, and a check left out there passes without doing its
+    work."""
+    path = os.path.join(shared or "", "data", *parts)
+    if shared and os.path.isfile(path):
+        return path
+    if os.environ.get("CI") == "true":
+        raise CheckFailed(f"shared data absent under CI=true: {path} (--shared {shared!r})")
+    print(f"skip: {path} absent; the checks that read it are left out", flush=True)
+    return None
+
+
 # ----------------------------------------------------------------------------------------------
 # Commands, flags, directories
 

@@ -18,7 +18,7 @@ import os
 import random
 import sys
 
-from harness import Server, interrupt_long_job, parser, run, run_checks, write_text
+from harness import Server, interrupt_long_job, parser, run, run_checks, shared_file, write_text
 
 
 def icosphere(levels):
@@ -157,10 +157,9 @@ def local_run_checks(a, check, tmp):
          ["--flow", "bilaplacian", "--iterations", "6", "--weight", "quality"]),
         ("repeated positions welded, a degenerate face", welded, ".ply", ["--flow", "laplacian", "--iterations", "5"]),
     ]
-    if a.shared:
-        bunny = os.path.join(a.shared, "data", "meshes", "stanford-bunny.ply")
-        if os.path.isfile(bunny):
-            cases.append(("the bunny, the default job", bunny, ".ply", []))
+    bunny = shared_file(a.shared, "meshes", "stanford-bunny.ply")
+    if bunny:
+        cases.append(("the bunny, the default job", bunny, ".ply", []))
 
     with Server(a.server, "--quiet") as server:
         def same_bits(name, source, ext, flags):

@@ -14,7 +14,7 @@ import sys
 
 import numpy as np
 
-from harness import parser, run, run_checks
+from harness import parser, run, run_checks, shared_file
 
 # A vertex is at the bound when it moved at least this share of it (core/measure/metrics.h).
 AT_BOUND_SHARE = 0.999
@@ -186,7 +186,7 @@ def checks(a, check, tmp):
           check_bound, cli, sphere, tmp, "sphere-default", "0.01")
     check("taubin, 20 iterations, keeps --max-displacement 0.1h on the noisy sphere",
           check_bound, cli, sphere, tmp, "sphere-taubin", "0.1h", "--flow", "taubin", "--iterations", "20")
-    if a.shared and os.path.isfile(os.path.join(a.shared, "data", "meshes", "stanford-dragon.ply")):
+    if shared_file(a.shared, "meshes", "stanford-dragon.ply"):
         dragon = os.path.join(tmp, "dragon-noisy.ply")
         noisy_dragon(a.shared, dragon)
         check("the noisy dragon's default job keeps --max-displacement 0.1h: every vertex within it, no more flipped "

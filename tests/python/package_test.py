@@ -25,7 +25,7 @@ import time
 
 import numpy as np
 
-from harness import Server, parser, require, run, run_checks, write_text
+from harness import Server, parser, require, run, run_checks, shared_file, write_text
 from local_run_test import icosphere
 from tls_test import make_ca, make_server_cert
 
@@ -39,9 +39,9 @@ CLI_JOB = ["--flow", "taubin", "--iterations", "10"]
 def load_bunny(shared):
     """(vertices, faces) of the Stanford bunny (ASCII PLY in shared/data/meshes), or of a noisy
     icosphere when the shared folder is absent."""
-    path = os.path.join(shared or "", "data", "meshes", "stanford-bunny.ply")
-    if not os.path.isfile(path):
-        print(f"note: no {path}; a noisy icosphere stands in for the bunny", flush=True)
+    path = shared_file(shared, "meshes", "stanford-bunny.ply")
+    if not path:
+        print("note: a noisy icosphere stands in for the bunny", flush=True)
         v, f = icosphere(4)
         rng = np.random.default_rng(1)
         return np.asarray(v) + rng.uniform(-0.01, 0.01, (len(v), 3)), np.asarray(f, dtype=np.int64)

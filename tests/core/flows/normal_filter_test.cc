@@ -146,7 +146,7 @@ TEST(NormalFilterTest, NoisyCubeComesBackWithSharpEdgesAndCorners) {
 // guided_normal's overall bound is above its target of 1.9 degrees, which it does not reach.
 TEST(NormalFilterTest, FandiskKeepsItsCreases) {
   const std::filesystem::path path = testing::SharedData("meshes") / "fandisk.obj";
-  if (!std::filesystem::exists(path)) GTEST_SKIP() << path << " absent";
+  MESHSMOOTH_REQUIRE_SHARED_PATH(path);
   const Mesh clean = *ReadMesh(path.string());
   const Mesh noisy = WithNormalNoise(clean, 0.2, 1);
   const auto [noisy_all, noisy_crease] = NormalErrors(noisy, clean);
