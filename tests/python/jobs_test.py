@@ -3,7 +3,8 @@
 processes with a job store, from a client written against the proto alone.
 
 Run (ctest does this):
-  /usr/bin/python3 tests/python/jobs_test.py --server build/server/meshsmoothd --proto-root proto
+  /usr/bin/python3 tests/python/jobs_test.py --server build/server/meshsmoothd --proto-root proto \
+      --cli build/client/meshsmooth
 
 Checks: a submit sent three times (the first cut a third in) gives one job and one run; a
 broken upload resumes from the bytes the server holds; 20 jobs on a one-worker server killed
@@ -12,7 +13,8 @@ a fetch resumes from an offset with the same SHA-256; a running job cancelled en
 frees its worker; a deleted job's bytes leave the store; the watch's events and its resumption;
 paging; and the bad inputs: a checksum mismatch (DATA_LOSS, never queued), unknown ids
 (NOT_FOUND), a chunk at the wrong offset (the expected offset named), a full disk budget
-(RESOURCE_EXHAUSTED before any byte is kept), a store another process holds.
+(RESOURCE_EXHAUSTED before any byte is kept), a store another process holds; with --cli, the
+CLI's submit, status, fetch, jobs and cancel.
 Needs python3-grpcio, python3-numpy, protobuf-compiler-grpc and draco (draco_encoder).
 """
 
@@ -171,7 +173,8 @@ def check_idempotent_submit(c, server, data):
     require([j.job_id for j in listed if j.request_id == "idem-1"] == [job.job_id], f"listed: {listed}")
     time.sleep(0.2)
     require(runs_of(server, job.job_id) == ["OK"], f"runs logged: {runs_of(server, job.job_id)}")
-    require(job.upload_sha256 == hashlib.sha256(data).digest(), "upload_sha256")
+    require(job.upload_sha256 == hashlib.sha256(data).digest() and job.upload_bytes == len(data),
+            f"upload: {job.upload_bytes} bytes held once of {len(data)}, SHA-256 equal")
     # The same request id with other bytes is another job: refused.
     code, details = code_of(lambda: c.submit("idem-1", spec, data[:-1] + b"\0"))
     require(code == grpc.StatusCode.ALREADY_EXISTS and "idem-1" in details, (code, details))
@@ -234,10 +237,18 @@ def check_cancel_running(c, server, data, small):
     require(c.get(job_id).state == pb2.JOB_STATE_CANCELLED, "stays CANCELLED")
     code, _ = code_of(lambda: c.fetch(job_id))
     require(code == grpc.StatusCode.FAILED_PRECONDITION, f"fetch of a cancelled job: {code}")
-    # The worker is free again.
+    # A job queued behind a running one, cancelled, never runs; the worker is free again after.
+    blocker = c.submit("cancel-blocker", c.spec(LONG_SPEC), data).job.job_id
+    c.wait_state(blocker, ["JOB_STATE_RUNNING"])
+    queued = c.submit("cancel-queued", c.spec(SHORT_SPEC), small).job.job_id
+    require(c.get(queued).state == pb2.JOB_STATE_QUEUED, "queued behind the running job")
+    require(c.stub.CancelJob(pb2.CancelJobRequest(job_id=queued), timeout=DEADLINE_S).state ==
+            pb2.JOB_STATE_CANCELLED, "the queued job cancelled")
+    c.stub.CancelJob(pb2.CancelJobRequest(job_id=blocker), timeout=DEADLINE_S)
     nxt = c.submit("cancel-after", c.spec(SHORT_SPEC), small)
     c.wait_state(nxt.job.job_id, ["JOB_STATE_SUCCEEDED"], seconds=20)
-    # A queued job cancelled never runs.
+    queued_job = c.get(queued)
+    require(queued_job.attempts == 0 and not runs_of(server, queued), "the cancelled queued job never ran")
     return job_id
 
 
@@ -357,8 +368,40 @@ def check_no_store(a, pb2, pb2_grpc):
         c.close()
 
 
+def check_cli(a, c, server, tmp):
+    """The CLI's job commands against the same server."""
+    cli = [a.cli]
+    where = ["--server", server.address]
+    out = os.path.join(tmp, "cli.drc")
+    r = run(cli + ["submit", "builtin:noisy-sphere", "--flow", "laplacian", "--iterations", "50", "--wait", "-o", out]
+            + where, timeout=60)
+    require(r.returncode == 0 and re.fullmatch(r"[0-9a-f]{32}\n", r.stdout), (r.returncode, r.stdout, r.stderr))
+    job_id = r.stdout.strip()
+    require("succeeded" in r.stderr, f"the watch's lines: {r.stderr!r}")
+    again = run(cli + ["submit", "builtin:noisy-sphere", "--flow", "laplacian", "--iterations", "50"] + where)
+    require(again.returncode == 0 and again.stdout.strip() == job_id, f"the same input again: {again.stdout!r}")
+    status = run(cli + ["status", job_id] + where)
+    require(status.returncode == 0 and "succeeded" in status.stdout and "attempts 1" in status.stdout, status.stdout)
+    fetched = os.path.join(tmp, "cli-fetch.drc")
+    f = run(cli + ["fetch", job_id, "-o", fetched] + where)
+    require(f.returncode == 0, f.stderr)
+    with open(out, "rb") as x, open(fetched, "rb") as y:
+        got = y.read()
+        require(x.read() == got and hashlib.sha256(got).digest() == c.get(job_id).result_sha256, "fetch: same bytes")
+    listed = run(cli + ["jobs", "--state", "succeeded"] + where)
+    require(listed.returncode == 0 and job_id in listed.stdout, listed.stdout)
+    cancel = run(cli + ["cancel", job_id] + where)
+    require(cancel.returncode == 0 and cancel.stdout.strip() == "succeeded", f"cancel of an ended job: {cancel.stdout}")
+    missing = run(cli + ["status", "0" * 32] + where)
+    require(missing.returncode == 1 and "no job" in missing.stderr, (missing.returncode, missing.stderr))
+    bad = run(cli + ["fetch", job_id, "-o", os.path.join(tmp, "x.ply")] + where)
+    require(bad.returncode == 2 and ".drc" in bad.stderr, (bad.returncode, bad.stderr))
+    helps = run(cli + ["--help"]).stdout
+    require(all(w in helps for w in ("submit", "status", "watch", "fetch", "cancel", "jobs")), helps)
+
+
 def main():
-    ap = parser(__doc__, required=("server", "proto-root"))
+    ap = parser(__doc__, required=("server", "proto-root"), optional=("cli",))
     a = ap.parse_args()
 
     def body(checks, tmp):
@@ -388,6 +431,9 @@ def main():
             c.stub.CancelJob(pb2.CancelJobRequest(job_id=running), timeout=DEADLINE_S)
             checks.check("bad input: checksum, offset, unknown ids, spec, request id", check_bad_input, c, meshes[4])
             checks.check("a second meshsmoothd on the same store is refused", check_store_in_use, a, store)
+            if a.cli:
+                checks.check("the CLI: submit --wait, the same submit again, status, fetch, jobs, cancel",
+                             check_cli, a, c, s, tmp)
             c.close()
             del cancelled
         checks.check("restart: 20 jobs, SIGKILL during the third, all SUCCEEDED with Smooth's bytes",
