@@ -20,6 +20,7 @@
 #include "CLI/CLI.hpp"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
+#include "absl/time/time.h"
 #include "base/huge_pages.h"
 #include "base/kernel_environment.h"
 #include "base/shutdown_signals.h"
@@ -97,12 +98,31 @@ int main(int argc, char** argv) {
                  "refused call's method, reason, status, error, peer and job id) for a log pipeline")
       ->capture_default_str()
       ->check(CLI::IsMember({"text", "json"}));
+  app.add_option("--job-store", o.job_store,
+                 "directory of the job store (a SQLite database) for jobs that outlive a connection (Submit, GetJob, "
+                 "WatchJob, FetchResult, ...); made when missing, one meshsmoothd per directory; default: none, and "
+                 "those methods answer UNIMPLEMENTED (the container image has /var/lib/meshsmooth/jobs for a volume)");
+  std::string retention = "24h";
+  app.add_option("--job-retention", retention,
+                 "how long the job store keeps an ended job and its result after its end (e.g. 24h, 30m, 90s)")
+      ->capture_default_str();
+  app.add_option("--job-store-max-bytes", o.job_store_max_bytes,
+                 "bytes of uploads and results the job store may hold; an upload beyond gets RESOURCE_EXHAUSTED "
+                 "after ended jobs are forgotten, oldest first, to make room")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
   app.add_option("--metrics-listen", o.metrics_listen,
                  "host:port of a Prometheus endpoint (GET /metrics; port 0 picks a free one); default: none");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : 2;
+  }
+  if (absl::Duration d; absl::ParseDuration(retention, &d) && d > absl::ZeroDuration()) {
+    o.job_retention_seconds = absl::ToDoubleSeconds(d);
+  } else {
+    std::fprintf(stderr, "--job-retention: '%s' is not a positive duration (e.g. 24h, 30m, 90s)\n", retention.c_str());
+    return 2;
   }
   o.log_format = log_format == "json" ? meshsmooth::server::LogFormat::kJson : meshsmooth::server::LogFormat::kText;
   if (!token_file.empty()) {

@@ -38,6 +38,15 @@ struct ServerOptions {
   bool log_jobs = true;                     // one line per job on stderr
   bool log_refusals = true;                 // one line per refused call on stderr (not --quiet's)
   LogFormat log_format = LogFormat::kText;
+  // The job store (smoothing.proto's Submit .. FetchResult, server/job_store.h): a directory
+  // holding the SQLite database of jobs that outlive a connection; empty: no store, and those
+  // methods answer UNIMPLEMENTED.
+  std::string job_store;
+  // An ended job and its bytes are forgotten this long after its end.
+  double job_retention_seconds = 24 * 3600.0;
+  // Bytes of uploads and results the job store may hold; an upload that does not fit, even after
+  // forgetting ended jobs (oldest end first), gets RESOURCE_EXHAUSTED before any byte is kept.
+  int64_t job_store_max_bytes = 10ll << 30;
   // host:port of the Prometheus endpoint (GET /metrics; port 0 picks a free one); empty: none.
   std::string metrics_listen;
 };

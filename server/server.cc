@@ -74,7 +74,14 @@ absl::StatusOr<std::unique_ptr<Server>> Server::Start(const ServerOptions& optio
   }
   grpc::EnableDefaultHealthCheckService(true);
   grpc::reflection::InitProtoReflectionServerBuilderPlugin();
-  s->service_ = std::make_unique<MeshSmootherService>(options, s->metrics_ ? s->metrics_->events() : NoMetrics());
+  std::unique_ptr<JobStore> store;
+  if (!options.job_store.empty()) {
+    absl::StatusOr<std::unique_ptr<JobStore>> opened = JobStore::Open(options.job_store);
+    if (!opened.ok()) return opened.status();
+    store = *std::move(opened);
+  }
+  s->service_ = std::make_unique<MeshSmootherService>(options, s->metrics_ ? s->metrics_->events() : NoMetrics(),
+                                                      std::move(store));
   grpc::ServerBuilder builder;
   if (listen) builder.AddListeningPort(options.listen, creds, &s->port_);
   builder.RegisterService(s->service_.get());

@@ -9,6 +9,7 @@
 #include "absl/strings/str_format.h"
 #include "core/flows/catalogue.h"
 #include "server/convert.h"
+#include "server/job_calls.h"
 #include "server/log.h"
 #include "server/smooth_job.h"
 #include "server/smooth_reactor.h"
@@ -20,15 +21,22 @@ int HardwareThreads() { return std::max(1u, std::thread::hardware_concurrency())
 
 }  // namespace
 
-MeshSmootherService::MeshSmootherService(const ServerOptions& options, ServiceMetrics& metrics)
+MeshSmootherService::MeshSmootherService(const ServerOptions& options, ServiceMetrics& metrics,
+                                         std::unique_ptr<JobStore> store)
     : options_(options),
       admission_(options_, metrics),
       pool_(options.workers > 0 ? options.workers : HardwareThreads(), options.queue_depth),
       start_tag_(static_cast<uint64_t>(
           std::chrono::duration_cast<std::chrono::seconds>(std::chrono::system_clock::now().time_since_epoch())
-              .count())) {}
+              .count())),
+      store_(std::move(store)) {
+  if (store_) runner_ = std::make_unique<JobRunner>(*store_, pool_, options_, metrics);
+}
 
-MeshSmootherService::~MeshSmootherService() { pool_.Stop(); }
+MeshSmootherService::~MeshSmootherService() {
+  if (runner_) runner_->Stop();  // first: the pool's Stop waits for its running tasks
+  pool_.Stop();
+}
 
 grpc::Status MeshSmootherService::Authenticate(const grpc::CallbackServerContext* context) const {
   if (options_.auth_token.empty()) return grpc::Status::OK;
@@ -81,8 +89,61 @@ grpc::ServerUnaryReactor* MeshSmootherService::ListFlows(grpc::CallbackServerCon
   return reactor;
 }
 
+template <typename Fn>
+grpc::ServerUnaryReactor* MeshSmootherService::Unary(grpc::CallbackServerContext* context, Fn&& fn) {
+  grpc::ServerUnaryReactor* reactor = context->DefaultReactor();
+  grpc::Status s = Authenticate(context);
+  reactor->Finish(s.ok() ? fn() : s);
+  return reactor;
+}
+
+grpc::ServerReadReactor<v1::SubmitRequest>* MeshSmootherService::Submit(grpc::CallbackServerContext* context,
+                                                                        v1::SubmitResponse* response) {
+  return NewSubmitReactor(Authenticate(context), runner_.get(), options_, response);
+}
+
+grpc::ServerUnaryReactor* MeshSmootherService::QueryUpload(grpc::CallbackServerContext* context,
+                                                           const v1::QueryUploadRequest* request,
+                                                           v1::SubmitResponse* response) {
+  return Unary(context, [&] { return server::QueryUpload(runner_.get(), *request, response); });
+}
+
+grpc::ServerUnaryReactor* MeshSmootherService::GetJob(grpc::CallbackServerContext* context,
+                                                      const v1::GetJobRequest* request, v1::Job* response) {
+  return Unary(context, [&] { return server::GetJob(runner_.get(), *request, response); });
+}
+
+grpc::ServerUnaryReactor* MeshSmootherService::ListJobs(grpc::CallbackServerContext* context,
+                                                        const v1::ListJobsRequest* request,
+                                                        v1::ListJobsResponse* response) {
+  return Unary(context, [&] { return server::ListJobs(runner_.get(), *request, response); });
+}
+
+grpc::ServerWriteReactor<v1::JobEvent>* MeshSmootherService::WatchJob(grpc::CallbackServerContext* context,
+                                                                      const v1::WatchJobRequest* request) {
+  return NewWatchReactor(Authenticate(context), runner_.get(), *request);
+}
+
+grpc::ServerUnaryReactor* MeshSmootherService::CancelJob(grpc::CallbackServerContext* context,
+                                                         const v1::CancelJobRequest* request, v1::Job* response) {
+  return Unary(context, [&] { return server::CancelJob(runner_.get(), *request, response); });
+}
+
+grpc::ServerUnaryReactor* MeshSmootherService::DeleteJob(grpc::CallbackServerContext* context,
+                                                         const v1::DeleteJobRequest* request, v1::DeleteJobResponse*) {
+  return Unary(context, [&] { return server::DeleteJob(runner_.get(), *request); });
+}
+
+grpc::ServerWriteReactor<v1::FetchResultResponse>* MeshSmootherService::FetchResult(
+    grpc::CallbackServerContext* context, const v1::FetchResultRequest* request) {
+  return NewFetchReactor(Authenticate(context), runner_.get(), *request);
+}
+
 int MeshSmootherService::DrainAndStop(Clock::time_point deadline) {
   const int cut = admission_.Drain(deadline);
+  // The store's running jobs stop within one iteration and stay RUNNING in the store: the next
+  // start runs them again from their input.
+  if (runner_) runner_->Stop();
   pool_.Stop();  // a cancelled job stops within one iteration
   return cut;
 }

@@ -248,7 +248,7 @@ TEST(ServiceTest, DivergingFlowEndsWithAClearError) {
 // first step): the two below are all the service has; a new method fails the count until it is
 // checked here too.
 TEST(ServiceTest, BearerTokenIsRequiredWhenConfigured) {
-  ASSERT_EQ(v1::SmoothRequest::descriptor()->file()->FindServiceByName("MeshSmoother")->method_count(), 2)
+  ASSERT_EQ(v1::SmoothRequest::descriptor()->file()->FindServiceByName("MeshSmoother")->method_count(), 10)
       << "check the new method's authentication below";
   ServerOptions o;
   o.auth_token = "s3cret-token";
@@ -277,6 +277,48 @@ TEST(ServiceTest, BearerTokenIsRequiredWhenConfigured) {
   EXPECT_EQ(flows.flows(1).name(), "taubin");
   ASSERT_EQ(flows.flows(1).constraints_size(), 2);
   EXPECT_NE(flows.flows(1).constraints(1).find("taubin_pass_band < 1/step - 1"), std::string::npos);
+
+  // The job methods check the token first: UNAUTHENTICATED without it; with it, this server
+  // (no --job-store) answers UNIMPLEMENTED.
+  for (const char* token : {"", "s3cret-token"}) {
+    const grpc::StatusCode want = *token ? grpc::StatusCode::UNIMPLEMENTED : grpc::StatusCode::UNAUTHENTICATED;
+    const auto context = [&] {
+      auto c = std::make_unique<grpc::ClientContext>();
+      if (*token) c->AddMetadata("authorization", std::string("Bearer ") + token);
+      return c;
+    };
+    v1::Job job;
+    v1::SubmitResponse submitted;
+    v1::ListJobsResponse listed;
+    v1::DeleteJobResponse deleted;
+    EXPECT_EQ(stub->GetJob(context().get(), {}, &job).error_code(), want) << token;
+    EXPECT_EQ(stub->ListJobs(context().get(), {}, &listed).error_code(), want) << token;
+    EXPECT_EQ(stub->CancelJob(context().get(), {}, &job).error_code(), want) << token;
+    EXPECT_EQ(stub->DeleteJob(context().get(), {}, &deleted).error_code(), want) << token;
+    EXPECT_EQ(stub->QueryUpload(context().get(), {}, &submitted).error_code(), want) << token;
+    {
+      auto c = context();
+      auto writer = stub->Submit(c.get(), &submitted);
+      writer->WritesDone();
+      EXPECT_EQ(writer->Finish().error_code(), want) << token;
+    }
+    {
+      auto c = context();
+      v1::JobEvent event;
+      auto reader = stub->WatchJob(c.get(), {});
+      while (reader->Read(&event)) {
+      }
+      EXPECT_EQ(reader->Finish().error_code(), want) << token;
+    }
+    {
+      auto c = context();
+      v1::FetchResultResponse piece;
+      auto reader = stub->FetchResult(c.get(), {});
+      while (reader->Read(&piece)) {
+      }
+      EXPECT_EQ(reader->Finish().error_code(), want) << token;
+    }
+  }
 }
 
 TEST(ServiceTest, SixteenConcurrentClientsAgainstTwoWorkers) {

@@ -1,0 +1,190 @@
+#include "server/job_runner.h"
+
+#include <algorithm>
+#include <chrono>
+#include <vector>
+
+#include "server/convert.h"
+#include "server/log.h"
+#include "server/smooth_job.h"
+
+namespace meshsmooth::server {
+namespace {
+
+// How often the scheduler looks for work without being woken, and forgets expired jobs.
+constexpr auto kTick = std::chrono::milliseconds(500);
+
+// A stored job's events, into the store; each change then goes to the job's watchers.
+class StoreSink final : public JobSink {
+ public:
+  StoreSink(std::string job_id, JobRunner& runner) : job_id_(std::move(job_id)), runner_(runner) {}
+  void OnAccepted(const v1::Accepted&) override {}
+  void OnProgress(const v1::Progress& progress) override {
+    runner_.store().SetProgress(job_id_, progress);  // the job throttles it to ~10/s
+    runner_.Notify(job_id_);
+  }
+  void OnResult(std::string draco_bytes, const v1::Summary& summary) override {
+    runner_.store().Succeed(job_id_, draco_bytes, summary, NowMicros());
+    runner_.Notify(job_id_);
+  }
+  void OnError(const absl::Status& status) override {
+    runner_.store().Fail(job_id_, status, NowMicros());
+    runner_.Notify(job_id_);
+  }
+
+ private:
+  const std::string job_id_;
+  JobRunner& runner_;
+};
+
+}  // namespace
+
+int64_t NowMicros() {
+  return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+JobRunner::JobRunner(JobStore& store, WorkerPool& pool, const ServerOptions& options, ServiceMetrics& metrics)
+    : store_(store), pool_(pool), options_(options), metrics_(metrics), thread_([this] { Loop(); }) {}
+
+JobRunner::~JobRunner() { Stop(); }
+
+void JobRunner::Wake() {
+  std::lock_guard<std::mutex> lock(mu_);
+  woken_ = true;
+  cv_.notify_all();
+}
+
+void JobRunner::Stop() {
+  std::map<std::string, std::shared_ptr<SmoothJob>> running;
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    if (stopping_) return;
+    stopping_ = true;
+    running = active_;
+    cv_.notify_all();
+  }
+  for (auto& [id, job] : running) {
+    if (job) job->Detach();
+  }
+  if (thread_.joinable()) thread_.join();
+}
+
+void JobRunner::Loop() {
+  std::unique_lock<std::mutex> lock(mu_);
+  while (!stopping_) {
+    lock.unlock();
+    if (options_.job_retention_seconds > 0) {
+      store_.ExpireEndedBefore(NowMicros() - static_cast<int64_t>(options_.job_retention_seconds * 1e6));
+    }
+    while (Dispatch()) {
+    }
+    lock.lock();
+    cv_.wait_for(lock, kTick, [this] { return stopping_ || woken_; });
+    woken_ = false;
+  }
+}
+
+bool JobRunner::Dispatch() {
+  std::vector<std::string> skip;
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    if (stopping_ || static_cast<int>(active_.size()) >= pool_.workers()) return false;
+    for (const auto& [id, job] : active_) skip.push_back(id);
+  }
+  std::optional<std::string> id = store_.NextQueued(skip);
+  if (!id.has_value()) return false;
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    active_.emplace(*id, nullptr);
+  }
+  if (!pool_.TrySubmit([this, id = *id] { Run(id); })) {  // the queue is full of Smooth calls: the next tick
+    std::lock_guard<std::mutex> lock(mu_);
+    active_.erase(*id);
+    return false;
+  }
+  return true;
+}
+
+void JobRunner::Run(const std::string& job_id) {
+  const auto done = [&] {
+    std::lock_guard<std::mutex> lock(mu_);
+    active_.erase(job_id);
+    woken_ = true;
+    cv_.notify_all();
+  };
+  std::optional<JobInput> input;
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    if (!stopping_) input = store_.StartRun(job_id, NowMicros());
+  }
+  if (!input.has_value()) return done();  // cancelled or deleted while it waited, or stopping
+  Notify(job_id);
+  StoreSink sink(job_id, *this);
+  v1::JobSpec spec = input->spec;
+  spec.clear_job_id();
+  absl::StatusOr<JobParams> params = FromProto(spec, options_.max_iterations);
+  if (!params.ok()) {  // checked at Submit; a server with a lower --max-iterations since then
+    sink.OnError(params.status());
+    return done();
+  }
+  params->job_id = job_id;
+  auto job = std::make_shared<SmoothJob>(job_id, *std::move(params), std::move(input->upload), BudgetHold(),
+                                         Clock::now(), options_, &sink, "job-store", metrics_);
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    active_[job_id] = job;
+    if (stopping_) job->Detach();
+  }
+  // A cancel between StartRun and here found no SmoothJob to stop: look at the store again.
+  if (absl::StatusOr<v1::Job> now = store_.Get(job_id); !now.ok() || now->state() != v1::JOB_STATE_RUNNING) {
+    job->Detach();
+  }
+  job->Run();
+  job->Detach();  // the sink goes with this frame
+  done();
+}
+
+absl::StatusOr<v1::Job> JobRunner::Cancel(const std::string& job_id) {
+  absl::StatusOr<v1::Job> job = store_.Cancel(job_id, NowMicros());
+  if (!job.ok()) return job;
+  std::shared_ptr<SmoothJob> running;
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    if (auto it = active_.find(job_id); it != active_.end()) running = it->second;
+  }
+  if (running) running->Detach();  // stops within one iteration; its late events go nowhere
+  Notify(job_id);
+  return job;
+}
+
+void JobRunner::Watch(const std::string& job_id, JobWatcher* watcher) {
+  std::lock_guard<std::mutex> lock(watch_mu_);
+  watchers_.emplace(job_id, watcher);
+}
+
+void JobRunner::Unwatch(const std::string& job_id, JobWatcher* watcher) {
+  std::lock_guard<std::mutex> lock(watch_mu_);
+  auto [begin, end] = watchers_.equal_range(job_id);
+  for (auto it = begin; it != end; ++it) {
+    if (it->second == watcher) {
+      watchers_.erase(it);
+      return;
+    }
+  }
+}
+
+void JobRunner::Notify(const std::string& job_id) {
+  {
+    std::lock_guard<std::mutex> lock(watch_mu_);
+    if (watchers_.count(job_id) == 0) return;
+  }
+  absl::StatusOr<v1::Job> job = store_.Get(job_id);
+  if (!job.ok()) return;
+  job->clear_spec();
+  std::lock_guard<std::mutex> lock(watch_mu_);
+  auto [begin, end] = watchers_.equal_range(job_id);
+  for (auto it = begin; it != end; ++it) it->second->OnJobChanged(*job);
+}
+
+}  // namespace meshsmooth::server
