@@ -73,7 +73,7 @@ JobRun RunInMemory(const v1::JobSpec& spec, Upload& upload, const ConnectionOpti
                    const JobHooks& hooks) {
   JobRun run;
   server::MeshUpload mesh{&upload.kept.positions, &upload.kept.triangles, std::move(upload.strength_values)};
-  LocalJob job;
+  LocalJob job(c.max_memory_bytes);
   absl::StatusOr<LocalOutcome> outcome;
   {
     CancelScope scope(cancels, [&job] { job.Cancel(); });
