@@ -56,8 +56,15 @@ class Collector final : public server::JobSink {
 LocalOutcome ResultPerVertex(server::MeshResult& r, const v1::Summary& summary, size_t vertices) {
   LocalOutcome out;
   out.summary = summary;
-  out.points.resize(vertices);
-  for (size_t v = 0; v < vertices; ++v) out.points[v] = RoundToFloat(r.smoothed.mesh.positions[r.smoothed.VertexOf(v)]);
+  out.faces = std::move(r.upload_faces);
+  std::vector<Vec3>& smoothed = r.smoothed.mesh.positions;
+  if (r.smoothed.point_to_vertex.empty() && smoothed.size() == vertices) {
+    for (Vec3& p : smoothed) p = RoundToFloat(p);  // vertex v is uploaded vertex v: no second copy
+    out.points = std::move(smoothed);
+  } else {
+    out.points.resize(vertices);
+    for (size_t v = 0; v < vertices; ++v) out.points[v] = RoundToFloat(smoothed[r.smoothed.VertexOf(v)]);
+  }
   for (const GenericAttribute& a : r.attributes) {
     if (a.name != kFeatureLabelAttribute) continue;
     out.labels.resize(vertices);
@@ -109,7 +116,7 @@ absl::Status CheckLocalMemory(const server::JobParams& params, const server::Mes
   const int64_t bound = LocalMemoryBound(max_memory_bytes);
   if (bound <= 0) return absl::OkStatus();
   const auto vertices = static_cast<int64_t>(upload.positions->size());
-  const auto faces = static_cast<int64_t>(upload.triangles->size());
+  const auto faces = static_cast<int64_t>(upload.triangles.size());
   const int64_t needed = server::EstimateJobBytes(vertices, faces, params);
   if (needed <= bound) return absl::OkStatus();
   return absl::ResourceExhaustedError(absl::StrCat(

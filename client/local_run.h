@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "absl/status/statusor.h"
+#include "core/mesh.h"
 #include "core/vec3.h"
 #include "meshsmooth/v1/smoothing.pb.h"
 #include "server/options.h"
@@ -34,6 +35,7 @@ struct LocalOutcome {
   v1::Summary summary;
   std::vector<Vec3> points;     // the result's positions: the float32 the service sends
   std::vector<uint8_t> labels;  // the ridge labels when the spec asked for them; else empty
+  std::vector<Triangle> faces;  // the upload's triangles, handed back (server::MeshResult::upload_faces)
 };
 
 class LocalJob {
