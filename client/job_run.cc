@@ -73,8 +73,7 @@ JobRun RunInMemory(const v1::JobSpec& spec, Upload& upload, const ConnectionOpti
                    const JobHooks& hooks) {
   JobRun run;
   // The triangles go to the job and come back with its result (not a second copy beside them).
-  server::MeshUpload mesh{&upload.kept.positions, std::move(upload.kept.triangles),
-                          std::move(upload.strength_values)};
+  server::MeshUpload mesh{&upload.kept.positions, std::move(upload.kept.triangles), std::move(upload.strength_values)};
   LocalJob job(c.max_memory_bytes);
   absl::StatusOr<LocalOutcome> outcome;
   {

@@ -10,9 +10,9 @@
 #include <utility>
 #include <variant>
 
+#include "absl/strings/str_cat.h"
 #include "client/smooth_client.h"
 #include "core/features/ridges.h"
-#include "absl/strings/str_cat.h"
 #include "core/io/draco_codec.h"
 #include "server/convert.h"
 #include "server/job_memory.h"
@@ -119,12 +119,12 @@ absl::Status CheckLocalMemory(const server::JobParams& params, const server::Mes
   const auto faces = static_cast<int64_t>(upload.triangles.size());
   const int64_t needed = server::EstimateJobBytes(vertices, faces, params);
   if (needed <= bound) return absl::OkStatus();
-  return absl::ResourceExhaustedError(absl::StrCat(
-      "the job needs about ", server::FormatBytes(needed), " of memory, estimated for ",
-      server::DescribeJobSize(vertices, faces, params), ", above the ", server::FormatBytes(bound), " ",
-      max_memory_bytes > 0 ? "that --max-memory allows"
-                           : "this machine has available (MemAvailable, and what this process holds)",
-      "; free memory, or smooth a smaller part of the mesh"));
+  return absl::ResourceExhaustedError(
+      absl::StrCat("the job needs about ", server::FormatBytes(needed), " of memory, estimated for ",
+                   server::DescribeJobSize(vertices, faces, params), ", above the ", server::FormatBytes(bound), " ",
+                   max_memory_bytes > 0 ? "that --max-memory allows"
+                                        : "this machine has available (MemAvailable, and what this process holds)",
+                   "; free memory, or smooth a smaller part of the mesh"));
 }
 
 }  // namespace

@@ -419,7 +419,7 @@ int main(int argc, char** argv) {
   smooth
       ->add_option("--max-memory", sc.max_memory_bytes,
                    "without --server: the most memory (bytes) a job may need by its estimate from the mesh's "
-                   "vertices and faces (about 230 bytes a vertex for the default job); a larger job is refused "
+                   "vertices and faces (about 270 bytes a vertex for the default job); a larger job is refused "
                    "before it starts, naming both figures. 0 = what this machine has available (MemAvailable)")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);

@@ -165,8 +165,8 @@ std::optional<Refused> Admission::CheckJobMemory(int64_t vertices, int64_t faces
   return Refused{Refusal::kJobTooLarge,
                  grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
                               absl::StrCat("the job needs about ", FormatBytes(needed), " of memory, estimated for ",
-                                           DescribeJobSize(vertices, faces, params),
-                                           ", above this server's limit of ", FormatBytes(options_.max_job_bytes),
+                                           DescribeJobSize(vertices, faces, params), ", above this server's limit of ",
+                                           FormatBytes(options_.max_job_bytes),
                                            " a job (--max-job-bytes); send a smaller mesh, or run it locally "
                                            "(meshsmooth without --server)"))};
 }

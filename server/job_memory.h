@@ -2,10 +2,13 @@
 // what a server's admission (--max-job-bytes, admission.h) and the CLI's local run (the
 // machine's available memory, or --max-memory) refuse a job by, naming both figures.
 //
-// The model: kFixed + per vertex + per face, by what the job asks for. The figures are the
-// peaks measured on the default job (docs/performance.md, "Large meshes") and on the flows of
-// docs/deployment.md's "Memory" table, rounded up: the estimate is meant to be reached by no run
-// of that kind, not to match one. Counts are the mesh's as it reaches the job: Draco's points
+// The model: a fixed part + per vertex + per face, by what the job asks for. One model for both
+// places a job runs (docs/performance.md, "Large meshes"): the local run's peak was 195-197 bytes
+// a vertex on 10M- and 50M-vertex height fields, against 270 here for a mesh of two faces a
+// vertex, the margin for meshsmoothd's own peak, which also holds the upload's Draco bytes until
+// they are decoded and the decoded points beside the welded mesh; the normal-filtering flows from
+// docs/deployment.md's "Memory" table (904-1,010 bytes a vertex on the dragon). The estimate is
+// meant to be reached by no run of that kind, not to match one. Counts are the mesh's as it reaches the job: Draco's points
 // (the upload's head, DracoDeclaredCounts: the points split at seams, at least the vertices
 // welded from them) or the vertices handed over in memory.
 #pragma once
@@ -22,7 +25,7 @@ struct JobMemoryModel {
   int64_t fixed = int64_t{64} << 20;  // the process's own and the job's small buffers
   // Every job: the mesh, its weld, topology, Morton-ordered copy, a flow's buffers, the metrics
   // and the input's positions for the displacement, beside the caller's own copy of the mesh.
-  int64_t per_vertex = 150;
+  int64_t per_vertex = 190;
   int64_t per_face = 40;
   // A normal-filtering flow (bilateral_normal, guided_normal) named by the job: its face graph
   // and a dozen per-face arrays.

@@ -43,7 +43,8 @@ class MemoryJobMesh final : public JobMesh {
   explicit MemoryJobMesh(MeshUpload upload) : upload_(std::move(upload)) {
     const int32_t n = static_cast<int32_t>(upload_.positions->size());
     std::vector<Triangle>& all = upload_.triangles;
-    const bool in_range = std::none_of(all.begin(), all.end(), [n](const Triangle& t) { return IndexOutOfRange(t, n); });
+    const bool in_range =
+        std::none_of(all.begin(), all.end(), [n](const Triangle& t) { return IndexOutOfRange(t, n); });
     if (in_range) {
       weld_ = WeldMeshLending(Float32Points(*upload_.positions), all);
       faces_lent_ = weld_.point_to_vertex.empty();

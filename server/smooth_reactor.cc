@@ -303,7 +303,7 @@ class SmoothReactor final : public grpc::ServerBidiReactor<v1::SmoothRequest, v1
   // Reader state: only touched by reactions, which gRPC serialises for reads.
   v1::SmoothRequest request_;
   std::optional<JobParams> params_;
-  bool sized_ = false;  // the upload's head was read for its counts (CheckJobSize)
+  bool sized_ = false;   // the upload's head was read for its counts (CheckJobSize)
   UploadBuffer upload_;  // held against the service's memory budget
   // For the idle reaper (another thread): reading the upload, and when the last message came.
   std::atomic<bool> uploading_{false};
