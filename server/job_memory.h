@@ -9,9 +9,9 @@
 // scripts/peak-memory.sh), which also holds the upload's Draco bytes until they are decoded and
 // the decoded points beside the welded mesh; the normal-filtering flows from
 // docs/deployment.md's "Memory" table (904-1,010 bytes a vertex on the dragon). The estimate is
-// meant to be reached by no run of that kind, not to match one. Counts are the mesh's as it reaches the job: Draco's points
-// (the upload's head, DracoDeclaredCounts: the points split at seams, at least the vertices
-// welded from them) or the vertices handed over in memory.
+// meant to be reached by no run of that kind, not to match one. Counts are the mesh's as it
+// reaches the job: Draco's points (the upload's head, DracoDeclaredCounts: the points split at
+// seams, at least the vertices welded from them) or the vertices handed over in memory.
 #pragma once
 
 #include <cstdint>
