@@ -108,7 +108,8 @@ std::string ServiceConfigJson(int retries) {
 absl::StatusOr<std::shared_ptr<grpc::Channel>> Connect(const ConnectionOptions& options,
                                                        std::unique_ptr<server::Server>& embedded) {
   if (options.server.empty()) {
-    absl::StatusOr<std::unique_ptr<server::Server>> s = server::Server::Start(LocalServerOptions(), /*listen=*/false);
+    absl::StatusOr<std::unique_ptr<server::Server>> s =
+        server::Server::Start(LocalServerOptions(options.max_memory_bytes), /*listen=*/false);
     if (!s.ok()) return s.status();
     embedded = std::move(*s);
     return embedded->InProcessChannel();

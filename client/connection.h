@@ -5,6 +5,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <cstdint>
 #include <functional>
 #include <memory>
 #include <string>
@@ -25,6 +26,9 @@ struct ConnectionOptions {
   std::string tls_ca;      // PEM roots; enables TLS
   double timeout_seconds = 3600.0;
   int retries = 4;  // attempts after the first on UNAVAILABLE / RESOURCE_EXHAUSTED; 0 = none
+  // Without `server`: the most memory a job may need by its estimate (server/job_memory.h);
+  // 0 = what the machine has available (LocalMemoryBound, client/local_run.h).
+  int64_t max_memory_bytes = 0;
 };
 
 // The gRPC target for --server: a target with a scheme (dns:///name:port, unix:path, ...) or a

@@ -72,8 +72,9 @@ bool JobCancels::cancelled() {
 JobRun RunInMemory(const v1::JobSpec& spec, Upload& upload, const ConnectionOptions& c, JobCancels& cancels,
                    const JobHooks& hooks) {
   JobRun run;
-  server::MeshUpload mesh{&upload.kept.positions, &upload.kept.triangles, std::move(upload.strength_values)};
-  LocalJob job;
+  // The triangles go to the job and come back with its result (not a second copy beside them).
+  server::MeshUpload mesh{&upload.kept.positions, std::move(upload.kept.triangles), std::move(upload.strength_values)};
+  LocalJob job(c.max_memory_bytes);
   absl::StatusOr<LocalOutcome> outcome;
   {
     CancelScope scope(cancels, [&job] { job.Cancel(); });
@@ -86,6 +87,7 @@ JobRun RunInMemory(const v1::JobSpec& spec, Upload& upload, const ConnectionOpti
     return run;
   }
   run.summary = std::move(outcome->summary);
+  upload.kept.triangles = std::move(outcome->faces);
   run.local = *std::move(outcome);
   return run;
 }

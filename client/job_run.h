@@ -82,7 +82,9 @@ struct JobRun {
 
 // The job `spec` on `upload` (prepared with `in_memory`: PrepareUpload, UploadMesh) in this
 // process, with the options of the CLI's in-process server, its deadline from `connection`. The
-// job is registered with `cancels` while it runs. The result is JobRun::local.
+// job is registered with `cancels` while it runs. The result is JobRun::local. The upload's
+// triangles are handed to the job and back (upload.kept holds them again once it succeeded; a
+// failed job's upload is not written from).
 JobRun RunInMemory(const v1::JobSpec& spec, Upload& upload, const ConnectionOptions& connection, JobCancels& cancels,
                    const JobHooks& hooks);
 

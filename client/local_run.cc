@@ -4,14 +4,18 @@
 #include <chrono>
 #include <condition_variable>
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <thread>
 #include <utility>
 #include <variant>
 
+#include "absl/strings/str_cat.h"
 #include "client/smooth_client.h"
 #include "core/features/ridges.h"
+#include "core/io/draco_codec.h"
 #include "server/convert.h"
+#include "server/job_memory.h"
 #include "server/service.h"
 
 namespace meshsmooth::client {
@@ -52,8 +56,15 @@ class Collector final : public server::JobSink {
 LocalOutcome ResultPerVertex(server::MeshResult& r, const v1::Summary& summary, size_t vertices) {
   LocalOutcome out;
   out.summary = summary;
-  out.points.resize(vertices);
-  for (size_t v = 0; v < vertices; ++v) out.points[v] = RoundToFloat(r.smoothed.mesh.positions[r.smoothed.VertexOf(v)]);
+  out.faces = std::move(r.upload_faces);
+  std::vector<Vec3>& smoothed = r.smoothed.mesh.positions;
+  if (r.smoothed.point_to_vertex.empty() && smoothed.size() == vertices) {
+    for (Vec3& p : smoothed) p = RoundToFloat(p);  // vertex v is uploaded vertex v: no second copy
+    out.points = std::move(smoothed);
+  } else {
+    out.points.resize(vertices);
+    for (size_t v = 0; v < vertices; ++v) out.points[v] = RoundToFloat(smoothed[r.smoothed.VertexOf(v)]);
+  }
   for (const GenericAttribute& a : r.attributes) {
     if (a.name != kFeatureLabelAttribute) continue;
     out.labels.resize(vertices);
@@ -77,22 +88,56 @@ std::string NextLocalJobId() {
   return server::JobIdOf(tag, next.fetch_add(1));
 }
 
-server::ServerOptions LocalServerOptions() {
+int64_t LocalMemoryBound(int64_t max_memory_bytes) {
+  if (max_memory_bytes > 0) return max_memory_bytes;
+  return server::AvailableToThisProcess().value_or(0);
+}
+
+server::ServerOptions LocalServerOptions(int64_t max_memory_bytes) {
   server::ServerOptions o;
   o.log_jobs = false;
   o.log_refusals = false;  // the call's status tells the user
   o.workers = 1;
+  constexpr int64_t kNoBound = std::numeric_limits<int64_t>::max() / 4;
+  o.max_upload_bytes = kNoBound;
+  o.max_buffered_bytes = kNoBound;
+  o.max_vertices = kMaxDracoVertices;
+  o.max_job_seconds = 0.0;  // the call's deadline stops it
+  o.max_job_bytes = LocalMemoryBound(max_memory_bytes);
   return o;
 }
+
+namespace {
+
+// OK, or ResourceExhausted naming both figures when the job's memory estimate is above
+// LocalMemoryBound(max_memory_bytes).
+absl::Status CheckLocalMemory(const server::JobParams& params, const server::MeshUpload& upload,
+                              int64_t max_memory_bytes) {
+  const int64_t bound = LocalMemoryBound(max_memory_bytes);
+  if (bound <= 0) return absl::OkStatus();
+  const auto vertices = static_cast<int64_t>(upload.positions->size());
+  const auto faces = static_cast<int64_t>(upload.triangles.size());
+  const int64_t needed = server::EstimateJobBytes(vertices, faces, params);
+  if (needed <= bound) return absl::OkStatus();
+  return absl::ResourceExhaustedError(
+      absl::StrCat("the job needs about ", server::FormatBytes(needed), " of memory, estimated for ",
+                   server::DescribeJobSize(vertices, faces, params), ", above the ", server::FormatBytes(bound), " ",
+                   max_memory_bytes > 0 ? "that --max-memory allows"
+                                        : "this machine has available (MemAvailable, and what this process holds)",
+                   "; free memory, or smooth a smaller part of the mesh"));
+}
+
+}  // namespace
 
 absl::StatusOr<LocalOutcome> LocalJob::Run(const v1::JobSpec& spec, server::MeshUpload upload,
                                            std::chrono::system_clock::time_point deadline,
                                            const std::function<void(const v1::Progress&)>& on_progress) {
-  const server::ServerOptions options = LocalServerOptions();
+  const server::ServerOptions options = LocalServerOptions(max_memory_bytes_);
   // Statuses as they reach a client of the service: through ToGrpc, which cuts long messages.
   const auto as_received = [](const absl::Status& s) { return FromGrpc(server::ToGrpc(s)); };
   absl::StatusOr<server::JobParams> params = server::FromProto(spec, options.max_iterations);
   if (!params.ok()) return as_received(params.status());
+  if (absl::Status s = CheckLocalMemory(*params, upload, max_memory_bytes_); !s.ok()) return s;
   const size_t vertices = upload.positions->size();
   const std::string id = !params->job_id.empty() ? params->job_id : NextLocalJobId();
   Collector sink(on_progress);

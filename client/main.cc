@@ -417,6 +417,13 @@ int main(int argc, char** argv) {
   AddSmoothOptions(smooth, so, batch);
   AddBatchOptions(smooth, batch);
   AddConnectionOptions(smooth, sc);
+  smooth
+      ->add_option("--max-memory", sc.max_memory_bytes,
+                   "without --server: the most memory (bytes) a job may need by its estimate from the mesh's "
+                   "vertices and faces (about 270 bytes a vertex for the default job); a larger job is refused "
+                   "before it starts, naming both figures. 0 = what this machine has available (MemAvailable)")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
 
   ConnectionOptions fc;
   bool flows_json = false;

@@ -85,20 +85,43 @@ Welded WeldPoints(const std::vector<Vec3>& points) {
   return w;
 }
 
-WeldedMesh WeldMesh(const std::vector<Vec3>& points, std::vector<Triangle> point_faces) {
-  Welded w = WeldPoints(points);
-  WeldedMesh out;
-  out.mesh.positions = std::move(w.positions);
-  out.merged = w.merged;
-  out.mesh.triangles = std::move(point_faces);
-  for (Triangle& t : out.mesh.triangles) {
-    for (int32_t& v : t) v = w.point_to_vertex[v];
-  }
+namespace {
+
+// True when every point is its own vertex, in order (the vertices are numbered in order of first
+// appearance, so with no point merged).
+bool IsIdentity(const Welded& w) {
   bool identity = w.merged == 0;
   for (size_t p = 0; identity && p < w.point_to_vertex.size(); ++p) {
     identity = w.point_to_vertex[p] == static_cast<int32_t>(p);
   }
-  if (!identity) out.point_to_vertex = std::move(w.point_to_vertex);
+  return identity;
+}
+
+// The welded mesh of `w` over `point_faces`, renumbered in place unless `w` is the identity.
+WeldedMesh FromWelded(Welded w, std::vector<Triangle> point_faces) {
+  WeldedMesh out;
+  out.mesh.positions = std::move(w.positions);
+  out.merged = w.merged;
+  out.mesh.triangles = std::move(point_faces);
+  if (IsIdentity(w)) return out;
+  for (Triangle& t : out.mesh.triangles) {
+    for (int32_t& v : t) v = w.point_to_vertex[v];
+  }
+  out.point_to_vertex = std::move(w.point_to_vertex);
+  return out;
+}
+
+}  // namespace
+
+WeldedMesh WeldMesh(const std::vector<Vec3>& points, std::vector<Triangle> point_faces) {
+  return FromWelded(WeldPoints(points), std::move(point_faces));
+}
+
+WeldedMesh WeldMeshLending(const std::vector<Vec3>& points, std::vector<Triangle>& point_faces) {
+  Welded w = WeldPoints(points);
+  if (!IsIdentity(w)) return FromWelded(std::move(w), point_faces);
+  WeldedMesh out = FromWelded(std::move(w), std::move(point_faces));
+  point_faces.clear();
   return out;
 }
 

@@ -39,6 +39,12 @@ struct WeldedMesh {
 // in range) to the vertices.
 WeldedMesh WeldMesh(const std::vector<Vec3>& points, std::vector<Triangle> point_faces);
 
+// As WeldMesh, without a second copy of the faces where none is needed: when no point is
+// merged, the faces are the welded mesh's as they are and are moved into it (`point_faces` is
+// left empty: the caller takes them back from the result's mesh once done with it); otherwise
+// `point_faces` stays as it was and the result holds them renumbered.
+WeldedMesh WeldMeshLending(const std::vector<Vec3>& points, std::vector<Triangle>& point_faces);
+
 // One value per vertex of `weld` from one per point: a vertex whose points disagree takes the
 // smallest, and NaN when one of them is NaN (so that a check of the values finds it).
 std::vector<float> VertexMinimum(const std::vector<float>& per_point, const WeldedMesh& weld, int64_t vertices);

@@ -1,12 +1,11 @@
 #include "server/admission.h"
 
 #include <algorithm>
-#include <fstream>
-#include <sstream>
 #include <utility>
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
+#include "server/job_memory.h"
 
 namespace meshsmooth::server {
 
@@ -90,14 +89,8 @@ bool IsTransient(Refusal reason) {
 }
 
 int64_t DefaultBufferedBytes(const std::string& meminfo_path) {
-  std::ifstream in(meminfo_path);
-  std::string line;
-  while (std::getline(in, line)) {
-    std::istringstream fields(line);
-    std::string key, unit;
-    int64_t kib = 0;
-    if (fields >> key >> kib >> unit && key == "MemTotal:" && unit == "kB" && kib > 0) return kib * 1024 / 4;
-  }
+  const std::optional<int64_t> total = MeminfoBytes("MemTotal", meminfo_path);
+  if (total.has_value() && *total > 0) return *total / 4;
   return int64_t{4} << 30;
 }
 
@@ -163,6 +156,19 @@ Refused Admission::QueueFull() const {
   return {Refusal::kQueueFull,
           grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
                        absl::StrCat("the job queue is full (", options_.queue_depth, " jobs waiting); retry later"))};
+}
+
+std::optional<Refused> Admission::CheckJobMemory(int64_t vertices, int64_t faces, const JobParams& params) const {
+  if (options_.max_job_bytes <= 0) return std::nullopt;
+  const int64_t needed = EstimateJobBytes(vertices, faces, params);
+  if (needed <= options_.max_job_bytes) return std::nullopt;
+  return Refused{Refusal::kJobTooLarge,
+                 grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
+                              absl::StrCat("the job needs about ", FormatBytes(needed), " of memory, estimated for ",
+                                           DescribeJobSize(vertices, faces, params), ", above this server's limit of ",
+                                           FormatBytes(options_.max_job_bytes),
+                                           " a job (--max-job-bytes); send a smaller mesh, or run it locally "
+                                           "(meshsmooth without --server)"))};
 }
 
 Refused Admission::ChunkTooLarge(int64_t bytes) const {

@@ -5,6 +5,8 @@
 //     for a worker (MemoryBudget). An upload takes its buffer's bytes before it keeps a chunk
 //     and is refused when they do not fit; a job gives them back once its upload is decoded
 //     and freed. Running jobs' meshes are not counted: the number of workers bounds them.
+//   - A job's memory: from the counts at the head of its upload, before the rest is kept, a job
+//     whose estimate (job_memory.h) is above --max-job-bytes is refused (CheckJobMemory).
 //   - Draining: once shutdown begins, new calls, uploads and queued jobs end with UNAVAILABLE
 //     at once (safe to send elsewhere); running jobs get the grace period.
 //   - Time: an upload that sends nothing for --upload-idle-seconds and a job that waits longer
@@ -26,6 +28,7 @@
 
 #include "absl/status/status.h"
 #include "grpcpp/support/status.h"
+#include "server/convert.h"
 #include "server/metrics.h"
 #include "server/options.h"
 
@@ -101,6 +104,7 @@ class UploadBuffer {
   // or the budget has no room for the buffer it needs (kMemoryBudget).
   std::optional<Refused> Append(std::string_view chunk);
   bool empty() const { return bytes_.empty(); }
+  std::string_view bytes() const { return bytes_; }
   // The bytes and their hold, for the job; the buffer is empty afterwards.
   std::string TakeBytes() { return std::exchange(bytes_, std::string()); }
   BudgetHold TakeHold() { return std::move(hold_); }
@@ -162,6 +166,10 @@ class Admission {
 
   // The job queue is full: RESOURCE_EXHAUSTED.
   Refused QueueFull() const;
+  // nullopt, or RESOURCE_EXHAUSTED (kJobTooLarge) naming both figures when a job of `params` on
+  // `vertices` and `faces` (the upload's head: DracoDeclaredCounts) needs more memory by its
+  // estimate (EstimateJobBytes, job_memory.h) than --max-job-bytes allows; none without it.
+  std::optional<Refused> CheckJobMemory(int64_t vertices, int64_t faces, const JobParams& params) const;
   // A mesh chunk of `bytes` above kMaxChunkBytes: RESOURCE_EXHAUSTED, as gRPC's own answer to a
   // message above its receive limit.
   Refused ChunkTooLarge(int64_t bytes) const;

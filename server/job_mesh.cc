@@ -1,5 +1,6 @@
 #include "server/job_mesh.h"
 
+#include <algorithm>
 #include <utility>
 #include <variant>
 
@@ -38,14 +39,23 @@ std::vector<Vec3> Float32Points(const std::vector<Vec3>& positions) {
 class MemoryJobMesh final : public JobMesh {
  public:
   // The faces with every index in range (the others are not sent), welded over the points.
+  // Faces all in range and no point welded: the upload's faces are the welded mesh's (lent).
   explicit MemoryJobMesh(MeshUpload upload) : upload_(std::move(upload)) {
     const int32_t n = static_cast<int32_t>(upload_.positions->size());
-    std::vector<Triangle> faces;
-    faces.reserve(upload_.triangles->size());
-    for (const Triangle& t : *upload_.triangles) {
-      if (!IndexOutOfRange(t, n)) faces.push_back(t);
+    std::vector<Triangle>& all = upload_.triangles;
+    const bool in_range =
+        std::none_of(all.begin(), all.end(), [n](const Triangle& t) { return IndexOutOfRange(t, n); });
+    if (in_range) {
+      weld_ = WeldMeshLending(Float32Points(*upload_.positions), all);
+      faces_lent_ = weld_.point_to_vertex.empty();
+    } else {
+      std::vector<Triangle> faces;
+      faces.reserve(all.size());
+      for (const Triangle& t : all) {
+        if (!IndexOutOfRange(t, n)) faces.push_back(t);
+      }
+      weld_ = WeldMesh(Float32Points(*upload_.positions), std::move(faces));
     }
-    weld_ = WeldMesh(Float32Points(*upload_.positions), std::move(faces));
     vertices_ = weld_.mesh.num_vertices();
   }
   Mesh TakeWelded() override { return std::exchange(weld_.mesh, Mesh{}); }
@@ -61,6 +71,8 @@ class MemoryJobMesh final : public JobMesh {
   }
   int64_t seam_points() const override { return weld_.merged; }
   std::vector<Vec3> InputPositions() const override {
+    // Every point its own vertex: each is its vertex's first point (no second copy of them).
+    if (weld_.point_to_vertex.empty()) return Float32Points(*upload_.positions);
     return FirstPointPositions(Float32Points(*upload_.positions), weld_, vertices_);
   }
   absl::StatusOr<std::string> Encode(const Mesh& smoothed, const DracoOptions& options,
@@ -77,10 +89,19 @@ class MemoryJobMesh final : public JobMesh {
     if (absl::Status s = stop.Check(); !s.ok()) return s;
     return std::string();
   }
-  std::optional<WeldedMesh> TakeWeld() override { return std::move(weld_); }
+  std::optional<MeshResult> TakeResult(Mesh smoothed, std::vector<GenericAttribute> attributes) override {
+    MeshResult out{std::move(weld_), std::move(attributes), {}};
+    out.smoothed.mesh = std::move(smoothed);
+    // The job moves vertices, never faces: lent faces come back as they were lent. The result's
+    // own faces are not needed past the job.
+    out.upload_faces = faces_lent_ ? std::move(out.smoothed.mesh.triangles) : std::move(upload_.triangles);
+    std::vector<Triangle>().swap(out.smoothed.mesh.triangles);
+    return out;
+  }
 
  private:
   MeshUpload upload_;
+  bool faces_lent_ = false;  // upload_.triangles are the welded mesh's
   WeldedMesh weld_;
   int64_t vertices_ = 0;
 };

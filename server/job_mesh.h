@@ -24,8 +24,11 @@ namespace meshsmooth::server {
 // WeldMesh), the faces with an index out of range left out, a welded vertex's strength the
 // smallest of its points'. The same code as the service's from there on.
 struct MeshUpload {
-  const std::vector<Vec3>* positions = nullptr;      // borrowed: they outlive the job
-  const std::vector<Triangle>* triangles = nullptr;  // borrowed
+  const std::vector<Vec3>* positions = nullptr;  // borrowed: they outlive the job
+  // Handed over, and handed back in MeshResult::upload_faces when the job succeeds: where every
+  // index is in range and no point is welded into another (a scan's usual case), they are the
+  // welded mesh's own faces through the job rather than a copy beside it (WeldMeshLending).
+  std::vector<Triangle> triangles;
   // JobSpec.strength_attribute's values (whatever the name), one per vertex; empty: none.
   std::vector<float> strength;
 };
@@ -33,9 +36,10 @@ struct MeshUpload {
 // What a job run on a MeshUpload hands back instead of the result's Draco bytes.
 struct MeshResult {
   // smoothed.mesh: the welded vertices at their smoothed positions (double; the service sends
-  // their float32); smoothed.VertexOf(i): uploaded vertex i's welded vertex.
+  // their float32), without its faces; smoothed.VertexOf(i): uploaded vertex i's welded vertex.
   WeldedMesh smoothed;
   std::vector<GenericAttribute> attributes;  // one value per welded vertex: the ridge labels when asked
+  std::vector<Triangle> upload_faces;        // MeshUpload::triangles, handed back as they came
 };
 
 // The upload as a job's steps read it.
@@ -54,9 +58,12 @@ class JobMesh {
   // would, with the same errors, and returns no bytes.
   virtual absl::StatusOr<std::string> Encode(const Mesh& smoothed, const DracoOptions& options,
                                              const std::vector<GenericAttribute>& extra, const StopToken& stop) = 0;
-  // A mesh in memory: its weld (the mesh taken), which maps the uploaded vertices to the
-  // result's; nothing for Draco bytes.
-  virtual std::optional<WeldedMesh> TakeWeld() { return std::nullopt; }
+  // A mesh in memory: the result of the job, `smoothed` (the mesh TakeWelded gave, at its smoothed
+  // positions) with its weld, which maps the uploaded vertices to the result's, and the upload's
+  // faces handed back; nothing for Draco bytes.
+  virtual std::optional<MeshResult> TakeResult(Mesh /*smoothed*/, std::vector<GenericAttribute> /*attributes*/) {
+    return std::nullopt;
+  }
 };
 
 // A decoded upload.

@@ -62,6 +62,12 @@ int main(int argc, char** argv) {
   app.add_option("--max-upload-bytes", o.max_upload_bytes, "largest Draco upload of one job")->capture_default_str();
   app.add_option("--max-vertices", o.max_vertices, "largest mesh, in vertices")->capture_default_str();
   app.add_option("--max-iterations", o.max_iterations, "most iterations one job may ask for")->capture_default_str();
+  app.add_option("--max-job-bytes", o.max_job_bytes,
+                 "largest memory one job may need, by its estimate from the counts at the head of its upload "
+                 "(about 270 bytes a vertex for the default job; docs/deployment.md): beyond, RESOURCE_EXHAUSTED "
+                 "naming both figures before the rest of the upload is kept; 0 = no bound")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
   app.add_option("--max-job-seconds", o.max_job_seconds,
                  "time limit of one job on its worker, decode to encode (DEADLINE_EXCEEDED)")
       ->capture_default_str();

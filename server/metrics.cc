@@ -43,6 +43,8 @@ std::string_view RefusalName(Refusal reason) {
       return "unauthenticated";
     case Refusal::kInvalidRequest:
       return "invalid_request";
+    case Refusal::kJobTooLarge:
+      return "job_too_large";
   }
   return "unknown";
 }

@@ -30,12 +30,13 @@ enum class Refusal : uint8_t {
   kShuttingDown,     // the server was draining: the job did not start
   kUnauthenticated,  // no or a wrong bearer token
   kInvalidRequest,   // the call broke the protocol or its spec was refused
+  kJobTooLarge,      // the job's memory estimate was above --max-job-bytes
 };
-inline constexpr int kRefusalCount = 10;
+inline constexpr int kRefusalCount = 11;
 
 // The `reason` label of a refusal: "queue_full", "queue_wait", "memory_budget",
 // "upload_too_large", "chunk_too_large", "too_many_calls", "upload_idle", "shutting_down",
-// "unauthenticated", "invalid_request".
+// "unauthenticated", "invalid_request", "job_too_large".
 std::string_view RefusalName(Refusal reason);
 
 // What the service tells its metrics. Called from gRPC's and the workers' threads at once.

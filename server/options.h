@@ -18,6 +18,9 @@ struct ServerOptions {
   int64_t max_upload_bytes = 512ll << 20;  // Draco bytes of one job
   int64_t max_vertices = 20'000'000;       // vertices of one mesh (after welding seams)
   int max_iterations = 10'000;
+  // A job's memory by its estimate (server/job_memory.h) from the counts at the head of its
+  // upload: above this, RESOURCE_EXHAUSTED before the rest of the upload is kept; 0 = no bound.
+  int64_t max_job_bytes = 0;
   double max_job_seconds = 600.0;    // a job's time on its worker (decode to encode)
   int max_concurrent_streams = 128;  // Smooth calls open at once
   // An upload that receives no message for this long ends with DEADLINE_EXCEEDED, freeing its

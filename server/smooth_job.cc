@@ -314,10 +314,8 @@ void SmoothJob::Run() {
   report.result_bytes = encoded->size();
   const v1::Summary summary = MakeSummary(report, params_);
   Log(report);
-  if (std::optional<WeldedMesh> weld = uploaded.TakeWeld()) {
-    MeshResult out{*std::move(weld), *std::move(attributes)};
-    out.smoothed.mesh = std::move(mesh);
-    Emit([&](JobSink& sink) { sink.OnMeshResult(std::move(out), summary); });
+  if (std::optional<MeshResult> out = uploaded.TakeResult(std::move(mesh), *std::move(attributes))) {
+    Emit([&](JobSink& sink) { sink.OnMeshResult(*std::move(out), summary); });
     return;
   }
   Emit([&](JobSink& sink) { sink.OnResult(std::move(*encoded), summary); });

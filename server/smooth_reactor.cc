@@ -104,6 +104,7 @@ class SmoothReactor final : public grpc::ServerBidiReactor<v1::SmoothRequest, v1
         }
         // The upload's own limit and the server's memory budget.
         if (std::optional<Refused> refused = upload_.Append(chunk)) return Refuse(*refused);
+        if (std::optional<Refused> refused = CheckJobSize()) return Refuse(*refused);
         break;
       }
       default:
@@ -188,6 +189,19 @@ class SmoothReactor final : public grpc::ServerBidiReactor<v1::SmoothRequest, v1
   static Refused InvalidArgument(const std::string& message) {
     return {Refusal::kInvalidRequest, grpc::Status(grpc::StatusCode::INVALID_ARGUMENT, message)};
   }
+
+  // Once the upload's head holds the counts Draco declares there (the first chunk, unless a
+  // large metadata block comes first): the job's memory estimate against --max-job-bytes. Looked
+  // for in the first kSizedWithinBytes only; past them the decoder's own checks are left.
+  std::optional<Refused> CheckJobSize() {
+    if (sized_) return std::nullopt;
+    const std::string_view head = upload_.bytes();
+    const std::optional<DracoCounts> counts = DracoDeclaredCounts(head);
+    sized_ = counts.has_value() || static_cast<int64_t>(head.size()) >= kSizedWithinBytes;
+    if (!counts.has_value()) return std::nullopt;
+    return admission_.CheckJobMemory(counts->points, counts->faces, *params_);
+  }
+  static constexpr int64_t kSizedWithinBytes = int64_t{4} << 20;
 
   // Ends the call with `status` as soon as no write is in flight (pending events are dropped);
   // `transient`: a RESOURCE_EXHAUSTED that is the server's capacity (IsTransient).
@@ -289,6 +303,7 @@ class SmoothReactor final : public grpc::ServerBidiReactor<v1::SmoothRequest, v1
   // Reader state: only touched by reactions, which gRPC serialises for reads.
   v1::SmoothRequest request_;
   std::optional<JobParams> params_;
+  bool sized_ = false;   // the upload's head was read for its counts (CheckJobSize)
   UploadBuffer upload_;  // held against the service's memory budget
   // For the idle reaper (another thread): reading the upload, and when the last message came.
   std::atomic<bool> uploading_{false};

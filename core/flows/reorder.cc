@@ -158,4 +158,18 @@ void RestoreOrder(const ReorderedMesh& r, Mesh& mesh, int threads) {
   for (int32_t i = 0; i < n; ++i) mesh.positions[r.order[i]] = r.mesh.positions[i];
 }
 
+void RestoreFaces(const ReorderedMesh& r, Mesh& mesh, int threads) {
+  const int32_t n = static_cast<int32_t>(r.order.size());
+  const auto faces = static_cast<int64_t>(r.mesh.triangles.size());
+  mesh.triangles.resize(r.mesh.triangles.size());
+#pragma omp parallel for schedule(static) num_threads(threads)
+  for (int64_t f = 0; f < faces; ++f) {
+    Triangle t = r.mesh.triangles[f];
+    for (int32_t& v : t) {
+      if (v >= 0 && v < n) v = r.order[v];
+    }
+    mesh.triangles[f] = t;
+  }
+}
+
 }  // namespace meshsmooth

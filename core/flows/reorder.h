@@ -42,4 +42,9 @@ ReorderedMesh ReorderByMorton(const Mesh& mesh, const Topology& topo, const std:
 // Writes r's positions back to `mesh` in the caller's order.
 void RestoreOrder(const ReorderedMesh& r, Mesh& mesh, int threads);
 
+// Makes `mesh`'s faces anew from r's, in the caller's numbering: the same faces as those r was
+// made from (each corner renumbered back; a corner out of range was kept as it was), so a caller
+// may free its own while it runs on r.
+void RestoreFaces(const ReorderedMesh& r, Mesh& mesh, int threads);
+
 }  // namespace meshsmooth

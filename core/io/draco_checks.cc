@@ -58,38 +58,71 @@ absl::Status CheckDracoOptions(const DracoOptions& options) {
   return absl::OkStatus();
 }
 
-absl::StatusOr<std::optional<DeclaredSizes>> CheckDeclaredEdgebreakerSizes(std::string_view bytes,
-                                                                           int64_t max_vertices) {
+namespace {
+
+// The counts at the head of Draco mesh bytes, as ReadDeclaredCounts says, and for Edgebreaker
+// the count of new vertices (before 2.2) and split symbols that add vertices to the declared.
+struct HeadCounts {
+  bool edgebreaker = false;
+  uint32_t faces = 0, points = 0, new_vertices = 0, split_symbols = 0;
+};
+
+std::optional<HeadCounts> ReadHeadCounts(std::string_view bytes) {
   draco::DecoderBuffer buffer;
   buffer.Init(bytes.data(), bytes.size());
   draco::DracoHeader header;
   if (!draco::PointCloudDecoder::DecodeHeader(&buffer, &header).ok()) return std::nullopt;
-  if (header.encoder_type != draco::TRIANGULAR_MESH || header.encoder_method != draco::MESH_EDGEBREAKER_ENCODING) {
-    return std::nullopt;
-  }
-  // The layout PointCloudDecoder::Decode and MeshEdgebreakerDecoderImpl::DecodeConnectivity
-  // read: metadata (from 1.3, when flagged), the traversal's type, then the counts, raw
-  // uint32 before 2.0 and varints after; before 2.2 a count of new vertices comes first.
+  if (header.encoder_type != draco::TRIANGULAR_MESH) return std::nullopt;
+  const bool edgebreaker = header.encoder_method == draco::MESH_EDGEBREAKER_ENCODING;
+  if (!edgebreaker && header.encoder_method != draco::MESH_SEQUENTIAL_ENCODING) return std::nullopt;
+  // The layout PointCloudDecoder::Decode reads: metadata (from 1.3, when flagged), then the
+  // connectivity's counts, raw uint32 before 2.0 (sequential: before 2.2) and varints after.
   const uint16_t version = DRACO_BITSTREAM_VERSION(header.version_major, header.version_minor);
   buffer.set_bitstream_version(version);
   if (version >= DRACO_BITSTREAM_VERSION(1, 3) && (header.flags & METADATA_FLAG_MASK)) {
     draco::GeometryMetadata metadata;
     if (!draco::MetadataDecoder().DecodeGeometryMetadata(&buffer, &metadata)) return std::nullopt;
   }
+  HeadCounts out;
+  out.edgebreaker = edgebreaker;
+  if (!edgebreaker) {  // MeshSequentialDecoder::DecodeConnectivity: the faces, then the points
+    const bool raw = version < DRACO_BITSTREAM_VERSION(2, 2);
+    auto count = [&](uint32_t& v) { return raw ? buffer.Decode(&v) : draco::DecodeVarint(&v, &buffer); };
+    if (!count(out.faces) || !count(out.points)) return std::nullopt;
+    return out;
+  }
+  // MeshEdgebreakerDecoderImpl::DecodeConnectivity: the traversal's type, then the counts;
+  // before 2.2 a count of new vertices comes first.
   uint8_t traversal = 0;
   if (!buffer.Decode(&traversal)) return std::nullopt;
-  auto count = [&](uint32_t& out) {
-    return version < DRACO_BITSTREAM_VERSION(2, 0) ? buffer.Decode(&out) : draco::DecodeVarint(&out, &buffer);
+  auto count = [&](uint32_t& v) {
+    return version < DRACO_BITSTREAM_VERSION(2, 0) ? buffer.Decode(&v) : draco::DecodeVarint(&v, &buffer);
   };
-  uint32_t new_vertices = 0, vertices = 0, faces = 0, symbols = 0, split_symbols = 0;
+  uint32_t symbols = 0;
   uint8_t attribute_data = 0;
-  if (version < DRACO_BITSTREAM_VERSION(2, 2) && !count(new_vertices)) return std::nullopt;
-  if (!count(vertices) || !count(faces) || !buffer.Decode(&attribute_data) || !count(symbols) ||
-      !count(split_symbols)) {
+  if (version < DRACO_BITSTREAM_VERSION(2, 2) && !count(out.new_vertices)) return std::nullopt;
+  if (!count(out.points) || !count(out.faces) || !buffer.Decode(&attribute_data) || !count(symbols) ||
+      !count(out.split_symbols)) {
     return std::nullopt;
   }
+  return out;
+}
+
+}  // namespace
+
+std::optional<DracoCounts> DracoDeclaredCounts(std::string_view head) {
+  const std::optional<HeadCounts> c = ReadHeadCounts(head);
+  if (!c.has_value()) return std::nullopt;
   // Draco refuses more split symbols than symbols; counted anyway, the bound stays an upper one.
-  const int64_t declared_vertices = int64_t{vertices} + new_vertices + split_symbols;
+  return DracoCounts{c->faces, int64_t{c->points} + c->new_vertices + c->split_symbols};
+}
+
+absl::StatusOr<std::optional<DeclaredSizes>> CheckDeclaredEdgebreakerSizes(std::string_view bytes,
+                                                                           int64_t max_vertices) {
+  const std::optional<HeadCounts> c = ReadHeadCounts(bytes);
+  if (!c.has_value() || !c->edgebreaker) return std::nullopt;
+  const int64_t faces = c->faces;
+  const int64_t declared_vertices = int64_t{c->points} + c->new_vertices + c->split_symbols;
   if (faces > 4 * max_vertices || declared_vertices > 2 * max_vertices) {
     return absl::ResourceExhaustedError(absl::StrCat("the Draco data declares ", faces, " faces and ",
                                                      declared_vertices, " vertices (Edgebreaker); with a limit of ",

@@ -16,6 +16,7 @@
 #include <cstdint>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <variant>
@@ -104,6 +105,17 @@ absl::StatusOr<std::unique_ptr<draco::Mesh>> DecodeDracoMesh(std::string_view by
 
 // Vertices a Draco mesh may have: an int32 holds every index.
 inline constexpr int64_t kMaxDracoVertices = std::numeric_limits<int32_t>::max();
+
+// The faces and points Draco mesh bytes declare at their head, before any data: what a server
+// sizes a job by from the first chunk of its upload. Sequential data declares exactly its faces
+// and points; Edgebreaker data an upper bound of its points (with its split symbols). nullopt
+// when `head` does not yet hold them (or is not a Draco mesh: the decoder says what is wrong).
+// Nothing is checked here: the counts are what the bytes say, the decoder checks them.
+struct DracoCounts {
+  int64_t faces = 0;
+  int64_t points = 0;
+};
+std::optional<DracoCounts> DracoDeclaredCounts(std::string_view head);
 
 // Per-vertex values stored as a one-component Draco GENERIC attribute, named by the attribute
 // metadata entry "name" (how Draco files label generic data).

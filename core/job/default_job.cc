@@ -75,6 +75,36 @@ int64_t MoveOutliersBack(Mesh& mesh, const Topology& topo, const FlowParams& p, 
   return outliers;
 }
 
+// Positions kept aside through a run: as float32 when every coordinate is one (a job's mesh is
+// the upload's float32 points), 12 bytes a vertex instead of 24; else as they are. Given back
+// exactly either way.
+class KeptPositions {
+ public:
+  explicit KeptPositions(const std::vector<Vec3>& p) {
+    const bool floats = std::all_of(p.begin(), p.end(), [](const Vec3& v) { return RoundToFloat(v) == v; });
+    if (!floats) {
+      doubles_ = p;
+      return;
+    }
+    floats_.resize(3 * p.size());
+    for (size_t i = 0; i < p.size(); ++i) {
+      floats_[3 * i] = static_cast<float>(p[i].x);
+      floats_[3 * i + 1] = static_cast<float>(p[i].y);
+      floats_[3 * i + 2] = static_cast<float>(p[i].z);
+    }
+  }
+  std::vector<Vec3> Get() const {
+    if (floats_.empty()) return doubles_;
+    std::vector<Vec3> p(floats_.size() / 3);
+    for (size_t i = 0; i < p.size(); ++i) p[i] = Vec3{floats_[3 * i], floats_[3 * i + 1], floats_[3 * i + 2]};
+    return p;
+  }
+
+ private:
+  std::vector<float> floats_;
+  std::vector<Vec3> doubles_;
+};
+
 // `centre`: the bound's centres, the job's input unless the caller gave them (null without a
 // bound).
 absl::StatusOr<FlowResult> SmoothAutomatic(Mesh& mesh, const Topology& topo, const FlowParams& p,
@@ -90,14 +120,15 @@ absl::StatusOr<FlowResult> SmoothAutomatic(Mesh& mesh, const Topology& topo, con
   if (absl::Status s = control.stop.Check(); !s.ok()) return s;
   // The runs start from the outliers' new places; the bound stays centred on the input.
   if (outliers > 0 && centre != nullptr) q.bound_centre = *centre;
-  // 3. The input is kept only where step 4 may take over (24 bytes a vertex).
+  // 3. The input is kept only where step 4 may take over (12 or 24 bytes a vertex: KeptPositions).
   const bool visible = TurnsFacesVisibly(noise, policy);
-  const std::vector<Vec3> input = visible ? mesh.positions : std::vector<Vec3>{};
+  const KeptPositions kept(visible ? mesh.positions : std::vector<Vec3>{});
   absl::StatusOr<FlowResult> result = SmoothByRisk(mesh, topo, q, control, h, noise, policy, outliers > 0);
   if (!result.ok()) return result;
   // 4. On the faces a run can turn (TurnableShare).
   const bool ran = result->iterations_run > 0 || result->stop_reason == StopReason::kNoGain;
   if (ran && visible) {
+    const std::vector<Vec3> input = kept.Get();
     const double share = TurnableShare(mesh, topo, q);
     const double turned = NormalTurn(input.data(), mesh.triangles, topo).Of(mesh.positions.data());
     if (turned < policy.risk_turn_share * share * noise.normal_turn) {

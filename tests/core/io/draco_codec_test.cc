@@ -3,7 +3,9 @@
 #include <cmath>
 #include <cstring>
 #include <memory>
+#include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "absl/strings/str_cat.h"
@@ -107,6 +109,39 @@ TEST(DracoCodecTest, EdgebreakerLosslessKeepsTheVertexSet) {
   std::sort(a.begin(), a.end());
   std::sort(b.begin(), b.end());
   EXPECT_EQ(a, b);
+}
+
+// What a server sizes a job by from the first chunk of its upload: the counts at the head of the
+// bytes, for both methods, after a metadata block, and nothing from a head too short to hold them.
+TEST(DracoCodecTest, DeclaredCountsAreReadFromTheHead) {
+  Mesh m = FloatNoisySphere(4);
+  const int64_t vertices = m.num_vertices(), faces = static_cast<int64_t>(m.triangles.size());
+  for (const DracoMethod method : {DracoMethod::kSequential, DracoMethod::kEdgebreaker}) {
+    SCOPED_TRACE(method == DracoMethod::kSequential ? "sequential" : "edgebreaker");
+    DracoOptions o;
+    o.method = method;
+    absl::StatusOr<std::string> bytes = EncodeDraco(m, o);
+    ASSERT_TRUE(bytes.ok()) << bytes.status();
+    const std::optional<DracoCounts> counts = DracoDeclaredCounts(std::string_view(*bytes).substr(0, 64));
+    ASSERT_TRUE(counts.has_value());
+    EXPECT_EQ(counts->faces, faces);
+    if (method == DracoMethod::kSequential) {
+      EXPECT_EQ(counts->points, vertices);
+    } else {
+      EXPECT_GE(counts->points, vertices);  // an upper bound
+      EXPECT_LE(counts->points, 2 * vertices);
+    }
+    EXPECT_FALSE(DracoDeclaredCounts(std::string_view(*bytes).substr(0, 11)).has_value());
+  }
+  // A named vertex property: its name travels in the metadata block ahead of the counts.
+  m.properties.push_back({"quality", "float", std::vector<double>(m.positions.size(), 0.5)});
+  absl::StatusOr<std::string> with_metadata = EncodeDraco(m);
+  ASSERT_TRUE(with_metadata.ok()) << with_metadata.status();
+  const std::optional<DracoCounts> counts = DracoDeclaredCounts(*with_metadata);
+  ASSERT_TRUE(counts.has_value());
+  EXPECT_EQ(counts->faces, faces);
+  EXPECT_EQ(counts->points, vertices);
+  EXPECT_FALSE(DracoDeclaredCounts("not Draco bytes at all").has_value());
 }
 
 TEST(DracoCodecTest, BadOptionsAndEmptyInputAreRefused) {
