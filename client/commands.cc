@@ -160,12 +160,13 @@ int RunEnhance(const EnhanceCommand& e) {
   // --detail: the same syntax as --max-displacement (D or Dh).
   absl::StatusOr<DisplacementBoundOption> detail = ParseMaxDisplacement(e.detail);
   if (!detail.ok()) {
-    std::cerr << "meshsmooth: --detail must be a finite number >= 0 in mesh units (0.5) or mean edge lengths (8h), got '"
-              << e.detail << "'\n";
+    std::cerr
+        << "meshsmooth: --detail must be a finite number >= 0 in mesh units (0.5) or mean edge lengths (8h), got '"
+        << e.detail << "'\n";
     return kExitUsage;
   }
-  if (!(e.gain >= 0.0 && e.gain <= kMaxEnhanceGain)) {
-    std::cerr << "meshsmooth: --gain must be in [0, " << kMaxEnhanceGain << "], got " << e.gain << "\n";
+  if (!(e.gain >= 0.0 && e.gain <= MaxEnhanceGain())) {
+    std::cerr << "meshsmooth: --gain must be in [0, " << MaxEnhanceGain() << "], got " << e.gain << "\n";
     return kExitUsage;
   }
   absl::StatusOr<Mesh> mesh = LoadInput(e.input);

@@ -262,11 +262,10 @@ void AddSmoothOptions(CLI::App* smooth, SmoothOptions& so, BatchOptions& batch) 
                        "--flow, fixed"))
       ->capture_default_str()
       ->check(CLI::IsMember({"auto", "fixed", "curve"}));
-  smooth
-      ->add_flag("--implicit{1}", so.implicit_theta,
-                 "implicit steps, stable for any --step (laplacian, bilaplacian, mcf; boundary fixed): one sparse "
-                 "solve per iteration. --implicit = backward Euler (theta 1); --implicit=THETA with THETA in [0.5, "
-                 "1], 0.5 = Crank-Nicolson (second order in the step)");
+  smooth->add_flag("--implicit{1}", so.implicit_theta,
+                   "implicit steps, stable for any --step (laplacian, bilaplacian, mcf; boundary fixed): one sparse "
+                   "solve per iteration. --implicit = backward Euler (theta 1); --implicit=THETA with THETA in [0.5, "
+                   "1], 0.5 = Crank-Nicolson (second order in the step)");
   smooth->add_option("--tolerance", so.tolerance, "stop when the largest move < tolerance x mean edge; 0 = off")
       ->capture_default_str();
   smooth
@@ -461,7 +460,7 @@ int main(int argc, char** argv) {
   enhance->add_option("--detail", ec.detail,
                       absl::StrCat("the detail scale: D in mesh units or Dh in mean edge lengths (e.g. 8h); a wave of "
                                    "that length grows by (1 + gain) / 2; default ",
-                                   meshsmooth::kDefaultDetailScaleH, "h"));
+                                   meshsmooth::EnhanceParams{}.detail_scale_h, "h"));
   enhance->add_flag("--smooth-first", ec.smooth_first,
                     "a noisy input: smooth it with the default job first, then enhance (without: refused, exit 1)");
   AddStrengthOptions(enhance, ec.strength);
@@ -498,11 +497,11 @@ int main(int argc, char** argv) {
   }
   // Still no thread: the huge-page re-exec (base/huge_pages.h) where the input is large enough
   // to repay a second start of the program (a batch's so.input is empty: its files are read later).
-  const std::string& input = smooth->parsed()   ? so.input
-                             : info->parsed()   ? info_input
-                             : ridges->parsed() ? ridges_input
+  const std::string& input = smooth->parsed()    ? so.input
+                             : info->parsed()    ? info_input
+                             : ridges->parsed()  ? ridges_input
                              : enhance->parsed() ? ec.input
-                                                : rc.input;
+                                                 : rc.input;
   if (HugePagesPay(input)) meshsmooth::UseHugePagesForLargeBuffers(argv);
   meshsmooth::ApplyKernelEnvironment();
   if (smooth->parsed()) return batch_mode ? RunBatch(so, sc, batch) : RunSmooth(so, sc);

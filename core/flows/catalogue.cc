@@ -28,23 +28,24 @@ ParameterInfo Step(const FlowRow& row) {
 // The parameters of a flow with an implicit form (HasImplicitForm), after its own.
 std::vector<ParameterInfo> IntegrationParameters() {
   const FlowParams d;
-  return {{"integration",
-           "explicit steps (the paper's), or implicit: one sparse solve per iteration, stable for any step in (0, 1e6], "
-           "boundary fixed, no adaptive threshold",
-           0,
-           0,
-           0,
-           false,
-           false,
-           {"INTEGRATION_EXPLICIT", "INTEGRATION_IMPLICIT"}},
-          {"theta",
-           "implicit steps' weight of the new positions: 1 = backward Euler, 0.5 = Crank-Nicolson (second order)",
-           d.theta,
-           0.5,
-           1.0,
-           false,
-           false,
-           {}}};
+  return {
+      {"integration",
+       "explicit steps (the paper's), or implicit: one sparse solve per iteration, stable for any step in (0, 1e6], "
+       "boundary fixed, no adaptive threshold",
+       0,
+       0,
+       0,
+       false,
+       false,
+       {"INTEGRATION_EXPLICIT", "INTEGRATION_IMPLICIT"}},
+      {"theta",
+       "implicit steps' weight of the new positions: 1 = backward Euler, 0.5 = Crank-Nicolson (second order)",
+       d.theta,
+       0.5,
+       1.0,
+       false,
+       false,
+       {}}};
 }
 
 }  // namespace

@@ -216,8 +216,8 @@ class FlowRun {
   // else OK.
   absl::Status CheckDivergence(int it, const BlockStats& total, const Progress& progress) {
     if (!solve_status_.ok()) {
-      return absl::Status(solve_status_.code(), absl::StrFormat("%s, implicit iteration %d: %s", row_.name, it,
-                                                                solve_status_.message()));
+      return absl::Status(solve_status_.code(),
+                          absl::StrFormat("%s, implicit iteration %d: %s", row_.name, it, solve_status_.message()));
     }
     const double capped_share = movable_ > 0 ? static_cast<double>(total.capped) / static_cast<double>(movable_) : 0.0;
     capped_run_ = capped_share > kCappedSharePersistent ? capped_run_ + 1 : 0;
@@ -236,8 +236,7 @@ class FlowRun {
   // An implicit iteration (implicit.h): one solve, the strength inside it, then the bound. `next`
   // holds the positions before `cur` from the second iteration on (the driver's swap): CG starts
   // from that move.
-  BlockStats ImplicitIteration(int it, const std::vector<Vec3>& cur, std::vector<Vec3>& next,
-                               std::vector<Vec3>*& out) {
+  BlockStats ImplicitIteration(int it, const std::vector<Vec3>& cur, std::vector<Vec3>& next, std::vector<Vec3>*& out) {
     out = &next;
     solve_status_ = implicit_->Step(cur.data(), next.data(), it > 1);
     if (!solve_status_.ok()) return {};

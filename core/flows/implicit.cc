@@ -12,9 +12,7 @@
 
 namespace meshsmooth {
 
-bool HasImplicitForm(FlowId id) {
-  return id == FlowId::kLaplacian || id == FlowId::kBilaplacian || id == FlowId::kMcf;
-}
+bool HasImplicitForm(FlowId id) { return id == FlowId::kLaplacian || id == FlowId::kBilaplacian || id == FlowId::kMcf; }
 
 namespace flows {
 namespace {
@@ -64,8 +62,8 @@ double CotangentRing(const int32_t* offsets, const int32_t* ring, const Vec3* po
     const double inv = ok ? 1.0 / dbl_area : 0.0;
     const double cot_a = std::clamp(dot_a * inv, -kCotMax, kCotMax);
     const double cot_q = std::clamp(dot_q * inv, -kCotMax, kCotMax);
-    w[k] += cot_a;                             // edge P-Q_k, angle at Q_{k-1}
-    w[k == 0 ? count - 1 : k - 1] += cot_q;    // edge P-Q_{k-1}, angle at Q_k
+    w[k] += cot_a;                           // edge P-Q_k, angle at Q_{k-1}
+    w[k == 0 ? count - 1 : k - 1] += cot_q;  // edge P-Q_{k-1}, angle at Q_k
     const double voronoi = (lq * cot_a + la * cot_q) * 0.125;
     const double part = dbl_area * (dot_p < 0.0 ? 0.25 : 0.125);
     const double least = std::min(dot_p, std::min(dot_a, dot_q));
@@ -95,7 +93,7 @@ class ImplicitStepper::Impl {
     int32_t movable = 0;
     for (int32_t v = 0; v < n_; ++v) movable += role_[v] == kFree;
     solver_ = p.implicit_solver != ImplicitSolver::kAuto ? p.implicit_solver
-              : movable <= kMaxDirectVertices               ? ImplicitSolver::kDirect
+              : movable <= kMaxDirectVertices            ? ImplicitSolver::kDirect
                                                          : ImplicitSolver::kCg;
     active_.assign(n_, 0);
     m_.assign(n_, 0.0);
@@ -421,11 +419,11 @@ class ImplicitStepper::Impl {
   ImplicitSolver solver_ = ImplicitSolver::kDirect;
   int steps_ = 0;
   int cg_iterations_ = 0;
-  std::vector<uint8_t> active_;  // free, with M > 0
-  std::vector<double> m_;        // M per vertex
-  std::vector<double> w_;        // per ring entry (U1, mcf); empty: 1
+  std::vector<uint8_t> active_;   // free, with M > 0
+  std::vector<double> m_;         // M per vertex
+  std::vector<double> w_;         // per ring entry (U1, mcf); empty: 1
   std::vector<int32_t> reverse_;  // mcf: the entry of the same edge in the neighbour's ring, or -1
-  std::vector<double> diag_;     // the system's diagonal (1 where inactive)
+  std::vector<double> diag_;      // the system's diagonal (1 where inactive)
   std::vector<Vec3> r_, p_, q_, u_;
   std::vector<Vec3> partial_;  // SumBlocks' per-block sums
   // The direct solver's rows: free vertices in order.

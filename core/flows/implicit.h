@@ -1,5 +1,6 @@
-// Internal to core/flows and shape enhancement (core/job/enhance.cc): the implicit step of the flows that have one (HasImplicitForm,
-// FlowParams::integration; docs/paper.md, "Implicit steps"). Each of them moves a free vertex by a speed
+// Internal to core/flows and shape enhancement (core/job/enhance.cc): the implicit step of the flows that have one
+// (HasImplicitForm, FlowParams::integration; docs/paper.md, "Implicit steps"). Each of them moves a free vertex by a
+// speed
 // -(K P)_i / M_i, with K a symmetric positive semi-definite operator and M a positive diagonal:
 //
 //   laplacian U0:  K = L (the ring's graph Laplacian),              M = valence

@@ -40,8 +40,8 @@ absl::Status ValidateIntegration(const FlowParams& p, const FlowRow& row) {
                                                    "(U0 or U1), bilaplacian and mcf"));
   }
   if (!(p.theta >= 0.5 && p.theta <= 1.0)) {
-    return absl::InvalidArgumentError(absl::StrFormat(
-        "theta must be in [0.5, 1] (1 = backward Euler, 0.5 = Crank-Nicolson), got %g", p.theta));
+    return absl::InvalidArgumentError(
+        absl::StrFormat("theta must be in [0.5, 1] (1 = backward Euler, 0.5 = Crank-Nicolson), got %g", p.theta));
   }
   if (p.adaptive != AdaptiveMode::kNone) {
     return absl::InvalidArgumentError("implicit integration takes no adaptive threshold (eq. (14) is explicit)");

@@ -16,21 +16,27 @@
 #include "core/measure/metrics.h"
 
 namespace meshsmooth {
+
+double MaxEnhanceGain() { return 100.0; }
+
 namespace {
 
 absl::Status ValidateEnhanceParams(const Mesh& mesh, const EnhanceParams& p) {
-  if (!(p.gain >= 0.0 && p.gain <= kMaxEnhanceGain)) {
-    return absl::InvalidArgumentError(absl::StrFormat(
-        "the gain must be in [0, %g] (> 1 sharpens, 1 leaves the mesh, < 1 smooths), got %g", kMaxEnhanceGain, p.gain));
+  if (!(p.gain >= 0.0 && p.gain <= MaxEnhanceGain())) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("the gain must be in [0, %g] (> 1 sharpens, 1 leaves the mesh, < 1 smooths), got %g",
+                        MaxEnhanceGain(), p.gain));
   }
-  if (!(p.detail_scale >= 0.0) || !std::isfinite(p.detail_scale)) {
-    return absl::InvalidArgumentError(absl::StrFormat(
-        "the detail scale must be finite and >= 0 (mesh units; 0 = %g mean edge lengths), got %g",
-        kDefaultDetailScaleH, p.detail_scale));
+  if (!(p.detail_scale >= 0.0) || !std::isfinite(p.detail_scale) || !(p.detail_scale_h > 0.0) ||
+      !std::isfinite(p.detail_scale_h)) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("the detail scale must be finite and >= 0 (mesh units; 0 = %g mean edge lengths), got %g",
+                        p.detail_scale_h, p.detail_scale));
   }
   const int32_t n = mesh.num_vertices();
   if (!p.locked.empty() && p.locked.size() != static_cast<size_t>(n)) {
-    return absl::InvalidArgumentError(absl::StrCat("the lock mask has ", p.locked.size(), " entries for ", n, " vertices"));
+    return absl::InvalidArgumentError(
+        absl::StrCat("the lock mask has ", p.locked.size(), " entries for ", n, " vertices"));
   }
   if (absl::Status s = ValidateStrength(p.strength, n); !s.ok()) return s;
   for (const Vec3& q : mesh.positions) {
@@ -69,7 +75,7 @@ absl::StatusOr<EnhanceResult> Enhance(Mesh& mesh, const Topology& topo, const En
     return absl::InvalidArgumentError("the mesh has no edge of non-zero length to enhance");
   }
   result.mean_edge_length = h;
-  result.detail_scale = p.detail_scale > 0.0 ? p.detail_scale : kDefaultDetailScaleH * h;
+  result.detail_scale = p.detail_scale > 0.0 ? p.detail_scale : p.detail_scale_h * h;
 
   absl::StatusOr<std::optional<std::pair<Mesh, FlowResult>>> smoothed = SmoothIfNoisy(mesh, topo, p, control);
   if (!smoothed.ok()) return smoothed.status();

@@ -26,14 +26,14 @@
 
 namespace meshsmooth {
 
-inline constexpr double kMaxEnhanceGain = 100.0;
-// The detail scale when none is given, in mean edge lengths h of the input.
-inline constexpr double kDefaultDetailScaleH = 8.0;
+// The largest gain Enhance takes (100).
+double MaxEnhanceGain();
 
 struct EnhanceParams {
-  double gain = 2.0;           // [0, kMaxEnhanceGain]: > 1 sharpens, 1 leaves the mesh, < 1 smooths
-  double detail_scale = 0.0;   // d, mesh units; 0 = kDefaultDetailScaleH x h
-  bool smooth_first = false;   // a noisy input: smoothed by the default job first (else refused)
+  double gain = 2.0;            // [0, MaxEnhanceGain()]: > 1 sharpens, 1 leaves the mesh, < 1 smooths
+  double detail_scale = 0.0;    // d, mesh units; 0 = detail_scale_h x h
+  double detail_scale_h = 8.0;  // d in mean edge lengths h of the input when detail_scale is 0
+  bool smooth_first = false;    // a noisy input: smoothed by the default job first (else refused)
   std::vector<uint8_t> locked;  // as FlowParams::locked
   std::vector<float> strength;  // as FlowParams::strength
   ImplicitSolver solver = ImplicitSolver::kAuto;

@@ -134,7 +134,8 @@ TEST(ImplicitTest, DirectAndConjugateGradientsAgree) {
   std::vector<float> strength(noisy.num_vertices());
   for (int32_t v = 0; v < noisy.num_vertices(); ++v) strength[v] = 0.25f + 0.75f * static_cast<float>(v % 4) / 3.0f;
   for (const auto& [flow, weights, step] :
-       {std::tuple{"laplacian", UmbrellaWeights::kUniform, 2.0}, std::tuple{"laplacian", UmbrellaWeights::kInverseDistance, 2.0},
+       {std::tuple{"laplacian", UmbrellaWeights::kUniform, 2.0},
+        std::tuple{"laplacian", UmbrellaWeights::kInverseDistance, 2.0},
         std::tuple{"bilaplacian", UmbrellaWeights::kUniform, 1.0}, std::tuple{"mcf", UmbrellaWeights::kUniform, 1.0}}) {
     SCOPED_TRACE(::testing::Message() << flow << " weights " << static_cast<int>(weights));
     Mesh direct = noisy, cg = noisy;
@@ -224,7 +225,8 @@ TEST(ImplicitTest, SameBitsForAnyThreadCount) {
 TEST(ImplicitTest, LargeStepsAreStable) {
   const Mesh noisy = NoisySphere(4);
   const Topology topo = BuildTopology(noisy);
-  for (const auto& [flow, step] : {std::pair{"laplacian", 1000.0}, std::pair{"bilaplacian", 500.0}, std::pair{"mcf", 100.0}}) {
+  for (const auto& [flow, step] :
+       {std::pair{"laplacian", 1000.0}, std::pair{"bilaplacian", 500.0}, std::pair{"mcf", 100.0}}) {
     SCOPED_TRACE(flow);
     Mesh out = noisy;
     const absl::StatusOr<FlowResult> r = Smooth(out, topo, Implicit(flow, 1, step));
