@@ -262,10 +262,12 @@ void AddSmoothOptions(CLI::App* smooth, SmoothOptions& so, BatchOptions& batch) 
                        "--flow, fixed"))
       ->capture_default_str()
       ->check(CLI::IsMember({"auto", "fixed", "curve"}));
-  smooth->add_flag("--implicit{1}", so.implicit_theta,
-                   "implicit steps, stable for any --step (laplacian, bilaplacian, mcf; boundary fixed): one sparse "
-                   "solve per iteration. --implicit = backward Euler (theta 1); --implicit=THETA with THETA in [0.5, "
-                   "1], 0.5 = Crank-Nicolson (second order in the step)");
+  smooth->add_flag("--implicit", so.implicit,
+                   "implicit steps, stable for any --step up to 1e6 (laplacian, bilaplacian, mcf; boundary fixed): one "
+                   "sparse solve per iteration; backward Euler unless --theta");
+  smooth->add_option("--theta", so.theta,
+                     "with --implicit: the weight of the new positions, 0.5..1: 1 = backward Euler (the default), 0.5 "
+                     "= Crank-Nicolson (second order in the step)");
   smooth->add_option("--tolerance", so.tolerance, "stop when the largest move < tolerance x mean edge; 0 = off")
       ->capture_default_str();
   smooth
