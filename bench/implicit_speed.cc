@@ -5,6 +5,7 @@
 // each solver; every result's RMS distance to the clean surface, its smoothing time, and the
 // smoothing's peak memory per vertex measured in a fresh process. Markdown to stdout, progress
 // to stderr; docs/performance.md ("Implicit steps") is its output.
+#include <malloc.h>
 #include <sys/resource.h>
 
 #include <cmath>
@@ -35,13 +36,16 @@ namespace fs = std::filesystem;
 constexpr char kUsage[] =
     "usage: meshsmooth_implicit_bench [--meshes icosphere,stanford-dragon] [--level 9] [--sigma 0.2]\n"
     "                                 [--seed 1] [--steps 1,2,4] [--solvers cg,direct]\n"
-    "                                 [--cg-tolerances 1e-8,1e-4] [--max-direct 700000] [--shared DIR]\n"
+    "                                 [--cg-tolerances 1e-8,1e-4,1e-2] [--time-scales 1] [--max-direct 700000]\n"
+    "                                 [--shared DIR]\n"
     "Time to the same error, implicit against explicit steps. For each mesh (icosphere: Icosphere(--level),\n"
     "the distance to the clean surface measured to the unit sphere; else a mesh of DIR/data/meshes, measured\n"
     "with the quality benchmark's GroundTruth), Gaussian noise of --sigma h along the normals (seed --seed),\n"
     "then: the default job (explicit, automatic; it chooses flow F and count N); F explicit for N iterations;\n"
-    "F implicit (backward Euler) in k steps of N lambda / k for each k of --steps and each solver (direct only\n"
-    "up to --max-direct vertices; CG at each of --cg-tolerances, its relative residual). Each row: RMS distance to the clean surface (h), smoothing time (s,\n"
+    "F implicit (backward Euler) in k steps of s N lambda / k for each k of --steps and s of --time-scales and each "
+    "solver (direct only\n"
+    "up to --max-direct vertices; CG at each of --cg-tolerances, its relative residual). Each row: RMS distance to the "
+    "clean surface (h), smoothing time (s,\n"
     "in-process, all threads), the ratio to the default job's, and the smoothing's peak memory in a fresh\n"
     "process (the growth of VmHWM over the process holding the mesh and its topology, and the whole\n"
     "process's VmHWM, bytes per vertex).\n";
@@ -53,7 +57,8 @@ struct Options {
   uint64_t seed = 1;
   std::vector<int> steps = {1, 2, 4};
   std::vector<std::string> solvers = {"cg", "direct"};
-  std::vector<double> cg_tolerances = {1e-8, 1e-4};
+  std::vector<double> cg_tolerances = {1e-8, 1e-4, 1e-2};
+  std::vector<double> time_scales = {1.0};
   int32_t max_direct = 700000;
   fs::path shared = fs::path(MESHSMOOTH_SOURCE_DIR) / ".." / "shared";
 };
@@ -113,6 +118,7 @@ int PeakChild(const Options& opt, const std::vector<std::string>& args) {
   Mesh mesh = std::move(in->noisy);
   in->clean = Mesh();
   const Topology topo = BuildTopology(mesh);
+  malloc_trim(0);  // the input's making (the clean mesh, the ground truth) gives its memory back
   { std::ofstream("/proc/self/clear_refs") << "5"; }  // VmHWM back to the resident set
   const double base = StatusKb("VmRSS:") * 1024.0;
   int iterations = 0;
@@ -190,8 +196,8 @@ int RunMesh(const std::string& self, const std::string& name, const Options& opt
   const std::string flow(FlowName(chosen->flow));
   const int count = chosen->iterations_run;
   const double job_rms = in->Rms(job);
-  rows.push_back({absl::StrFormat("default job: %s, %d iterations (explicit, automatic)", flow, count), job_rms,
-                  job_seconds, {}});
+  rows.push_back(
+      {absl::StrFormat("default job: %s, %d iterations (explicit, automatic)", flow, count), job_rms, job_seconds, {}});
 
   const double step = DefaultStep(chosen->flow);
   std::fprintf(stderr, "%s: %s explicit, %d iterations\n", name.c_str(), flow.c_str(), count);
@@ -206,22 +212,25 @@ int RunMesh(const std::string& self, const std::string& name, const Options& opt
 
   for (const std::string& solver : opt.solvers) {
     if (solver == "direct" && n > opt.max_direct) continue;
-    for (double tolerance : solver == "cg" ? opt.cg_tolerances : std::vector<double>{0.0}) {
+    for (double tolerance : solver == "cg" ? opt.cg_tolerances : std::vector<double>{1e-8}) {
       for (int k : opt.steps) {
-        const double big = step * count / k;
-        const std::string what = absl::StrFormat("%s implicit, %s, %d steps of %g", flow,
-                                                 solver == "cg" ? absl::StrFormat("CG to %g", tolerance) : solver, k, big);
-        std::fprintf(stderr, "%s: %s\n", name.c_str(), what.c_str());
-        Mesh im = in->noisy;
-        t0 = Clock::now();
-        const absl::StatusOr<FlowResult> r = Smooth(im, topo, RunParams(flow, k, big, solver, tolerance));
-        const double seconds = Seconds(t0, Clock::now());
-        if (!r.ok()) {
-          std::fprintf(stderr, "  failed: %s\n", r.status().ToString().c_str());
-          continue;
+        for (double scale : opt.time_scales) {
+          const double big = scale * step * count / k;
+          const std::string what =
+              absl::StrFormat("%s implicit, %s, %d steps of %g", flow,
+                              solver == "cg" ? absl::StrFormat("CG to %g", tolerance) : solver, k, big);
+          std::fprintf(stderr, "%s: %s\n", name.c_str(), what.c_str());
+          Mesh im = in->noisy;
+          t0 = Clock::now();
+          const absl::StatusOr<FlowResult> r = Smooth(im, topo, RunParams(flow, k, big, solver, tolerance));
+          const double seconds = Seconds(t0, Clock::now());
+          if (!r.ok()) {
+            std::fprintf(stderr, "  failed: %s\n", r.status().ToString().c_str());
+            continue;
+          }
+          rows.push_back({what, in->Rms(im), seconds, MeasurePeak(self, opt, name, flow, k, big, solver, tolerance)});
+          std::fprintf(stderr, "  RMS %.4f h, %.3f s\n", rows.back().rms, seconds);
         }
-        rows.push_back({what, in->Rms(im), seconds, MeasurePeak(self, opt, name, flow, k, big, solver, tolerance)});
-        std::fprintf(stderr, "  RMS %.4f h, %.3f s\n", rows.back().rms, seconds);
       }
     }
   }
@@ -263,6 +272,9 @@ int Main(int argc, char** argv) {
     } else if (a == "--cg-tolerances") {
       opt.cg_tolerances.clear();
       for (absl::string_view t : absl::StrSplit(v, ',')) opt.cg_tolerances.push_back(std::atof(std::string(t).c_str()));
+    } else if (a == "--time-scales") {
+      opt.time_scales.clear();
+      for (absl::string_view t : absl::StrSplit(v, ',')) opt.time_scales.push_back(std::atof(std::string(t).c_str()));
     } else if (a == "--max-direct") {
       opt.max_direct = std::atoi(v.c_str());
     } else if (a == "--shared") {
