@@ -27,9 +27,11 @@
 
 namespace meshsmooth::flows {
 
-// ImplicitSolver::kAuto factors the system (kDirect) up to this many free vertices and runs
-// conjugate gradients above (docs/performance.md, "Implicit steps", has the measurements).
-inline constexpr int32_t kMaxDirectVertices = 200000;
+// ImplicitSolver::kAuto factors the system (kDirect) up to this many free vertices (the meshes
+// that run on one thread) and runs conjugate gradients above: bilaplacian's factor on the dragon
+// (437,645 vertices) took 22.7 s where CG took 0.4-0.9 s a step (docs/performance.md,
+// "Implicit steps").
+inline constexpr int32_t kMaxDirectVertices = 20000;
 
 // CG fails after this many iterations (it stops at FlowParams::cg_tolerance).
 inline constexpr int kMaxCgIterations = 5000;
