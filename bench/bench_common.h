@@ -34,6 +34,10 @@ struct NamedMesh {
   Mesh mesh;
 };
 
+// The value of /proc/self/status's line starting with `key` ("VmHWM:", "VmRSS:"), in kB; -1 when
+// there is none.
+double StatusKb(const char* key);
+
 // `mesh` as a client uploads it: positions rounded to float32, lossless sequential Draco.
 std::string DracoUpload(Mesh mesh);
 

@@ -14,20 +14,6 @@
 #include "core/topology.h"
 
 namespace meshsmooth::bench {
-namespace {
-
-// The value of /proc/self/status's line starting with `key` (kB), -1 when there is none.
-double StatusKb(const char* key) {
-  std::ifstream in("/proc/self/status");
-  std::string line;
-  while (std::getline(in, line)) {
-    if (line.rfind(key, 0) == 0) return std::atof(line.c_str() + std::strlen(key));
-  }
-  return -1.0;
-}
-
-}  // namespace
-
 int PeakChild(const std::string& draco_path) {
   absl::StatusOr<std::string> bytes = ReadFileBytes(draco_path);
   if (!bytes.ok()) return 1;

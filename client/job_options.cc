@@ -70,6 +70,8 @@ v1::JobSpec SpecFrom(const SmoothOptions& o, bool strength_values) {
   spec.set_tolerance(o.tolerance);
   spec.mutable_output()->set_quantization_bits(o.quantization_bits);
   spec.mutable_output()->set_edgebreaker(o.edgebreaker);
+  if (o.implicit) spec.set_integration(v1::INTEGRATION_IMPLICIT);
+  if (o.theta != 0.0) spec.set_theta(o.theta);  // without --implicit: refused, naming theta
   if (o.ridges) {
     spec.mutable_features()->set_enabled(true);
     spec.mutable_features()->set_min_abs_curvature(o.ridge_threshold);

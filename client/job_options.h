@@ -37,6 +37,8 @@ struct SmoothOptions {
   StrengthOptions strength;  // --weight, --fixed, --region, --outside, --falloff
   // --max-displacement: D (mesh units) or Dh (D mean edge lengths); empty = no bound.
   std::string max_displacement;
+  bool implicit = false;  // --implicit: JobSpec.integration IMPLICIT
+  double theta = 0.0;     // --theta: JobSpec.theta; 0 = unset (backward Euler)
 };
 
 // --max-displacement parsed: the bound and whether it is in mean edge lengths.

@@ -6,6 +6,7 @@
 //   meshsmooth flows [--server TARGET]
 //   meshsmooth info IN
 //   meshsmooth ridges IN -o OUT.ply [--threshold K]      (locally, no smoothing)
+//   meshsmooth enhance IN -o OUT [--gain G] [--detail D|Dh] [--smooth-first]   (locally)
 //   meshsmooth render IN -o OUT.png [--view V] [--size WxH] [--shading flat|gouraud]
 //
 // Without --server, `smooth` and `flows` start the service in-process (the same code as
@@ -45,6 +46,7 @@
 #include "core/flows/flow.h"
 #include "core/io/draco_codec.h"
 #include "core/io/mesh_io.h"
+#include "core/job/enhance.h"
 #include "grpc/support/log.h"
 
 namespace meshsmooth::client {
@@ -261,6 +263,12 @@ void AddSmoothOptions(CLI::App* smooth, SmoothOptions& so, BatchOptions& batch) 
                        "--flow, fixed"))
       ->capture_default_str()
       ->check(CLI::IsMember({"auto", "fixed", "curve"}));
+  smooth->add_flag("--implicit", so.implicit,
+                   "implicit steps, stable for any --step up to 1e6 (laplacian, bilaplacian, mcf; boundary fixed): one "
+                   "sparse solve per iteration; backward Euler unless --theta");
+  smooth->add_option("--theta", so.theta,
+                     "with --implicit: the weight of the new positions, 0.5..1: 1 = backward Euler (the default), 0.5 "
+                     "= Crank-Nicolson (second order in the step)");
   smooth->add_option("--tolerance", so.tolerance, "stop when the largest move < tolerance x mean edge; 0 = off")
       ->capture_default_str();
   smooth
@@ -450,6 +458,23 @@ int main(int argc, char** argv) {
                    "max(|kmax|, |kmin|)), whatever the mesh's units and size")
       ->capture_default_str();
 
+  EnhanceCommand ec;
+  CLI::App* enhance = app.add_subcommand(
+      "enhance",
+      "Sharpen a mesh's detail, locally (screened-Poisson sharpening, one sparse solve): waves along the surface "
+      "shorter than --detail grow by --gain, longer ones stay; boundary fixed, a closed mesh keeps its volume. A "
+      "noisy input is refused (noise is the finest detail) unless --smooth-first");
+  enhance->add_option("input", ec.input, "mesh file or builtin:NAME")->required()->check(KnownInput());
+  enhance->add_option("-o,--output", ec.output, "output mesh file")->required();
+  enhance->add_option("--gain", ec.gain, "> 1 sharpens, 1 leaves the mesh, < 1 smooths; 0..100")->capture_default_str();
+  enhance->add_option("--detail", ec.detail,
+                      absl::StrCat("the detail scale: D in mesh units or Dh in mean edge lengths (e.g. 8h); a wave of "
+                                   "that length grows by (1 + gain) / 2; default ",
+                                   meshsmooth::EnhanceParams{}.detail_scale_h, "h"));
+  enhance->add_flag("--smooth-first", ec.smooth_first,
+                    "a noisy input: smooth it with the default job first, then enhance (without: refused, exit 1)");
+  AddStrengthOptions(enhance, ec.strength);
+
   RenderCommand rc;
   CLI::App* render = app.add_subcommand(
       "render",
@@ -520,10 +545,11 @@ int main(int argc, char** argv) {
   }
   // Still no thread: the huge-page re-exec (base/huge_pages.h) where the input is large enough
   // to repay a second start of the program (a batch's so.input is empty: its files are read later).
-  const std::string& input = smooth->parsed()   ? so.input
-                             : info->parsed()   ? info_input
-                             : ridges->parsed() ? ridges_input
-                                                : rc.input;
+  const std::string& input = smooth->parsed()    ? so.input
+                             : info->parsed()    ? info_input
+                             : ridges->parsed()  ? ridges_input
+                             : enhance->parsed() ? ec.input
+                                                 : rc.input;
   if (HugePagesPay(input)) meshsmooth::UseHugePagesForLargeBuffers(argv);
   meshsmooth::ApplyKernelEnvironment();
   if (smooth->parsed()) return batch_mode ? RunBatch(so, sc, batch) : RunSmooth(so, sc);
@@ -536,6 +562,7 @@ int main(int argc, char** argv) {
   if (jobs->parsed()) return RunJobs(jc, jcc);
   if (info->parsed()) return RunInfo(info_input);
   if (ridges->parsed()) return RunRidges(ridges_input, ridges_output, ridges_threshold);
+  if (enhance->parsed()) return RunEnhance(ec);
   if (render->parsed()) return RunRender(rc);
   return kExitUsage;
 }

@@ -50,7 +50,8 @@ grpc::Status ToGrpc(const absl::Status& s) {
 absl::StatusOr<JobParams> FromProto(const v1::JobSpec& spec, int max_iterations) {
   for (const absl::Status& s : {CheckEnum("weights", spec.weights(), v1::UmbrellaWeights_descriptor()),
                                 CheckEnum("boundary", spec.boundary(), v1::BoundaryMode_descriptor()),
-                                CheckEnum("adaptive.mode", spec.adaptive().mode(), v1::AdaptiveMode_descriptor())}) {
+                                CheckEnum("adaptive.mode", spec.adaptive().mode(), v1::AdaptiveMode_descriptor()),
+                                CheckEnum("integration", spec.integration(), v1::Integration_descriptor())}) {
     if (!s.ok()) return s;
   }
   if (absl::Status s = CheckJobId(spec.job_id()); !s.ok()) return s;
@@ -110,6 +111,12 @@ absl::StatusOr<JobParams> FromProto(const v1::JobSpec& spec, int max_iterations)
   p.tolerance = spec.tolerance();
   p.max_displacement = spec.max_displacement();
   p.max_displacement_h = spec.max_displacement_h();
+  if (spec.integration() == v1::INTEGRATION_IMPLICIT) {
+    p.integration = Integration::kImplicit;
+    if (spec.has_theta()) p.theta = spec.theta();
+  } else if (spec.has_theta()) {
+    return absl::InvalidArgumentError("theta is for integration IMPLICIT only");
+  }
   if (absl::Status s = ValidateFlowParams(p, 0); !s.ok()) return s;
 
   if (spec.output().quantization_bits() > static_cast<uint32_t>(kMaxQuantizationBits)) {
@@ -210,6 +217,10 @@ void ToProto(const JobParams& params, const FlowResult& result, v1::EffectivePar
   }
   out->set_outliers_moved(result.outliers_moved);
   out->set_max_displacement(result.displacement_bound);
+  if (p.integration == Integration::kImplicit) {
+    out->set_integration(v1::INTEGRATION_IMPLICIT);
+    out->set_theta(p.theta);
+  }
   out->set_weights(p.weights == UmbrellaWeights::kInverseDistance ? v1::UMBRELLA_WEIGHTS_INVERSE_DISTANCE
                                                                   : v1::UMBRELLA_WEIGHTS_UNIFORM);
   out->set_boundary(result.boundary == BoundaryMode::kCurve ? v1::BOUNDARY_MODE_CURVE : v1::BOUNDARY_MODE_FIXED);

@@ -25,6 +25,29 @@ ParameterInfo Step(const FlowRow& row) {
       {}};
 }
 
+// The parameters of a flow with an implicit form (HasImplicitForm), after its own.
+std::vector<ParameterInfo> IntegrationParameters() {
+  const FlowParams d;
+  return {
+      {"integration",
+       "explicit steps (the paper's), or implicit: one sparse solve per iteration, stable for any step in (0, 1e6], "
+       "boundary fixed, no adaptive threshold",
+       0,
+       0,
+       0,
+       false,
+       false,
+       {"INTEGRATION_EXPLICIT", "INTEGRATION_IMPLICIT"}},
+      {"theta",
+       "implicit steps' weight of the new positions: 1 = backward Euler, 0.5 = Crank-Nicolson (second order)",
+       d.theta,
+       0.5,
+       1.0,
+       false,
+       false,
+       {}}};
+}
+
 }  // namespace
 
 std::string_view FlowName(FlowId id) { return FlowOf(id).name; }
@@ -62,6 +85,10 @@ std::vector<FlowInfo> DescribeFlows() {
     FlowInfo f{
         std::string(row.name), std::string(row.description), std::string(row.equations), {Step(row)}, row.constraints};
     f.parameters.insert(f.parameters.end(), row.parameters.begin(), row.parameters.end());
+    if (HasImplicitForm(row.id)) {
+      for (ParameterInfo& info : IntegrationParameters()) f.parameters.push_back(std::move(info));
+      f.constraints.emplace_back("with integration IMPLICIT: step in (0, 1e6]");
+    }
     flows.push_back(std::move(f));
   }
   return flows;

@@ -14,6 +14,7 @@
 #include "core/flows/chebyshev.h"
 #include "core/flows/flow_kernel.h"
 #include "core/flows/flow_table.h"
+#include "core/flows/implicit.h"
 #include "core/flows/lane_batches.h"
 #include "core/flows/step_loops.h"
 #include "core/measure/metrics.h"
@@ -108,6 +109,10 @@ class FlowRun {
     t_scale_ = p_.adaptive == AdaptiveMode::kConstant ? (curvature_ ? 1.0 : h_) : (curvature_ ? 1.0 : 0.5 * h_ * h_);
     if (p_.adaptive == AdaptiveMode::kConstant) threshold_.assign(n_, p_.adaptive_threshold * t_scale_);
     stats_.resize(blocks_);
+    if (p_.integration == Integration::kImplicit) {
+      implicit_ = std::make_unique<ImplicitStepper>(topo_, p_, role_.data(),
+                                                    ImplicitWeights{p_.theta * lambda_, -lambda_}, h_, threads_);
+    }
   }
 
   int passes() const { return kernel_->passes(); }
@@ -116,6 +121,7 @@ class FlowRun {
   // last iteration has run: what the run does after it needs only the roles.
   void Release() {
     kernel_.reset();
+    implicit_.reset();
     batches_ = {};
     std::vector<double>().swap(threshold_);
   }
@@ -133,6 +139,7 @@ class FlowRun {
   // umbrella is not covered by the floor).
   std::optional<double> LinearStepFloor() const {
     if (kernel_->passes() != 1 || p_.adaptive != AdaptiveMode::kNone || partial_ || bound_ > 0.0) return std::nullopt;
+    if (implicit_) return std::nullopt;
     if (!std::isinf(ctx_.max_step_sq)) return std::nullopt;
     if (std::any_of(role_.begin(), role_.end(), [](uint8_t r) { return r == kCurve; })) return std::nullopt;
     return kernel_->LinearStepFloor(lambda_);
@@ -165,6 +172,7 @@ class FlowRun {
   // Iteration `it` from `cur` into `*out` (one of next / mid): its displacement statistics.
   BlockStats Iterate(int it, const std::vector<Vec3>& cur, std::vector<Vec3>& next, std::vector<Vec3>& mid,
                      std::vector<Vec3>*& out) {
+    if (implicit_) return ImplicitIteration(it, cur, next, out);
     UpdateRingThresholds(it, cur);
     ctx_.threshold = threshold_.empty() ? nullptr : threshold_.data();
     const Vec3* in = cur.data();
@@ -204,8 +212,13 @@ class FlowRun {
   }
 
   // FailedPrecondition when iteration `it` diverged (a non-finite coordinate, a vertex moved
-  // further than the mesh's size, or too many vertices capped), else OK.
+  // further than the mesh's size, or too many vertices capped) or its implicit solve failed,
+  // else OK.
   absl::Status CheckDivergence(int it, const BlockStats& total, const Progress& progress) {
+    if (!solve_status_.ok()) {
+      return absl::Status(solve_status_.code(),
+                          absl::StrFormat("%s, implicit iteration %d: %s", row_.name, it, solve_status_.message()));
+    }
     const double capped_share = movable_ > 0 ? static_cast<double>(total.capped) / static_cast<double>(movable_) : 0.0;
     capped_run_ = capped_share > kCappedSharePersistent ? capped_run_ + 1 : 0;
     const bool too_many_capped = capped_share > kCappedShareAtOnce || capped_run_ >= kCappedPersistentIterations;
@@ -220,6 +233,22 @@ class FlowRun {
   }
 
  private:
+  // An implicit iteration (implicit.h): one solve, the strength inside it, then the bound. `next`
+  // holds the positions before `cur` from the second iteration on (the driver's swap): CG starts
+  // from that move.
+  BlockStats ImplicitIteration(int it, const std::vector<Vec3>& cur, std::vector<Vec3>& next, std::vector<Vec3>*& out) {
+    out = &next;
+    solve_status_ = implicit_->Step(cur.data(), next.data(), it > 1);
+    if (!solve_status_.ok()) return {};
+    if (bound_ > 0.0) {
+      ForBlocks(n_, threads_, [&](int32_t, int32_t begin, int32_t end) {
+        KeepWithinBound(centre_, bound_, next.data(), begin, end, role_.data());
+      });
+    }
+    MeasureWholeIteration(cur.data(), next.data());
+    return Reduce(stats_);
+  }
+
   // Free (interior), curve (boundary in BoundaryMode::kCurve) or fixed, and which blocks are
   // all free.
   void AssignRoles() {
@@ -312,6 +341,8 @@ class FlowRun {
   bool curvature_ = false;
   double step_ = 0.0, lambda_ = 0.0, curve_step_ = 0.0, t_scale_ = 1.0;
   std::unique_ptr<FlowKernel> kernel_;
+  std::unique_ptr<ImplicitStepper> implicit_;  // FlowParams::integration kImplicit
+  absl::Status solve_status_;                  // of the last implicit iteration
   std::vector<uint8_t> role_, all_free_;
   int64_t movable_ = 0;
   bool partial_ = false;          // some movable vertex has a strength below 1 (ScaleMoves)

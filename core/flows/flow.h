@@ -4,7 +4,10 @@
 // silent.
 //
 // Every flow is an explicit Jacobi iteration: each iteration reads the old positions and
-// writes new ones, so the result is bit-identical whatever the number of threads.
+// writes new ones, so the result is bit-identical whatever the number of threads. laplacian,
+// bilaplacian and mcf can also step implicitly (FlowParams::integration, core/flows/implicit.h):
+// one sparse linear solve per iteration, stable for any step, also bit-identical for any number
+// of threads.
 //
 // The front door is one rule: FlowParams{} (no flow, automatic iterations, no step) is the
 // default job, the same as an empty JobSpec and `meshsmooth smooth IN -o OUT` (see
@@ -78,6 +81,28 @@ struct NormalFilterParams {
   double sigma_range = 0.35;  // (0, 2]
 };
 
+// How a run steps in time (FlowParams::integration; docs/paper.md, "Implicit steps").
+enum class Integration {
+  kExplicit,  // the paper's forward-Euler Jacobi iteration. The default.
+  // One linear solve per iteration: (M/s + theta lambda K) d = -lambda K P, P <- P + d, with K
+  // the flow's symmetric operator, M its diagonal and s the vertex's strength (flows that
+  // HasImplicitForm). Stable for any step; theta 1 is backward Euler, 0.5 Crank-Nicolson.
+  kImplicit,
+};
+
+// The linear solver of an implicit run (FlowParams::implicit_solver).
+enum class ImplicitSolver {
+  kAuto,    // kDirect up to kMaxDirectVertices free vertices, kCg above (docs/paper.md, "Implicit steps")
+  kDirect,  // sparse LDL^T (Eigen's SimplicialLDLT), factored once where the matrix is constant
+  kCg,      // Jacobi-preconditioned conjugate gradients, warm-started from the last step's move
+};
+
+// True for the flows with an implicit step (laplacian U0/U1, bilaplacian, mcf).
+bool HasImplicitForm(FlowId id);
+
+// An implicit step may be this large (the flow's units: dimensionless or relative to h^2).
+inline constexpr double kMaxImplicitStep = 1e6;
+
 inline constexpr int kMaxIterations = 100000;
 inline constexpr int kAutoIterations = 0;
 // Automatic stopping runs at most this many iterations (or the server's limit, if lower).
@@ -147,6 +172,19 @@ struct FlowParams {
   // Stop early when the largest displacement of an iteration falls below tolerance * h
   // (0 = run every iteration).
   double tolerance = 0.0;
+
+  // Explicit (the default) or implicit steps (Integration). An implicit run takes any step in
+  // (0, kMaxImplicitStep], fixed boundaries (kFixed or kAuto), no adaptive threshold, and a flow
+  // that HasImplicitForm; a job that chooses its flow (no flow, automatic iterations, no step)
+  // cannot be implicit.
+  Integration integration = Integration::kExplicit;
+  // Implicit: the weight of the new positions, in [0.5, 1]: 1 = backward Euler (first order,
+  // damps every frequency), 0.5 = Crank-Nicolson (second order in the step).
+  double theta = 1.0;
+  ImplicitSolver implicit_solver = ImplicitSolver::kAuto;
+  // Implicit, kCg: stop once every coordinate's residual is below this share of its right-hand
+  // side, in (0, 0.1] (the bound on the move's error grows with the system's condition number).
+  double cg_tolerance = 1e-8;
 
   int threads = 0;  // worker threads for the per-vertex loops; 0 = all hardware threads
   // Large meshes whose own vertex order leaves neighbours far apart in memory run on a

@@ -23,6 +23,43 @@ namespace {
 // the order it runs in.
 constexpr int kTypicalAutoIterations = 20;
 
+// FlowParams::integration, theta and implicit_solver for the flow of `row`.
+absl::Status ValidateIntegration(const FlowParams& p, const FlowRow& row) {
+  if (p.integration != Integration::kExplicit && p.integration != Integration::kImplicit) {
+    return absl::InvalidArgumentError(absl::StrCat("unknown integration ", static_cast<int>(p.integration)));
+  }
+  if (p.integration == Integration::kExplicit) return absl::OkStatus();
+  if (!p.flow.has_value() && p.iterations == kAutoIterations && !p.step.has_value()) {
+    return absl::InvalidArgumentError(
+        "implicit integration needs a flow (laplacian, bilaplacian or mcf), an iteration count or a step: a job "
+        "that names none chooses its flow among explicit candidates");
+  }
+  if (!HasImplicitForm(row.id)) {
+    return absl::InvalidArgumentError(absl::StrCat("flow ", std::string(row.name),
+                                                   " has no implicit form; implicit integration is for laplacian "
+                                                   "(U0 or U1), bilaplacian and mcf"));
+  }
+  if (!(p.theta >= 0.5 && p.theta <= 1.0)) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("theta must be in [0.5, 1] (1 = backward Euler, 0.5 = Crank-Nicolson), got %g", p.theta));
+  }
+  if (p.adaptive != AdaptiveMode::kNone) {
+    return absl::InvalidArgumentError("implicit integration takes no adaptive threshold (eq. (14) is explicit)");
+  }
+  if (p.boundary == BoundaryMode::kCurve) {
+    return absl::InvalidArgumentError("implicit integration keeps the boundary fixed; boundary curve is explicit only");
+  }
+  if (!(p.cg_tolerance > 0.0 && p.cg_tolerance <= 0.1)) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("the implicit solve's CG tolerance must be in (0, 0.1], got %g", p.cg_tolerance));
+  }
+  if (p.implicit_solver != ImplicitSolver::kAuto && p.implicit_solver != ImplicitSolver::kDirect &&
+      p.implicit_solver != ImplicitSolver::kCg) {
+    return absl::InvalidArgumentError(absl::StrCat("unknown implicit solver ", static_cast<int>(p.implicit_solver)));
+  }
+  return absl::OkStatus();
+}
+
 }  // namespace
 
 std::string_view StopReasonName(StopReason reason) {
@@ -96,11 +133,14 @@ absl::Status ValidateFlowParams(const FlowParams& p, int32_t num_vertices) {
     return absl::InvalidArgumentError(
         absl::StrCat("the automatic iteration limit must be >= 1, got ", p.max_auto_iterations));
   }
+  if (absl::Status s = ValidateIntegration(p, row); !s.ok()) return s;
+  const bool implicit = p.integration == Integration::kImplicit;
   const double step = p.step.value_or(row.default_step);
-  if (!(step > 0.0) || !(step <= row.max_step)) {
+  const double max_step = implicit ? kMaxImplicitStep : row.max_step;
+  if (!(step > 0.0) || !(step <= max_step)) {
     return absl::InvalidArgumentError(
-        absl::StrFormat("step must be in (0, %g] for %s, got %g%s", row.max_step, row.name, step,
-                        row.kind == FlowKind::kCurvature ? " (relative to the squared mean edge length)" : ""));
+        absl::StrFormat("step must be in (0, %g] for %s%s, got %g%s", max_step, implicit ? "implicit " : "", row.name,
+                        step, row.kind == FlowKind::kCurvature ? " (relative to the squared mean edge length)" : ""));
   }
   if (row.validate != nullptr) {
     if (absl::Status s = row.validate(p, step); !s.ok()) return s;

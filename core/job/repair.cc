@@ -159,7 +159,8 @@ double EnclosedVolume(const Vec3* pos, const Topology& topo, int threads) {
   return total / 18.0;
 }
 
-void RestoreVolume(Vec3* pos, const Topology& topo, const uint8_t* role, double h, int threads, double volume) {
+void RestoreVolume(Vec3* pos, const Topology& topo, const uint8_t* role, double h, int threads, double volume,
+                   double max_offset_h) {
   const int32_t n = topo.num_vertices();
   std::vector<Vec3> unit(n);
   std::vector<double> block_rate((n + kBlock - 1) / kBlock, 0.0);
@@ -185,7 +186,7 @@ void RestoreVolume(Vec3* pos, const Topology& topo, const uint8_t* role, double 
     if (!(rate > 0.0) || !std::isfinite(gap)) return;
     const double d = gap / rate;
     // A correction of more than a mean edge length is not a flow's shrinkage: leave it.
-    if (!(std::abs(d) <= h)) return;
+    if (!(std::abs(d) <= max_offset_h * h)) return;
     for (int32_t v = 0; v < n; ++v) pos[v] += unit[v] * d;
   }
 }

@@ -91,8 +91,10 @@ class FoldRepair {
 double EnclosedVolume(const Vec3* pos, const Topology& topo, int threads);
 
 // Moves the free interior vertices of `pos` (roles `role`) along their normals by the common
-// distance that gives a closed mesh back `volume`; leaves it when that is more than h.
-void RestoreVolume(Vec3* pos, const Topology& topo, const uint8_t* role, double h, int threads, double volume);
+// distance that gives a closed mesh back `volume`; leaves it when that is more than
+// max_offset_h x h (a flow's shrinkage is less than h; enhancement's growth may be more).
+void RestoreVolume(Vec3* pos, const Topology& topo, const uint8_t* role, double h, int threads, double volume,
+                   double max_offset_h = 1.0);
 
 // The area of the usable faces of `mesh` at positions `pos`: noise adds area, and a run that
 // removes noise takes it away. The job does not take a run that leaves its input more area.

@@ -1,0 +1,127 @@
+#include "core/job/enhance.h"
+
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <utility>
+#include <vector>
+
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+#include "core/flows/catalogue.h"
+#include "core/flows/driver.h"
+#include "core/flows/flow_kernel.h"
+#include "core/flows/implicit.h"
+#include "core/job/repair.h"
+#include "core/measure/metrics.h"
+
+namespace meshsmooth {
+
+double MaxEnhanceGain() { return 100.0; }
+
+namespace {
+
+absl::Status ValidateEnhanceParams(const Mesh& mesh, const EnhanceParams& p) {
+  if (!(p.gain >= 0.0 && p.gain <= MaxEnhanceGain())) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("the gain must be in [0, %g] (> 1 sharpens, 1 leaves the mesh, < 1 smooths), got %g",
+                        MaxEnhanceGain(), p.gain));
+  }
+  if (!(p.detail_scale >= 0.0) || !std::isfinite(p.detail_scale) || !(p.detail_scale_h > 0.0) ||
+      !std::isfinite(p.detail_scale_h)) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("the detail scale must be finite and >= 0 (mesh units; 0 = %g mean edge lengths), got %g",
+                        p.detail_scale_h, p.detail_scale));
+  }
+  const int32_t n = mesh.num_vertices();
+  if (!p.locked.empty() && p.locked.size() != static_cast<size_t>(n)) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("the lock mask has ", p.locked.size(), " entries for ", n, " vertices"));
+  }
+  if (absl::Status s = ValidateStrength(p.strength, n); !s.ok()) return s;
+  for (const Vec3& q : mesh.positions) {
+    if (!IsFinite(q)) return absl::InvalidArgumentError("the mesh has vertices with NaN or infinite coordinates");
+  }
+  return absl::OkStatus();
+}
+
+// The default job on a copy of `mesh`: its result when it smoothed (the input is noisy), else
+// nothing.
+absl::StatusOr<std::optional<std::pair<Mesh, FlowResult>>> SmoothIfNoisy(const Mesh& mesh, const Topology& topo,
+                                                                         const EnhanceParams& p,
+                                                                         const RunControl& control) {
+  FlowParams job;
+  job.locked = p.locked;
+  job.strength = p.strength;
+  job.threads = p.threads;
+  Mesh copy = mesh;
+  absl::StatusOr<FlowResult> r = Smooth(copy, topo, job, control);
+  if (!r.ok()) return r.status();
+  if (r->iterations_run == 0) return std::nullopt;  // no noise, no estimate, or no gain from smoothing
+  return std::make_optional(std::pair{std::move(copy), *std::move(r)});
+}
+
+}  // namespace
+
+absl::StatusOr<EnhanceResult> Enhance(Mesh& mesh, const Topology& topo, const EnhanceParams& p,
+                                      const RunControl& control) {
+  if (absl::Status s = ValidateEnhanceParams(mesh, p); !s.ok()) return s;
+  if (topo.num_vertices() != mesh.num_vertices()) {
+    return absl::InvalidArgumentError("the topology was built for another mesh");
+  }
+  EnhanceResult result;
+  const double h = MeanEdgeLength(mesh, topo);
+  if (!(h > 0.0) || !std::isfinite(h)) {
+    return absl::InvalidArgumentError("the mesh has no edge of non-zero length to enhance");
+  }
+  result.mean_edge_length = h;
+  result.detail_scale = p.detail_scale > 0.0 ? p.detail_scale : p.detail_scale_h * h;
+
+  absl::StatusOr<std::optional<std::pair<Mesh, FlowResult>>> smoothed = SmoothIfNoisy(mesh, topo, p, control);
+  if (!smoothed.ok()) return smoothed.status();
+  if (smoothed->has_value()) {
+    const FlowResult& run = (*smoothed)->second;
+    if (!p.smooth_first) {
+      return absl::FailedPreconditionError(absl::StrFormat(
+          "the input is noisy (estimated noise %.3g mean edge lengths: the default job would smooth it with %d "
+          "iterations of %s); enhancing would amplify the noise most. Smooth it first (meshsmooth smooth, or "
+          "--smooth-first)",
+          run.auto_stop ? run.auto_stop->noise_sigma_h : 0.0, run.iterations_run, FlowName(run.flow)));
+    }
+    mesh.positions = std::move((*smoothed)->first.positions);
+    result.smoothing = run;
+  }
+
+  const int32_t n = mesh.num_vertices();
+  std::vector<uint8_t> role(n, flows::kFixed);
+  bool closed = true;
+  for (int32_t v = 0; v < n; ++v) {
+    closed &= topo.kind[v] == VertexKind::kInterior || topo.kind[v] == VertexKind::kIsolated;
+    if (topo.kind[v] != VertexKind::kInterior) continue;
+    if (!p.locked.empty() && p.locked[v] != 0) continue;
+    if (!p.strength.empty() && p.strength[v] == 0.0f) continue;
+    role[v] = flows::kFree;
+  }
+  FlowParams system;
+  system.flow = FlowId::kMcf;
+  system.strength = p.strength;
+  system.implicit_solver = p.solver;
+  system.cg_tolerance = 1e-10;
+  const double alpha = 2.0 * std::numbers::pi * std::numbers::pi / (result.detail_scale * result.detail_scale);
+  FlowParams thread_params;
+  thread_params.threads = p.threads;
+  const int threads = flows::ThreadsFor(n, thread_params);
+  const double volume = closed ? job::EnclosedVolume(mesh.positions.data(), topo, threads) : 0.0;
+  flows::ImplicitStepper stepper(topo, system, role.data(), {1.0 / alpha, (p.gain - 1.0) / alpha}, h, threads);
+  std::vector<Vec3> enhanced(n);
+  if (absl::Status s = stepper.Step(mesh.positions.data(), enhanced.data(), false); !s.ok()) return s;
+  // Three Newton steps a call: a gain that grows the shape by a good share of its size takes a
+  // few calls (the volume is cubic in the offset).
+  for (int call = 0; closed && call < 4; ++call) {
+    job::RestoreVolume(enhanced.data(), topo, role.data(), h, threads, volume, std::numeric_limits<double>::infinity());
+  }
+  mesh.positions = std::move(enhanced);
+  return result;
+}
+
+}  // namespace meshsmooth

@@ -1,0 +1,57 @@
+// Shape enhancement: screened-Poisson sharpening (Chuang and Kazhdan 2011) with the cotangent
+// operator. With K the cotangent Laplacian and M the mixed Voronoi areas (core/flows/implicit.h),
+// the enhanced positions G solve
+//
+//   (alpha M + K) G = alpha M F + gain K F,     alpha = 2 pi^2 / d^2,
+//
+// F the input, d the detail scale: a wave of wavelength w along the surface is multiplied by
+// (1 + gain (d/w)^2) / (1 + (d/w)^2): by about `gain` below d, (1 + gain) / 2 at d, and not at all
+// far above it. One sparse solve (symmetric positive definite for any gain >= 0: stable for every
+// gain), the boundary and vertices of strength 0 fixed, a strength between scaling the move. A
+// closed mesh then gets its volume back along its normals (a convex shape's own curvature is
+// detail too, and would grow with it). Noise is the finest detail and would grow most: a noisy
+// input is refused, or smoothed first by the default job (EnhanceParams::smooth_first).
+// docs/decisions.md ("Shape enhancement: a subcommand") says why this is `meshsmooth enhance`
+// and not a flow.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "absl/status/statusor.h"
+#include "core/flows/flow.h"
+#include "core/mesh.h"
+#include "core/topology.h"
+
+namespace meshsmooth {
+
+// The largest gain Enhance takes (100).
+double MaxEnhanceGain();
+
+struct EnhanceParams {
+  double gain = 2.0;            // [0, MaxEnhanceGain()]: > 1 sharpens, 1 leaves the mesh, < 1 smooths
+  double detail_scale = 0.0;    // d, mesh units; 0 = detail_scale_h x h
+  double detail_scale_h = 8.0;  // d in mean edge lengths h of the input when detail_scale is 0
+  bool smooth_first = false;    // a noisy input: smoothed by the default job first (else refused)
+  std::vector<uint8_t> locked;  // as FlowParams::locked
+  std::vector<float> strength;  // as FlowParams::strength
+  ImplicitSolver solver = ImplicitSolver::kAuto;
+  int threads = 0;  // 0 = all hardware threads
+};
+
+struct EnhanceResult {
+  double mean_edge_length = 0.0;  // h of the input
+  double detail_scale = 0.0;      // d applied, mesh units
+  // The default job's run when the input was noisy and EnhanceParams::smooth_first; else unset.
+  std::optional<FlowResult> smoothing;
+};
+
+// Enhances `mesh` in place (connectivity unchanged). InvalidArgument for a gain or detail scale
+// out of range, a bad strength or lock mask, non-finite coordinates; FailedPrecondition when the
+// input is noisy (the default job would smooth it: its estimated noise is named) and
+// smooth_first is not set, or when the solve fails.
+absl::StatusOr<EnhanceResult> Enhance(Mesh& mesh, const Topology& topo, const EnhanceParams& p,
+                                      const RunControl& control = {});
+
+}  // namespace meshsmooth

@@ -1,0 +1,154 @@
+// Shape enhancement (core/job/enhance.h): a degree-8 spherical-harmonic bump on a sphere grows by
+// the gain while the radius stays, no face turns over, the same bits for any thread count,
+// strength 0 holds, a noisy input is refused or smoothed first, bad parameters are refused.
+#include <cmath>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "core/job/enhance.h"
+#include "core/shapes/parametric.h"
+#include "gtest/gtest.h"
+#include "tests/flow_fixtures.h"
+
+namespace meshsmooth {
+namespace {
+
+using namespace meshsmooth::testing;
+
+// Re((x + i y)^l) on the unit sphere: a spherical harmonic of degree l.
+double Harmonic(const Vec3& u, int l) {
+  double re = 1.0, im = 0.0;
+  for (int k = 0; k < l; ++k) {
+    const double next = re * u.x - im * u.y;
+    im = re * u.y + im * u.x;
+    re = next;
+  }
+  return re;
+}
+
+// The unit icosphere with a bump eps Y_l along its normals.
+Mesh BumpySphere(int level, int l, double eps) {
+  Mesh m = Icosphere(level);
+  for (Vec3& p : m.positions) p = p * (1.0 + eps * Harmonic(p, l));
+  return m;
+}
+
+struct Fit {
+  double radius = 0.0, amplitude = 0.0;
+};
+
+// Least squares of |p| = radius + amplitude Y_l(p / |p|) over the vertices.
+Fit FitBump(const Mesh& m, int l) {
+  double s11 = 0, s1y = 0, syy = 0, sr = 0, sry = 0;
+  for (const Vec3& p : m.positions) {
+    const double r = Norm(p), y = Harmonic(p * (1.0 / r), l);
+    s11 += 1, s1y += y, syy += y * y, sr += r, sry += r * y;
+  }
+  const double det = s11 * syy - s1y * s1y;
+  return {(sr * syy - sry * s1y) / det, (s11 * sry - s1y * sr) / det};
+}
+
+int64_t FlippedFaces(const Mesh& before, const Mesh& after) {
+  int64_t flipped = 0;
+  for (const Triangle& t : before.triangles) {
+    auto normal = [&](const Mesh& m) {
+      return Cross(m.positions[t[1]] - m.positions[t[0]], m.positions[t[2]] - m.positions[t[0]]);
+    };
+    flipped += Dot(normal(before), normal(after)) <= 0.0;
+  }
+  return flipped;
+}
+
+TEST(EnhanceTest, GainMultipliesADegreeEightBumpAndKeepsTheRadius) {
+  const int l = 8;
+  const Mesh start = BumpySphere(5, l, 0.002);
+  const Topology topo = BuildTopology(start);
+  const Fit before = FitBump(start, l);
+  ASSERT_NEAR(before.amplitude, 0.002, 2e-4);
+  for (double gain : {2.0, 3.0, 0.5}) {
+    SCOPED_TRACE(::testing::Message() << "gain " << gain);
+    Mesh m = start;
+    EnhanceParams p;
+    p.gain = gain;
+    p.detail_scale = 4.0;  // 5.4 wavelengths of the degree-8 bump (0.74 on the unit sphere)
+    const absl::StatusOr<EnhanceResult> r = Enhance(m, topo, p);
+    ASSERT_TRUE(r.ok()) << r.status();
+    EXPECT_FALSE(r->smoothing.has_value());
+    const Fit after = FitBump(m, l);
+    EXPECT_NEAR(after.amplitude / before.amplitude, gain, 0.1 * gain);
+    EXPECT_NEAR(after.radius / before.radius, 1.0, 0.005);
+    EXPECT_EQ(FlippedFaces(start, m), 0);
+  }
+  // Gain 1 leaves the mesh.
+  Mesh same = start;
+  EnhanceParams one;
+  one.gain = 1.0;
+  ASSERT_TRUE(Enhance(same, topo, one).ok());
+  for (size_t v = 0; v < same.positions.size(); ++v) ASSERT_LT(Norm(same.positions[v] - start.positions[v]), 1e-12);
+}
+
+TEST(EnhanceTest, SameBitsForAnyThreadCountAndStrengthZeroHolds) {
+  const Mesh start = BumpySphere(6, 8, 0.01);
+  const Topology topo = BuildTopology(start);
+  EnhanceParams p;
+  p.detail_scale = 1.0;
+  p.strength.assign(start.num_vertices(), 1.0f);
+  for (int32_t v = 0; v < start.num_vertices(); ++v) p.strength[v] = start.positions[v].z > 0.5 ? 0.0f : 1.0f;
+  Mesh one = start, four = start;
+  p.threads = 1;
+  ASSERT_TRUE(Enhance(one, topo, p).ok());
+  p.threads = 4;
+  ASSERT_TRUE(Enhance(four, topo, p).ok());
+  ASSERT_EQ(std::memcmp(one.positions.data(), four.positions.data(), one.positions.size() * sizeof(Vec3)), 0);
+  int64_t moved = 0;
+  for (int32_t v = 0; v < start.num_vertices(); ++v) {
+    if (p.strength[v] == 0.0f) {
+      ASSERT_EQ(std::memcmp(&one.positions[v], &start.positions[v], sizeof(Vec3)), 0) << "vertex " << v;
+    } else {
+      moved += !(one.positions[v] == start.positions[v]);
+    }
+  }
+  EXPECT_GT(moved, start.num_vertices() / 2);
+}
+
+// Noise is the finest detail: enhancing it would grow it most. Refused, or smoothed first.
+TEST(EnhanceTest, ANoisyInputIsRefusedOrSmoothedFirst) {
+  const Mesh noisy = NoisySphere(4);
+  const Topology topo = BuildTopology(noisy);
+  Mesh m = noisy;
+  const absl::StatusOr<EnhanceResult> refused = Enhance(m, topo, EnhanceParams{});
+  ASSERT_FALSE(refused.ok());
+  EXPECT_EQ(refused.status().code(), absl::StatusCode::kFailedPrecondition);
+  EXPECT_NE(std::string(refused.status().message()).find("the input is noisy"), std::string::npos)
+      << refused.status().message();
+  EXPECT_EQ(std::memcmp(m.positions.data(), noisy.positions.data(), m.positions.size() * sizeof(Vec3)), 0);
+
+  EnhanceParams first;
+  first.smooth_first = true;
+  const absl::StatusOr<EnhanceResult> r = Enhance(m, topo, first);
+  ASSERT_TRUE(r.ok()) << r.status();
+  ASSERT_TRUE(r->smoothing.has_value());
+  EXPECT_GT(r->smoothing->iterations_run, 0);
+  // Smoothed, then enhanced: still far less rough than the input.
+  EXPECT_LT(RadiusError(m), 0.7 * RadiusError(noisy));
+}
+
+TEST(EnhanceTest, BadParametersAreRefused) {
+  Mesh m = Icosphere(2);
+  const Topology topo = BuildTopology(m);
+  for (double gain : {-1.0, 101.0, std::nan("")}) {
+    EnhanceParams p;
+    p.gain = gain;
+    const absl::StatusOr<EnhanceResult> r = Enhance(m, topo, p);
+    ASSERT_FALSE(r.ok());
+    EXPECT_EQ(r.status().code(), absl::StatusCode::kInvalidArgument);
+    EXPECT_NE(std::string(r.status().message()).find("the gain must be in [0, 100]"), std::string::npos);
+  }
+  EnhanceParams detail;
+  detail.detail_scale = -1.0;
+  EXPECT_EQ(Enhance(m, topo, detail).status().code(), absl::StatusCode::kInvalidArgument);
+}
+
+}  // namespace
+}  // namespace meshsmooth
