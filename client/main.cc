@@ -399,6 +399,69 @@ bool HugePagesPay(const std::string& input) {
   return !error && bytes >= kHugePagesMinInputBytes;
 }
 
+// `enhance IN -o OUT`: its options into `ec`.
+CLI::App* AddEnhanceSubcommand(CLI::App& app, EnhanceCommand& ec) {
+  CLI::App* enhance = app.add_subcommand(
+      "enhance",
+      "Sharpen a mesh's detail, locally (screened-Poisson sharpening, one sparse solve): waves along the surface "
+      "shorter than --detail grow by --gain, longer ones stay; boundary fixed, a closed mesh keeps its volume. A "
+      "noisy input is refused (noise is the finest detail) unless --smooth-first");
+  enhance->add_option("input", ec.input, "mesh file or builtin:NAME")->required()->check(KnownInput());
+  enhance->add_option("-o,--output", ec.output, "output mesh file")->required();
+  enhance->add_option("--gain", ec.gain, "> 1 sharpens, 1 leaves the mesh, < 1 smooths; 0..100")->capture_default_str();
+  enhance->add_option("--detail", ec.detail,
+                      absl::StrCat("the detail scale: D in mesh units or Dh in mean edge lengths (e.g. 8h); a wave of "
+                                   "that length grows by (1 + gain) / 2; default ",
+                                   meshsmooth::EnhanceParams{}.detail_scale_h, "h"));
+  enhance->add_flag("--smooth-first", ec.smooth_first,
+                    "a noisy input: smooth it with the default job first, then enhance (without: refused, exit 1)");
+  AddStrengthOptions(enhance, ec.strength);
+  return enhance;
+}
+
+// The subcommands of jobs a server keeps (meshsmoothd --job-store); their options go into `jc`
+// and their connection into `jcc`.
+struct JobSubcommands {
+  CLI::App *submit, *status, *watch, *fetch, *cancel, *jobs;
+};
+JobSubcommands AddJobSubcommands(CLI::App& app, JobCommand& jc, ConnectionOptions& jcc) {
+  CLI::App* submit = app.add_subcommand(
+      "submit",
+      "Upload a mesh as a job the server keeps (meshsmoothd --job-store) and print its id; a broken upload "
+      "resumes, and the same input submitted again is the same job");
+  submit->add_option("input", jc.input, "mesh file (.obj .ply .off .stl .drc) or builtin:NAME")
+      ->required()
+      ->check(KnownInput());
+  submit->add_option("--flow", jc.flow, "a flow (meshsmooth flows); default: the default job");
+  submit->add_option("--iterations", jc.iterations, "iterations; 0 = automatic")->capture_default_str();
+  submit->add_option("--request-id", jc.request_id,
+                     "the upload's request id (1-128 printable characters); default: the SHA-256 of the spec and the "
+                     "upload, so that submitting the same input again gives the same job");
+  submit->add_flag("--wait", jc.wait, "watch the job to its end, then fetch the result into -o");
+  submit->add_option("-o,--output", jc.output, "with --wait: the result's .drc file");
+  AddConnectionOptions(submit, jcc);
+  CLI::App* status = app.add_subcommand("status", "A kept job's state, progress, times and summary");
+  status->add_option("id", jc.job_id, "the job's id (as submit printed it)")->required();
+  AddConnectionOptions(status, jcc);
+  CLI::App* watch =
+      app.add_subcommand("watch", "Follow a kept job to its end, a line per event (resumed after a disconnect)");
+  watch->add_option("id", jc.job_id, "the job's id")->required();
+  AddConnectionOptions(watch, jcc);
+  CLI::App* fetch = app.add_subcommand(
+      "fetch", "Download a kept job's result as Draco bytes (resumed after a disconnect, checked by SHA-256)");
+  fetch->add_option("id", jc.job_id, "the job's id")->required();
+  fetch->add_option("-o,--output", jc.output, "the result's .drc file")->required();
+  AddConnectionOptions(fetch, jcc);
+  CLI::App* cancel = app.add_subcommand("cancel", "Cancel a kept job (a queued one never runs, a running one stops)");
+  cancel->add_option("id", jc.job_id, "the job's id")->required();
+  AddConnectionOptions(cancel, jcc);
+  CLI::App* jobs = app.add_subcommand("jobs", "List the jobs a server keeps, oldest first");
+  jobs->add_option("--state", jc.state, "only jobs in this state")
+      ->check(CLI::IsMember({"queued", "running", "succeeded", "failed", "cancelled"}));
+  AddConnectionOptions(jobs, jcc);
+  return {submit, status, watch, fetch, cancel, jobs};
+}
+
 }  // namespace
 }  // namespace meshsmooth::client
 
@@ -459,21 +522,7 @@ int main(int argc, char** argv) {
       ->capture_default_str();
 
   EnhanceCommand ec;
-  CLI::App* enhance = app.add_subcommand(
-      "enhance",
-      "Sharpen a mesh's detail, locally (screened-Poisson sharpening, one sparse solve): waves along the surface "
-      "shorter than --detail grow by --gain, longer ones stay; boundary fixed, a closed mesh keeps its volume. A "
-      "noisy input is refused (noise is the finest detail) unless --smooth-first");
-  enhance->add_option("input", ec.input, "mesh file or builtin:NAME")->required()->check(KnownInput());
-  enhance->add_option("-o,--output", ec.output, "output mesh file")->required();
-  enhance->add_option("--gain", ec.gain, "> 1 sharpens, 1 leaves the mesh, < 1 smooths; 0..100")->capture_default_str();
-  enhance->add_option("--detail", ec.detail,
-                      absl::StrCat("the detail scale: D in mesh units or Dh in mean edge lengths (e.g. 8h); a wave of "
-                                   "that length grows by (1 + gain) / 2; default ",
-                                   meshsmooth::EnhanceParams{}.detail_scale_h, "h"));
-  enhance->add_flag("--smooth-first", ec.smooth_first,
-                    "a noisy input: smooth it with the default job first, then enhance (without: refused, exit 1)");
-  AddStrengthOptions(enhance, ec.strength);
+  CLI::App* enhance = AddEnhanceSubcommand(app, ec);
 
   RenderCommand rc;
   CLI::App* render = app.add_subcommand(
@@ -492,43 +541,9 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   AddStrengthOptions(render, rc.strength);
 
-  // Jobs kept in a server's job store (meshsmoothd --job-store).
   JobCommand jc;
   ConnectionOptions jcc;
-  CLI::App* submit = app.add_subcommand(
-      "submit",
-      "Upload a mesh as a job the server keeps (meshsmoothd --job-store) and print its id; a broken upload "
-      "resumes, and the same input submitted again is the same job");
-  submit->add_option("input", jc.input, "mesh file (.obj .ply .off .stl .drc) or builtin:NAME")
-      ->required()
-      ->check(KnownInput());
-  submit->add_option("--flow", jc.flow, "a flow (meshsmooth flows); default: the default job");
-  submit->add_option("--iterations", jc.iterations, "iterations; 0 = automatic")->capture_default_str();
-  submit->add_option("--request-id", jc.request_id,
-                     "the upload's request id (1-128 printable characters); default: the SHA-256 of the spec and the "
-                     "upload, so that submitting the same input again gives the same job");
-  submit->add_flag("--wait", jc.wait, "watch the job to its end, then fetch the result into -o");
-  submit->add_option("-o,--output", jc.output, "with --wait: the result's .drc file");
-  AddConnectionOptions(submit, jcc);
-  CLI::App* status = app.add_subcommand("status", "A kept job's state, progress, times and summary");
-  status->add_option("id", jc.job_id, "the job's id (as submit printed it)")->required();
-  AddConnectionOptions(status, jcc);
-  CLI::App* watch =
-      app.add_subcommand("watch", "Follow a kept job to its end, a line per event (resumed after a disconnect)");
-  watch->add_option("id", jc.job_id, "the job's id")->required();
-  AddConnectionOptions(watch, jcc);
-  CLI::App* fetch = app.add_subcommand(
-      "fetch", "Download a kept job's result as Draco bytes (resumed after a disconnect, checked by SHA-256)");
-  fetch->add_option("id", jc.job_id, "the job's id")->required();
-  fetch->add_option("-o,--output", jc.output, "the result's .drc file")->required();
-  AddConnectionOptions(fetch, jcc);
-  CLI::App* cancel = app.add_subcommand("cancel", "Cancel a kept job (a queued one never runs, a running one stops)");
-  cancel->add_option("id", jc.job_id, "the job's id")->required();
-  AddConnectionOptions(cancel, jcc);
-  CLI::App* jobs = app.add_subcommand("jobs", "List the jobs a server keeps, oldest first");
-  jobs->add_option("--state", jc.state, "only jobs in this state")
-      ->check(CLI::IsMember({"queued", "running", "succeeded", "failed", "cancelled"}));
-  AddConnectionOptions(jobs, jcc);
+  const JobSubcommands kept = AddJobSubcommands(app, jc, jcc);
 
   try {
     app.parse(argc, argv);
@@ -554,12 +569,12 @@ int main(int argc, char** argv) {
   meshsmooth::ApplyKernelEnvironment();
   if (smooth->parsed()) return batch_mode ? RunBatch(so, sc, batch) : RunSmooth(so, sc);
   if (flows->parsed()) return RunFlows(fc, flows_json);
-  if (submit->parsed()) return RunSubmit(jc, jcc);
-  if (status->parsed()) return RunStatus(jc, jcc);
-  if (watch->parsed()) return RunWatch(jc, jcc);
-  if (fetch->parsed()) return RunFetch(jc, jcc);
-  if (cancel->parsed()) return RunCancel(jc, jcc);
-  if (jobs->parsed()) return RunJobs(jc, jcc);
+  if (kept.submit->parsed()) return RunSubmit(jc, jcc);
+  if (kept.status->parsed()) return RunStatus(jc, jcc);
+  if (kept.watch->parsed()) return RunWatch(jc, jcc);
+  if (kept.fetch->parsed()) return RunFetch(jc, jcc);
+  if (kept.cancel->parsed()) return RunCancel(jc, jcc);
+  if (kept.jobs->parsed()) return RunJobs(jc, jcc);
   if (info->parsed()) return RunInfo(info_input);
   if (ridges->parsed()) return RunRidges(ridges_input, ridges_output, ridges_threshold);
   if (enhance->parsed()) return RunEnhance(ec);
