@@ -19,6 +19,53 @@ namespace meshsmooth {
 
 double MaxEnhanceGain() { return 100.0; }
 
+std::vector<ParameterInfo> EnhanceParameters() {
+  const EnhanceParams d;
+  return {
+      {"enhance.gain",
+       "the factor detail shorter than the detail scale grows by; longer waves stay",
+       d.gain,
+       1.0,
+       MaxEnhanceGain(),
+       true,
+       false,
+       {}},
+      {"enhance.detail_scale",
+       "the detail scale d in mesh units: a wave of wavelength d grows by (1 + gain) / 2; 0 = detail_scale_h",
+       0.0,
+       0.0,
+       std::numeric_limits<double>::infinity(),
+       false,
+       true,
+       {}},
+      {"enhance.detail_scale_h",
+       absl::StrFormat("d in mean edge lengths of the input; 0 with detail_scale 0 = %g", d.detail_scale_h),
+       0.0,
+       0.0,
+       std::numeric_limits<double>::infinity(),
+       false,
+       true,
+       {}},
+      {"enhance.smooth_first",
+       "a noisy input (one the default job would smooth): 0 = refused (FAILED_PRECONDITION), 1 = smoothed by the "
+       "default job first",
+       0.0,
+       0.0,
+       1.0,
+       false,
+       false,
+       {}},
+      {"enhance.method",
+       "how: one screened-Poisson solve (stable for any gain)",
+       0,
+       0,
+       0,
+       false,
+       false,
+       {"ENHANCE_METHOD_SCREENED_POISSON"}},
+  };
+}
+
 namespace {
 
 absl::Status ValidateEnhanceParams(const Mesh& mesh, const EnhanceParams& p) {
@@ -113,6 +160,12 @@ absl::StatusOr<EnhanceResult> Enhance(Mesh& mesh, const Topology& topo, const En
   const int threads = flows::ThreadsFor(n, thread_params);
   const double volume = closed ? job::EnclosedVolume(mesh.positions.data(), topo, threads) : 0.0;
   flows::ImplicitStepper stepper(topo, system, role.data(), {1.0 / alpha, (p.gain - 1.0) / alpha}, h, threads);
+  if (absl::Status s = control.stop.Check(); !s.ok()) return s;
+  if (control.on_progress) {
+    Progress progress;
+    progress.phase = Phase::kEnhancing;
+    control.on_progress(progress);
+  }
   std::vector<Vec3> enhanced(n);
   if (absl::Status s = stepper.Step(mesh.positions.data(), enhanced.data(), false); !s.ok()) return s;
   // Three Newton steps a call: a gain that grows the shape by a good share of its size takes a

@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "absl/status/statusor.h"
+#include "core/flows/catalogue.h"
 #include "core/flows/flow.h"
 #include "core/mesh.h"
 #include "core/topology.h"
@@ -28,6 +29,11 @@ namespace meshsmooth {
 
 // The largest gain Enhance takes (100).
 double MaxEnhanceGain();
+
+// The fields of the service's JobSpec.enhance ("enhance.gain", ...) with their defaults and
+// ranges, as ListFlows and the CLI's help state them. The service takes gains in (1, 100]: a
+// gain <= 1 smooths, which the smoothing jobs do.
+std::vector<ParameterInfo> EnhanceParameters();
 
 struct EnhanceParams {
   double gain = 2.0;            // [0, MaxEnhanceGain()]: > 1 sharpens, 1 leaves the mesh, < 1 smooths
@@ -50,7 +56,8 @@ struct EnhanceResult {
 // Enhances `mesh` in place (connectivity unchanged). InvalidArgument for a gain or detail scale
 // out of range, a bad strength or lock mask, non-finite coordinates; FailedPrecondition when the
 // input is noisy (the default job would smooth it: its estimated noise is named) and
-// smooth_first is not set, or when the solve fails.
+// smooth_first is not set, or when the solve fails. Reports Phase::kEnhancing to
+// control.on_progress before the solve.
 absl::StatusOr<EnhanceResult> Enhance(Mesh& mesh, const Topology& topo, const EnhanceParams& p,
                                       const RunControl& control = {});
 

@@ -9,6 +9,7 @@
 #include "core/job/enhance.h"
 #include "core/shapes/parametric.h"
 #include "gtest/gtest.h"
+#include "tests/bump_sphere.h"
 #include "tests/flow_fixtures.h"
 
 namespace meshsmooth {
@@ -16,55 +17,11 @@ namespace {
 
 using namespace meshsmooth::testing;
 
-// Re((x + i y)^l) on the unit sphere: a spherical harmonic of degree l.
-double Harmonic(const Vec3& u, int l) {
-  double re = 1.0, im = 0.0;
-  for (int k = 0; k < l; ++k) {
-    const double next = re * u.x - im * u.y;
-    im = re * u.y + im * u.x;
-    re = next;
-  }
-  return re;
-}
-
-// The unit icosphere with a bump eps Y_l along its normals.
-Mesh BumpySphere(int level, int l, double eps) {
-  Mesh m = Icosphere(level);
-  for (Vec3& p : m.positions) p = p * (1.0 + eps * Harmonic(p, l));
-  return m;
-}
-
-struct Fit {
-  double radius = 0.0, amplitude = 0.0;
-};
-
-// Least squares of |p| = radius + amplitude Y_l(p / |p|) over the vertices.
-Fit FitBump(const Mesh& m, int l) {
-  double s11 = 0, s1y = 0, syy = 0, sr = 0, sry = 0;
-  for (const Vec3& p : m.positions) {
-    const double r = Norm(p), y = Harmonic(p * (1.0 / r), l);
-    s11 += 1, s1y += y, syy += y * y, sr += r, sry += r * y;
-  }
-  const double det = s11 * syy - s1y * s1y;
-  return {(sr * syy - sry * s1y) / det, (s11 * sry - s1y * sr) / det};
-}
-
-int64_t FlippedFaces(const Mesh& before, const Mesh& after) {
-  int64_t flipped = 0;
-  for (const Triangle& t : before.triangles) {
-    auto normal = [&](const Mesh& m) {
-      return Cross(m.positions[t[1]] - m.positions[t[0]], m.positions[t[2]] - m.positions[t[0]]);
-    };
-    flipped += Dot(normal(before), normal(after)) <= 0.0;
-  }
-  return flipped;
-}
-
 TEST(EnhanceTest, GainMultipliesADegreeEightBumpAndKeepsTheRadius) {
   const int l = 8;
   const Mesh start = BumpySphere(5, l, 0.002);
   const Topology topo = BuildTopology(start);
-  const Fit before = FitBump(start, l);
+  const BumpFit before = FitBump(start, l);
   ASSERT_NEAR(before.amplitude, 0.002, 2e-4);
   for (double gain : {2.0, 3.0, 0.5}) {
     SCOPED_TRACE(::testing::Message() << "gain " << gain);
@@ -75,7 +32,7 @@ TEST(EnhanceTest, GainMultipliesADegreeEightBumpAndKeepsTheRadius) {
     const absl::StatusOr<EnhanceResult> r = Enhance(m, topo, p);
     ASSERT_TRUE(r.ok()) << r.status();
     EXPECT_FALSE(r->smoothing.has_value());
-    const Fit after = FitBump(m, l);
+    const BumpFit after = FitBump(m, l);
     EXPECT_NEAR(after.amplitude / before.amplitude, gain, 0.1 * gain);
     EXPECT_NEAR(after.radius / before.radius, 1.0, 0.005);
     EXPECT_EQ(FlippedFaces(start, m), 0);
