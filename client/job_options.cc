@@ -38,6 +38,7 @@ absl::Status CheckChoices(const SmoothOptions& o) {
     if (absl::Status s = CheckChoice("flow", o.flow, flows); !s.ok()) return s;
   }
   if (absl::Status s = CheckChoice("weights", o.weights, {"u0", "u1"}); !s.ok()) return s;
+  if (absl::Status s = CheckChoice("method", o.method, {"poisson", "inverted-flow"}); !s.ok()) return s;
   if (absl::Status s = CheckChoice("adaptive", o.adaptive, {"none", "constant", "ring1", "ring2"}); !s.ok()) return s;
   return CheckChoice("boundary", o.boundary, {"auto", "fixed", "curve"});
 }
@@ -81,6 +82,7 @@ v1::JobSpec SpecFrom(const SmoothOptions& o, bool strength_values) {
     v1::Enhancement* e = spec.mutable_enhance();
     if (o.gain != 0.0) e->set_gain(o.gain);
     e->set_smooth_first(o.smooth_first);
+    if (o.method == "inverted-flow") e->set_method(v1::ENHANCE_METHOD_INVERTED_FLOW);
     // Checked before (CheckSmoothOptions).
     if (absl::StatusOr<DisplacementBoundOption> d = ParseLengthOption("--detail", o.detail); d.ok()) {
       if (d->in_h) {

@@ -41,9 +41,10 @@ struct SmoothOptions {
   double theta = 0.0;     // --theta: JobSpec.theta; 0 = unset (backward Euler)
   // `meshsmooth enhance` (JobSpec.enhance): the job enhances instead of smoothing.
   bool enhance = false;
-  double gain = 0.0;          // --gain: enhance.gain; 0 = unset (the default)
-  std::string detail;         // --detail: D (mesh units) or Dh (mean edge lengths); empty = the default
-  bool smooth_first = false;  // --smooth-first
+  double gain = 0.0;               // --gain: enhance.gain; 0 = unset (the default)
+  std::string detail;              // --detail: D (mesh units) or Dh (mean edge lengths); empty = the default
+  bool smooth_first = false;       // --smooth-first
+  std::string method = "poisson";  // --method: poisson | inverted-flow
 };
 
 // A length option parsed (--max-displacement, --detail): the value and whether it is in mean

@@ -407,7 +407,8 @@ CLI::App* AddEnhanceSubcommand(CLI::App& app, SmoothOptions& eo, ConnectionOptio
       "enhance",
       "Sharpen a mesh's detail, the inverse of smoothing, through meshsmoothd (or an in-process server): waves "
       "along the surface shorter than --detail grow by --gain, longer ones stay (screened-Poisson sharpening, one "
-      "sparse solve, stable for any gain); boundary fixed, a closed mesh keeps its volume. A noisy input is "
+      "sparse solve, stable for any gain, or --method inverted-flow); boundary fixed, a closed mesh keeps its "
+      "volume. A noisy input is "
       "refused (noise is the finest detail and would grow most; exit 1) unless --smooth-first");
   enhance->add_option("input", eo.input, "mesh file or builtin:NAME")->required()->check(KnownInput());
   enhance->add_option("-o,--output", eo.output, "output mesh file")->required()->check(KnownOutputFormat());
@@ -419,6 +420,13 @@ CLI::App* AddEnhanceSubcommand(CLI::App& app, SmoothOptions& eo, ConnectionOptio
   enhance->add_flag("--smooth-first", eo.smooth_first,
                     "a noisy input (one the default job would smooth): smooth it with the default job first, then "
                     "enhance (without: refused, exit 1)");
+  enhance
+      ->add_option("--method", eo.method,
+                   "poisson: one screened-Poisson solve, stable for any gain; inverted-flow: the paper's proposal, "
+                   "the umbrella flow run backwards on the band below --detail, each vertex's move per step bounded "
+                   "by eq. (14)'s curvature control turned round (at most 1000 steps; bounded, slower)")
+      ->check(CLI::IsMember({"poisson", "inverted-flow"}))
+      ->capture_default_str();
   enhance->add_flag("-q,--quiet", eo.quiet, "print nothing but errors and warnings");
   enhance->add_flag("--json", eo.json, "print the job summary as JSON on stdout (no progress)");
   AddStrengthOptions(enhance, eo.strength);

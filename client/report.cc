@@ -101,7 +101,9 @@ void PrintSummary(const v1::Summary& s) {
   const v1::MeshMetrics &a = s.before(), &b = s.after();
   const v1::EffectiveParameters& p = s.parameters();
   if (p.has_enhance()) {
-    std::printf("job %s: enhanced, gain %g below a detail scale of %g (%.3g mean edge lengths)\n", s.job_id().c_str(),
+    std::printf("job %s: enhanced (%s), gain %g below a detail scale of %g (%.3g mean edge lengths)\n",
+                s.job_id().c_str(),
+                p.enhance().method() == v1::ENHANCE_METHOD_INVERTED_FLOW ? "inverted flow" : "screened Poisson",
                 p.enhance().gain(), p.enhance().detail_scale(), p.enhance().detail_scale_h());
     if (p.iterations_run() > 0) {
       std::printf(

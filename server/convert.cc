@@ -67,6 +67,8 @@ absl::Status EnhanceFromProto(const v1::JobSpec& spec, JobParams& j) {
   p.detail_scale = e.detail_scale();
   if (e.detail_scale_h() > 0.0) p.detail_scale_h = e.detail_scale_h();
   p.smooth_first = e.smooth_first();
+  p.method =
+      e.method() == v1::ENHANCE_METHOD_INVERTED_FLOW ? EnhanceMethod::kInvertedFlow : EnhanceMethod::kScreenedPoisson;
   j.enhance = std::move(p);
   return absl::OkStatus();
 }
@@ -327,7 +329,8 @@ v1::Summary MakeSummary(const JobReport& report, const JobParams& params) {
     e->set_detail_scale(report.enhanced->detail_scale);
     e->set_detail_scale_h(report.enhanced->detail_scale / report.enhanced->mean_edge_length);
     e->set_smooth_first(params.enhance->smooth_first);
-    e->set_method(v1::ENHANCE_METHOD_SCREENED_POISSON);
+    e->set_method(params.enhance->method == EnhanceMethod::kInvertedFlow ? v1::ENHANCE_METHOD_INVERTED_FLOW
+                                                                         : v1::ENHANCE_METHOD_SCREENED_POISSON);
   }
   summary.set_result_bytes(report.result_bytes);
   for (const std::string& w : report.warnings) summary.add_warnings(w);

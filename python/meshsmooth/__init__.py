@@ -248,6 +248,7 @@ def enhance(vertices: npt.ArrayLike, faces: npt.ArrayLike, *,
             gain: float = 2.0,
             detail: Union[None, float, str] = None,
             smooth_first: bool = False,
+            method: Literal["poisson", "inverted-flow"] = "poisson",
             ridges: bool = False,
             ridge_threshold: float = 0.0,
             job_id: Optional[str] = None,
@@ -260,7 +261,8 @@ def enhance(vertices: npt.ArrayLike, faces: npt.ArrayLike, *,
     """Enhances the mesh's detail, the inverse of smoothing, as `meshsmooth enhance` does (a job
     with JobSpec.enhance): waves along the surface shorter than `detail` grow by `gain` (in
     (1, 100]), longer ones stay (screened-Poisson sharpening, stable for any gain); boundary
-    vertices stay, a closed mesh keeps its volume. `detail` None (8 mean edge lengths), D (mesh
+    vertices stay, a closed mesh keeps its volume; `method` "inverted-flow" runs the paper's
+    inverted umbrella flow with eq. (14)'s bound instead (`meshsmooth enhance --help`). `detail` None (8 mean edge lengths), D (mesh
     units) or "Dh" (D mean edge lengths, e.g. "8h"). A noisy input (one the default job would
     smooth) raises Error FAILED_PRECONDITION naming its noise, unless `smooth_first`: then the
     default job smooths it first. `attributes`, `strength` (0 = the vertex does not move), the
@@ -268,6 +270,6 @@ def enhance(vertices: npt.ArrayLike, faces: npt.ArrayLike, *,
     """
     return _run(vertices, faces, attributes, strength,
                 dict(flow="", enhance=True, gain=gain, detail=_length("detail", detail),
-                     smooth_first=smooth_first, ridges=ridges, ridge_threshold=ridge_threshold,
+                     smooth_first=smooth_first, method=method, ridges=ridges, ridge_threshold=ridge_threshold,
                      job_id=job_id or ""),
                 server, tls_ca, token_file, timeout, retries, progress)

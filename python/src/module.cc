@@ -163,6 +163,7 @@ SmoothOptions OptionsFrom(const py::dict& params) {
   Take(params, "gain", o.gain);
   Take(params, "detail", o.detail);
   Take(params, "smooth_first", o.smooth_first);
+  Take(params, "method", o.method);
   if (absl::Status s = client::CheckSmoothOptions(o); !s.ok()) Fail(s);
   return o;
 }

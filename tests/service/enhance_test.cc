@@ -1,6 +1,6 @@
 // Shape enhancement through the service (JobSpec.enhance): a degree-8 bump on a sphere grows by
 // the gain through a real (loopback) server, equal to the core's result bit for bit, with the
-// radius kept and no face turned over; strength 0 holds a vertex; a noisy input is refused or
+// radius kept and no face turned over, by either method; strength 0 holds a vertex; a noisy input is refused or
 // smoothed first; bad gains, scales, methods and smoothing fields are refused naming the field;
 // ListFlows lists the fields.
 #include <cmath>
@@ -61,6 +61,23 @@ TEST(EnhanceServiceTest, GainMultipliesTheBumpThroughARealServer) {
       ASSERT_EQ(got->positions[v], RoundToFloat(expected.positions[v])) << "vertex " << v;
     }
   }
+}
+
+TEST(EnhanceServiceTest, TheInvertedFlowThroughTheServiceMultipliesTheBump) {
+  auto server = StartServer();
+  const int l = 8;
+  const Mesh start = FloatMesh(BumpySphere(5, l, 0.002));
+  v1::JobSpec spec = EnhanceSpec(2.0, 4.0);
+  spec.mutable_enhance()->set_method(v1::ENHANCE_METHOD_INVERTED_FLOW);
+  absl::StatusOr<SmoothOutcome> out = Call(server->InProcessChannel(), spec, *EncodeDraco(start));
+  ASSERT_TRUE(out.ok()) << out.status();
+  EXPECT_EQ(out->summary.parameters().enhance().method(), v1::ENHANCE_METHOD_INVERTED_FLOW);
+  const absl::StatusOr<Mesh> got = DecodeDraco(out->result);
+  ASSERT_TRUE(got.ok());
+  const BumpFit before = FitBump(start, l), after = FitBump(*got, l);
+  EXPECT_NEAR(after.amplitude / before.amplitude, 2.0, 0.2);
+  EXPECT_NEAR(after.radius / before.radius, 1.0, 0.005);
+  EXPECT_EQ(FlippedFaces(start, *got), 0);
 }
 
 TEST(EnhanceServiceTest, StrengthZeroHoldsAVertex) {
