@@ -21,7 +21,6 @@
 #include "client/smooth_file.h"
 #include "core/features/ridges.h"
 #include "core/io/mesh_io.h"
-#include "core/job/enhance.h"
 #include "core/measure/metrics.h"
 #include "core/render/png.h"
 #include "core/render/render.h"
@@ -149,64 +148,6 @@ int RunRidges(const std::string& input, const std::string& output, const std::st
       "%lld ridge and %lld ravine vertices of %lld classified (%d vertices; |curvature| threshold %g); wrote %s\n",
       static_cast<long long>(features.ridges), static_cast<long long>(features.ravines),
       static_cast<long long>(features.classified), mesh->num_vertices(), features.threshold, output.c_str());
-  return 0;
-}
-
-int RunEnhance(const EnhanceCommand& e) {
-  if (absl::Status s = CheckStrengthOptions(e.strength); !s.ok()) {
-    std::cerr << "meshsmooth: " << s.message() << "\n";
-    return kExitUsage;
-  }
-  // --detail: the same syntax as --max-displacement (D or Dh).
-  absl::StatusOr<DisplacementBoundOption> detail = ParseMaxDisplacement(e.detail);
-  if (!detail.ok()) {
-    std::cerr
-        << "meshsmooth: --detail must be a finite number >= 0 in mesh units (0.5) or mean edge lengths (8h), got '"
-        << e.detail << "'\n";
-    return kExitUsage;
-  }
-  if (!(e.gain >= 0.0 && e.gain <= MaxEnhanceGain())) {
-    std::cerr << "meshsmooth: --gain must be in [0, " << MaxEnhanceGain() << "], got " << e.gain << "\n";
-    return kExitUsage;
-  }
-  absl::StatusOr<Mesh> mesh = LoadInput(e.input);
-  if (!mesh.ok()) {
-    std::cerr << "meshsmooth: " << mesh.status().message() << "\n";
-    return kExitFailure;
-  }
-  EnhanceParams p;
-  p.gain = e.gain;
-  p.smooth_first = e.smooth_first;
-  if (e.strength.any()) {
-    absl::StatusOr<std::vector<float>> strength = VertexStrength(*mesh, e.strength);
-    if (!strength.ok()) {
-      std::cerr << "meshsmooth: " << strength.status().message() << "\n";
-      return kExitFailure;
-    }
-    p.strength = *std::move(strength);
-  }
-  const Topology topo = BuildTopology(*mesh);
-  if (detail->in_h) {
-    p.detail_scale = detail->value * MeanEdgeLength(*mesh, topo);
-  } else {
-    p.detail_scale = detail->value;
-  }
-  absl::StatusOr<EnhanceResult> r = Enhance(*mesh, topo, p);
-  if (!r.ok()) {
-    std::cerr << "meshsmooth: " << r.status().message() << "\n";
-    return kExitFailure;
-  }
-  if (absl::Status s = WriteMesh(e.output, *mesh); !s.ok()) {
-    std::cerr << "meshsmooth: " << s.message() << "\n";
-    return kExitFailure;
-  }
-  std::printf("enhanced %d vertices: gain %g below a detail scale of %g (%.3g mean edge lengths)%s; wrote %s\n",
-              mesh->num_vertices(), e.gain, r->detail_scale, r->detail_scale / r->mean_edge_length,
-              r->smoothing ? absl::StrCat(", after smoothing the noisy input (", r->smoothing->iterations_run,
-                                          " iterations of ", std::string(FlowName(r->smoothing->flow)), ")")
-                                 .c_str()
-                           : "",
-              e.output.c_str());
   return 0;
 }
 

@@ -25,16 +25,8 @@ struct RenderCommand {
   StrengthOptions strength;
 };
 
-// `meshsmooth enhance`.
-struct EnhanceCommand {
-  std::string input, output;
-  double gain = 2.0;
-  std::string detail;  // D (mesh units) or Dh (mean edge lengths); empty = the default (core/job/enhance.h)
-  bool smooth_first = false;
-  StrengthOptions strength;
-};
-
-// Smooths a mesh through the service and writes the result; prints the summary.
+// Smooths (or, with options.enhance, enhances) a mesh through the service and writes the
+// result; prints the summary.
 int RunSmooth(const SmoothOptions& options, const ConnectionOptions& connection);
 
 // Lists the flows the service offers (ListFlows), as text or as JSON.
@@ -47,9 +39,6 @@ int RunInfo(const std::string& input);
 // `threshold`: "auto" (FeatureOptions::relative_threshold = kDefaultRelativeThreshold) or an
 // absolute |curvature| >= 0.
 int RunRidges(const std::string& input, const std::string& output, const std::string& threshold);
-
-// Shape enhancement (core/job/enhance.h), locally: reads, enhances, writes, prints a line.
-int RunEnhance(const EnhanceCommand& command);
 
 // A picture of a mesh, rendered locally into a PNG.
 int RunRender(const RenderCommand& command);

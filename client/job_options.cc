@@ -38,6 +38,7 @@ absl::Status CheckChoices(const SmoothOptions& o) {
     if (absl::Status s = CheckChoice("flow", o.flow, flows); !s.ok()) return s;
   }
   if (absl::Status s = CheckChoice("weights", o.weights, {"u0", "u1"}); !s.ok()) return s;
+  if (absl::Status s = CheckChoice("method", o.method, {"poisson", "inverted-flow"}); !s.ok()) return s;
   if (absl::Status s = CheckChoice("adaptive", o.adaptive, {"none", "constant", "ring1", "ring2"}); !s.ok()) return s;
   return CheckChoice("boundary", o.boundary, {"auto", "fixed", "curve"});
 }
@@ -77,6 +78,20 @@ v1::JobSpec SpecFrom(const SmoothOptions& o, bool strength_values) {
     spec.mutable_features()->set_min_abs_curvature(o.ridge_threshold);
   }
   if (o.strength.any() || strength_values) spec.set_strength_attribute(kStrengthAttribute);
+  if (o.enhance) {
+    v1::Enhancement* e = spec.mutable_enhance();
+    if (o.gain != 0.0) e->set_gain(o.gain);
+    e->set_smooth_first(o.smooth_first);
+    if (o.method == "inverted-flow") e->set_method(v1::ENHANCE_METHOD_INVERTED_FLOW);
+    // Checked before (CheckSmoothOptions).
+    if (absl::StatusOr<DisplacementBoundOption> d = ParseLengthOption("--detail", o.detail); d.ok()) {
+      if (d->in_h) {
+        e->set_detail_scale_h(d->value);
+      } else {
+        e->set_detail_scale(d->value);
+      }
+    }
+  }
   // Checked before (CheckSmoothOptions).
   if (absl::StatusOr<DisplacementBoundOption> bound = ParseMaxDisplacement(o.max_displacement); bound.ok()) {
     if (bound->in_h) {
@@ -88,7 +103,7 @@ v1::JobSpec SpecFrom(const SmoothOptions& o, bool strength_values) {
   return spec;
 }
 
-absl::StatusOr<DisplacementBoundOption> ParseMaxDisplacement(const std::string& text) {
+absl::StatusOr<DisplacementBoundOption> ParseLengthOption(const char* flag, const std::string& text) {
   DisplacementBoundOption bound;
   if (text.empty()) return bound;
   std::string number = text;
@@ -97,17 +112,23 @@ absl::StatusOr<DisplacementBoundOption> ParseMaxDisplacement(const std::string& 
     number.pop_back();
   }
   if (!absl::SimpleAtod(number, &bound.value) || !std::isfinite(bound.value) || bound.value < 0.0) {
-    return absl::InvalidArgumentError(absl::StrCat(
-        "--max-displacement: '", text,
-        "' is not a bound; give a finite number >= 0 in mesh units (0.02) or in mean edge lengths (0.5h)"));
+    return absl::InvalidArgumentError(
+        absl::StrCat(flag, ": '", text,
+                     "' is not a length; give a finite number >= 0 in mesh units (0.02) or in mean edge "
+                     "lengths (0.5h)"));
   }
   return bound;
+}
+
+absl::StatusOr<DisplacementBoundOption> ParseMaxDisplacement(const std::string& text) {
+  return ParseLengthOption("--max-displacement", text);
 }
 
 absl::Status CheckSmoothOptions(const SmoothOptions& options) {
   if (absl::Status s = CheckChoices(options); !s.ok()) return s;
   if (absl::Status s = CheckStrengthOptions(options.strength); !s.ok()) return s;
   if (absl::Status s = ParseMaxDisplacement(options.max_displacement).status(); !s.ok()) return s;
+  if (absl::Status s = ParseLengthOption("--detail", options.detail).status(); !s.ok()) return s;
   v1::JobSpec spec = SpecFrom(options);
   spec.clear_job_id();
   return server::FromProto(spec, std::numeric_limits<int>::max()).status();

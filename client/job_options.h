@@ -39,17 +39,26 @@ struct SmoothOptions {
   std::string max_displacement;
   bool implicit = false;  // --implicit: JobSpec.integration IMPLICIT
   double theta = 0.0;     // --theta: JobSpec.theta; 0 = unset (backward Euler)
+  // `meshsmooth enhance` (JobSpec.enhance): the job enhances instead of smoothing.
+  bool enhance = false;
+  double gain = 0.0;               // --gain: enhance.gain; 0 = unset (the default)
+  std::string detail;              // --detail: D (mesh units) or Dh (mean edge lengths); empty = the default
+  bool smooth_first = false;       // --smooth-first
+  std::string method = "poisson";  // --method: poisson | inverted-flow
 };
 
-// --max-displacement parsed: the bound and whether it is in mean edge lengths.
+// A length option parsed (--max-displacement, --detail): the value and whether it is in mean
+// edge lengths.
 struct DisplacementBoundOption {
   double value = 0.0;
   bool in_h = false;
 };
 
-// "0.02" (mesh units) or "0.5h" (mean edge lengths of the input); empty = no bound (0).
-// InvalidArgument naming --max-displacement for anything else, a negative value, NaN or an
-// infinity.
+// "0.02" (mesh units) or "0.5h" (mean edge lengths of the input); empty = unset (0).
+// InvalidArgument naming `flag` for anything else, a negative value, NaN or an infinity.
+absl::StatusOr<DisplacementBoundOption> ParseLengthOption(const char* flag, const std::string& text);
+
+// ParseLengthOption of --max-displacement (empty = no bound).
 absl::StatusOr<DisplacementBoundOption> ParseMaxDisplacement(const std::string& text);
 
 // The flow and output options of `meshsmooth smooth` checked as the server checks a JobSpec
@@ -59,9 +68,9 @@ absl::StatusOr<DisplacementBoundOption> ParseMaxDisplacement(const std::string& 
 // before any file is read.
 absl::Status CheckSmoothOptions(const SmoothOptions& options);
 
-// The JobSpec of `options` (checked with CheckSmoothOptions first): the flow options, the output
-// encoding, the ridges and the strength's attribute name (kStrengthAttribute) when a strength is
-// given by flags or `strength_values`.
+// The JobSpec of `options` (checked with CheckSmoothOptions first): the flow options (or, with
+// options.enhance, JobSpec.enhance), the output encoding, the ridges and the strength's attribute
+// name (kStrengthAttribute) when a strength is given by flags or `strength_values`.
 v1::JobSpec SpecFrom(const SmoothOptions& options, bool strength_values = false);
 
 }  // namespace meshsmooth::client

@@ -6,10 +6,10 @@
 //   meshsmooth flows [--server TARGET]
 //   meshsmooth info IN
 //   meshsmooth ridges IN -o OUT.ply [--threshold K]      (locally, no smoothing)
-//   meshsmooth enhance IN -o OUT [--gain G] [--detail D|Dh] [--smooth-first]   (locally)
+//   meshsmooth enhance IN -o OUT [--gain G] [--detail D|Dh] [--smooth-first] [--server TARGET]
 //   meshsmooth render IN -o OUT.png [--view V] [--size WxH] [--shading flat|gouraud]
 //
-// Without --server, `smooth` and `flows` start the service in-process (the same code as
+// Without --server, `smooth`, `enhance` and `flows` start the service in-process (the same code as
 // meshsmoothd, over an in-process channel), so the CLI works with nothing else running.
 // This file is the command line; the commands are in commands.cc. The flows' names, defaults
 // and which flow takes which option come from the flow table (DescribeFlows()).
@@ -399,23 +399,38 @@ bool HugePagesPay(const std::string& input) {
   return !error && bytes >= kHugePagesMinInputBytes;
 }
 
-// `enhance IN -o OUT`: its options into `ec`.
-CLI::App* AddEnhanceSubcommand(CLI::App& app, EnhanceCommand& ec) {
+// `enhance IN -o OUT`: its options into `eo` (a job with JobSpec.enhance) and `ec`.
+CLI::App* AddEnhanceSubcommand(CLI::App& app, SmoothOptions& eo, ConnectionOptions& ec) {
+  eo.enhance = true;
+  eo.gain = meshsmooth::EnhanceParams{}.gain;
   CLI::App* enhance = app.add_subcommand(
       "enhance",
-      "Sharpen a mesh's detail, locally (screened-Poisson sharpening, one sparse solve): waves along the surface "
-      "shorter than --detail grow by --gain, longer ones stay; boundary fixed, a closed mesh keeps its volume. A "
-      "noisy input is refused (noise is the finest detail) unless --smooth-first");
-  enhance->add_option("input", ec.input, "mesh file or builtin:NAME")->required()->check(KnownInput());
-  enhance->add_option("-o,--output", ec.output, "output mesh file")->required();
-  enhance->add_option("--gain", ec.gain, "> 1 sharpens, 1 leaves the mesh, < 1 smooths; 0..100")->capture_default_str();
-  enhance->add_option("--detail", ec.detail,
+      "Sharpen a mesh's detail, the inverse of smoothing, through meshsmoothd (or an in-process server): waves "
+      "along the surface shorter than --detail grow by --gain, longer ones stay (screened-Poisson sharpening, one "
+      "sparse solve, stable for any gain, or --method inverted-flow); boundary fixed, a closed mesh keeps its "
+      "volume. A noisy input is "
+      "refused (noise is the finest detail and would grow most; exit 1) unless --smooth-first");
+  enhance->add_option("input", eo.input, "mesh file or builtin:NAME")->required()->check(KnownInput());
+  enhance->add_option("-o,--output", eo.output, "output mesh file")->required()->check(KnownOutputFormat());
+  enhance->add_option("--gain", eo.gain, "the factor the detail grows by, in (1, 100]")->capture_default_str();
+  enhance->add_option("--detail", eo.detail,
                       absl::StrCat("the detail scale: D in mesh units or Dh in mean edge lengths (e.g. 8h); a wave of "
-                                   "that length grows by (1 + gain) / 2; default ",
+                                   "that length grows by (1 + gain) / 2, shorter ones by nearly the gain; default ",
                                    meshsmooth::EnhanceParams{}.detail_scale_h, "h"));
-  enhance->add_flag("--smooth-first", ec.smooth_first,
-                    "a noisy input: smooth it with the default job first, then enhance (without: refused, exit 1)");
-  AddStrengthOptions(enhance, ec.strength);
+  enhance->add_flag("--smooth-first", eo.smooth_first,
+                    "a noisy input (one the default job would smooth): smooth it with the default job first, then "
+                    "enhance (without: refused, exit 1)");
+  enhance
+      ->add_option("--method", eo.method,
+                   "poisson: one screened-Poisson solve, stable for any gain; inverted-flow: the paper's proposal, "
+                   "the umbrella flow run backwards on the band below --detail, each vertex's move per step bounded "
+                   "by eq. (14)'s curvature control turned round (at most 1000 steps; bounded, slower)")
+      ->check(CLI::IsMember({"poisson", "inverted-flow"}))
+      ->capture_default_str();
+  enhance->add_flag("-q,--quiet", eo.quiet, "print nothing but errors and warnings");
+  enhance->add_flag("--json", eo.json, "print the job summary as JSON on stdout (no progress)");
+  AddStrengthOptions(enhance, eo.strength);
+  AddConnectionOptions(enhance, ec);
   return enhance;
 }
 
@@ -521,8 +536,9 @@ int main(int argc, char** argv) {
                    "max(|kmax|, |kmin|)), whatever the mesh's units and size")
       ->capture_default_str();
 
-  EnhanceCommand ec;
-  CLI::App* enhance = AddEnhanceSubcommand(app, ec);
+  SmoothOptions eo;
+  ConnectionOptions ec;
+  CLI::App* enhance = AddEnhanceSubcommand(app, eo, ec);
 
   RenderCommand rc;
   CLI::App* render = app.add_subcommand(
@@ -553,7 +569,9 @@ int main(int argc, char** argv) {
   bool batch_mode = false;
   if (smooth->parsed()) {
     if (const int code = SettleSmoothInputs(so, batch, batch_mode); code != 0) return code;
-    if (absl::Status s = CheckSmoothOptions(so); !s.ok()) {
+  }
+  if (smooth->parsed() || enhance->parsed()) {
+    if (absl::Status s = CheckSmoothOptions(smooth->parsed() ? so : eo); !s.ok()) {
       std::fprintf(stderr, "meshsmooth: %s\n", std::string(s.message()).c_str());
       return kExitUsage;
     }
@@ -563,7 +581,7 @@ int main(int argc, char** argv) {
   const std::string& input = smooth->parsed()    ? so.input
                              : info->parsed()    ? info_input
                              : ridges->parsed()  ? ridges_input
-                             : enhance->parsed() ? ec.input
+                             : enhance->parsed() ? eo.input
                                                  : rc.input;
   if (HugePagesPay(input)) meshsmooth::UseHugePagesForLargeBuffers(argv);
   meshsmooth::ApplyKernelEnvironment();
@@ -577,7 +595,7 @@ int main(int argc, char** argv) {
   if (kept.jobs->parsed()) return RunJobs(jc, jcc);
   if (info->parsed()) return RunInfo(info_input);
   if (ridges->parsed()) return RunRidges(ridges_input, ridges_output, ridges_threshold);
-  if (enhance->parsed()) return RunEnhance(ec);
+  if (enhance->parsed()) return RunSmooth(eo, ec);
   if (render->parsed()) return RunRender(rc);
   return kExitUsage;
 }

@@ -38,6 +38,9 @@ void ProgressPrinter::operator()(const v1::Progress& p) {
       case v1::PROGRESS_PHASE_CHOOSING:
         std::fprintf(stderr, "choosing the flow and the count: trying %s\n", p.flow().c_str());
         break;
+      case v1::PROGRESS_PHASE_ENHANCING:
+        std::fprintf(stderr, "enhancing\n");
+        break;
       default:
         std::fprintf(stderr, "writing the result (%.2fs)\n", p.elapsed_seconds());
         break;
@@ -97,7 +100,17 @@ void PrintRetry(const std::string& prefix, int retry, const absl::Status& status
 void PrintSummary(const v1::Summary& s) {
   const v1::MeshMetrics &a = s.before(), &b = s.after();
   const v1::EffectiveParameters& p = s.parameters();
-  if (p.iterations_requested() == 0) {
+  if (p.has_enhance()) {
+    std::printf("job %s: enhanced (%s), gain %g below a detail scale of %g (%.3g mean edge lengths)\n",
+                s.job_id().c_str(),
+                p.enhance().method() == v1::ENHANCE_METHOD_INVERTED_FLOW ? "inverted flow" : "screened Poisson",
+                p.enhance().gain(), p.enhance().detail_scale(), p.enhance().detail_scale_h());
+    if (p.iterations_run() > 0) {
+      std::printf(
+          "after smoothing the noisy input: %s, %u iterations (stopped by %s), noise estimate %.4f mean edges\n",
+          p.flow().c_str(), p.iterations_run(), p.stop_reason().c_str(), p.noise_estimate());
+    }
+  } else if (p.iterations_requested() == 0) {
     std::printf("job %s: %s, %u iterations (automatic: stopped by %s), step %g (effective %g)\n", s.job_id().c_str(),
                 p.flow().c_str(), p.iterations_run(), p.stop_reason().c_str(), p.step(), p.effective_step());
     std::printf(
@@ -145,7 +158,10 @@ void PrintSummary(const v1::Summary& s) {
 std::string OneLineSummary(const v1::Summary& s) {
   const v1::EffectiveParameters& p = s.parameters();
   char line[512];
-  if (p.iterations_requested() == 0) {
+  if (p.has_enhance()) {
+    std::snprintf(line, sizeof line, "enhanced, gain %g below %g mesh units%s", p.enhance().gain(),
+                  p.enhance().detail_scale(), p.iterations_run() > 0 ? " (smoothed first)" : "");
+  } else if (p.iterations_requested() == 0) {
     std::snprintf(line, sizeof line, "%s, %u iterations (automatic: stopped by %s)", p.flow().c_str(),
                   p.iterations_run(), p.stop_reason().c_str());
   } else {
@@ -170,6 +186,12 @@ void PrintFlows(const v1::ListFlowsResponse& flows) {
     std::printf("    %-24s %s; %s\n", p.name().c_str(), p.description().c_str(), Range(p).c_str());
   }
   std::printf("this server allows at most %u iterations\n", flows.max_iterations());
+  if (flows.enhance_parameters_size() > 0) {
+    std::printf("enhancement (meshsmooth enhance; JobSpec.enhance), the inverse of smoothing:\n");
+    for (const v1::ParameterInfo& p : flows.enhance_parameters()) {
+      std::printf("    %-24s %s; %s\n", p.name().c_str(), p.description().c_str(), Range(p).c_str());
+    }
+  }
 }
 
 }  // namespace meshsmooth::client

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "absl/strings/str_cat.h"
@@ -21,6 +22,55 @@ absl::Status CheckEnum(const char* field, int value, const google::protobuf::Enu
   for (int i = 0; i < values->value_count(); ++i) names.push_back(values->value(i)->name());
   return absl::InvalidArgumentError(
       absl::StrCat(field, ": unknown value ", value, " (this server knows ", absl::StrJoin(names, ", "), ")"));
+}
+
+// JobSpec.enhance into `j.enhance`; InvalidArgument naming the field for a value out of range
+// and for a smoothing field that does not apply to an enhancement job.
+absl::Status EnhanceFromProto(const v1::JobSpec& spec, JobParams& j) {
+  const v1::Enhancement& e = spec.enhance();
+  if (absl::Status s = CheckEnum("enhance.method", e.method(), v1::EnhanceMethod_descriptor()); !s.ok()) return s;
+  const std::pair<const char*, bool> smoothing_fields[] = {
+      {"flow", !spec.flow().empty()},
+      {"iterations", spec.iterations() != 0},
+      {"step", spec.step() != 0.0},
+      {"integration", spec.integration() != v1::INTEGRATION_EXPLICIT},
+      {"theta", spec.has_theta()},
+      {"adaptive", spec.adaptive().mode() != v1::ADAPTIVE_MODE_NONE},
+      {"tolerance", spec.tolerance() != 0.0},
+      {"max_displacement", spec.max_displacement() != 0.0},
+      {"max_displacement_h", spec.max_displacement_h() != 0.0},
+      {"boundary", spec.boundary() == v1::BOUNDARY_MODE_CURVE},
+  };
+  for (const auto& [field, set] : smoothing_fields) {
+    if (set) {
+      return absl::InvalidArgumentError(absl::StrCat(
+          field,
+          " does not apply to an enhancement job (enhance is set); leave it unset, or smooth in a job of its "
+          "own first"));
+    }
+  }
+  EnhanceParams p;
+  if (e.has_gain()) p.gain = e.gain();
+  if (!(p.gain > 1.0 && p.gain <= MaxEnhanceGain())) {
+    return absl::InvalidArgumentError(absl::StrCat("enhance.gain must be in (1, ", MaxEnhanceGain(),
+                                                   "] (a gain <= 1 smooths: ask for a smoothing job), got ", p.gain));
+  }
+  for (const auto& [field, value] :
+       {std::pair{"enhance.detail_scale", e.detail_scale()}, std::pair{"enhance.detail_scale_h", e.detail_scale_h()}}) {
+    if (!(value >= 0.0) || !std::isfinite(value)) {
+      return absl::InvalidArgumentError(absl::StrCat(field, " must be finite and >= 0 (0 = the default), got ", value));
+    }
+  }
+  if (e.detail_scale() > 0.0 && e.detail_scale_h() > 0.0) {
+    return absl::InvalidArgumentError("enhance.detail_scale and enhance.detail_scale_h are both set; give one");
+  }
+  p.detail_scale = e.detail_scale();
+  if (e.detail_scale_h() > 0.0) p.detail_scale_h = e.detail_scale_h();
+  p.smooth_first = e.smooth_first();
+  p.method =
+      e.method() == v1::ENHANCE_METHOD_INVERTED_FLOW ? EnhanceMethod::kInvertedFlow : EnhanceMethod::kScreenedPoisson;
+  j.enhance = std::move(p);
+  return absl::OkStatus();
 }
 
 }  // namespace
@@ -132,6 +182,9 @@ absl::StatusOr<JobParams> FromProto(const v1::JobSpec& spec, int max_iterations)
         absl::StrCat("features.min_abs_curvature must be finite and >= 0, got ", threshold));
   }
   j.features.min_abs_curvature = threshold;
+  if (spec.has_enhance()) {
+    if (absl::Status s = EnhanceFromProto(spec, j); !s.ok()) return s;
+  }
   return j;
 }
 
@@ -175,6 +228,8 @@ v1::ProgressPhase ToProto(Phase phase) {
       return v1::PROGRESS_PHASE_CHOOSING;
     case Phase::kWriting:
       return v1::PROGRESS_PHASE_WRITING;
+    case Phase::kEnhancing:
+      return v1::PROGRESS_PHASE_ENHANCING;
   }
   return v1::PROGRESS_PHASE_UNSPECIFIED;
 }
@@ -260,6 +315,23 @@ v1::Summary MakeSummary(const JobReport& report, const JobParams& params) {
   t->set_encode_seconds(report.encode_seconds);
   t->set_total_seconds(report.total_seconds);
   ToProto(params, report.flow, summary.mutable_parameters());
+  if (report.enhanced.has_value() && params.enhance.has_value()) {
+    v1::EffectiveParameters* p = summary.mutable_parameters();
+    if (!report.enhanced->smoothing.has_value()) {  // no smoothing ran: no flow to report
+      p->clear_flow();
+      p->clear_step();
+      p->clear_effective_step();
+      p->clear_taubin_mu();
+      p->clear_stop_reason();
+    }
+    v1::Enhancement* e = p->mutable_enhance();
+    e->set_gain(params.enhance->gain);
+    e->set_detail_scale(report.enhanced->detail_scale);
+    e->set_detail_scale_h(report.enhanced->detail_scale / report.enhanced->mean_edge_length);
+    e->set_smooth_first(params.enhance->smooth_first);
+    e->set_method(params.enhance->method == EnhanceMethod::kInvertedFlow ? v1::ENHANCE_METHOD_INVERTED_FLOW
+                                                                         : v1::ENHANCE_METHOD_SCREENED_POISSON);
+  }
   summary.set_result_bytes(report.result_bytes);
   for (const std::string& w : report.warnings) summary.add_warnings(w);
   if (report.features.has_value()) {
@@ -273,6 +345,7 @@ v1::Summary MakeSummary(const JobReport& report, const JobParams& params) {
 }
 
 std::string_view JobFlowName(const JobReport& report, const JobParams& params) {
+  if (params.enhance.has_value()) return "enhance";
   return FlowName(report.flow.iterations_run > 0 ? report.flow.flow : params.flow.flow.value_or(kDefaultFlow));
 }
 

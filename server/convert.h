@@ -12,6 +12,7 @@
 #include "core/flows/catalogue.h"
 #include "core/flows/flow.h"
 #include "core/io/draco_codec.h"
+#include "core/job/enhance.h"
 #include "core/measure/metrics.h"
 #include "core/topology.h"
 #include "grpcpp/support/status.h"
@@ -28,6 +29,9 @@ struct JobParams {
   std::string job_id;  // the client's JobSpec.job_id (checked); empty = the server makes one up
   // JobSpec.strength_attribute: the upload's attribute that fills flow.strength; empty = none.
   std::string strength_attribute;
+  // JobSpec.enhance: the job enhances with these instead of smoothing with `flow` (whose
+  // strength and threads it takes); unset = a smoothing job.
+  std::optional<EnhanceParams> enhance;
 };
 
 // JobSpec.job_id's longest length.
@@ -50,6 +54,8 @@ struct JobReport {
   std::string error;          // the status message when the job failed
   int64_t vertices = 0;       // of the welded mesh; 0 when it did not decode
   FlowResult flow;            // iterations_run: those completed, also when the run ends early
+  // An enhancement job's, once it ran (flow is then its smoothing first, if any).
+  std::optional<EnhanceResult> enhanced;
   double decode_seconds = 0.0, queue_seconds = 0.0, smooth_seconds = 0.0, encode_seconds = 0.0;
   double total_seconds = 0.0;  // from the call's arrival
   // Known once the job got that far.
@@ -64,7 +70,7 @@ struct JobReport {
 v1::Summary MakeSummary(const JobReport& report, const JobParams& params);
 
 // The flow a job's log line and metrics name: the one that ran (a default job's choice) once it
-// iterated; else the one asked for.
+// iterated; else the one asked for; "enhance" for an enhancement job.
 std::string_view JobFlowName(const JobReport& report, const JobParams& params);
 
 // The job's log line, without a newline: "meshsmoothd job=ID flow=NAME vertices=N

@@ -8,6 +8,7 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "core/flows/catalogue.h"
+#include "core/job/enhance.h"
 #include "server/convert.h"
 #include "server/job_calls.h"
 #include "server/log.h"
@@ -85,6 +86,7 @@ grpc::ServerUnaryReactor* MeshSmootherService::ListFlows(grpc::CallbackServerCon
   for (const ParameterInfo& p : CommonParameters(options_.max_iterations))
     ToProto(p, response->add_common_parameters());
   response->set_max_iterations(static_cast<uint32_t>(options_.max_iterations));
+  for (const ParameterInfo& p : EnhanceParameters()) ToProto(p, response->add_enhance_parameters());
   reactor->Finish(grpc::Status::OK);
   return reactor;
 }

@@ -12,6 +12,7 @@
 #include "core/features/ridges.h"
 #include "core/flows/flow.h"
 #include "core/io/coordinates.h"
+#include "core/job/enhance.h"
 #include "core/measure/metrics.h"
 #include "core/topology.h"
 #include "server/log.h"
@@ -186,7 +187,16 @@ absl::StatusOr<FlowResult> SmoothJob::SmoothMesh(Mesh& mesh, const Topology& top
     msg.set_elapsed_seconds(Seconds(decoded, now));
     Emit([&](JobSink& sink) { sink.OnProgress(msg); });
   };
-  return Smooth(mesh, topo, flow, control);
+  if (!params_.enhance.has_value()) return Smooth(mesh, topo, flow, control);
+  EnhanceParams enhance = *params_.enhance;
+  enhance.strength = std::move(flow.strength);
+  enhance.threads = flow.threads;
+  absl::StatusOr<EnhanceResult> enhanced = Enhance(mesh, topo, enhance, control);
+  if (!enhanced.ok()) return enhanced.status();
+  FlowResult result = enhanced->smoothing.value_or(FlowResult{});
+  result.mean_edge_length = enhanced->mean_edge_length;
+  report.enhanced = *std::move(enhanced);
+  return result;
 }
 
 absl::StatusOr<std::vector<GenericAttribute>> SmoothJob::DetectFeaturesIfAsked(const Mesh& mesh, const Topology& topo,

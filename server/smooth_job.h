@@ -91,8 +91,9 @@ class SmoothJob {
   // Decodes Draco bytes or welds a MeshUpload; takes the upload and frees the bytes.
   absl::StatusOr<std::unique_ptr<JobMesh>> DecodeUpload(const StopToken& stop);
   void SendAccepted(const ValidationReport& validation, int64_t seam_points);
-  // The flow with what is left of the job's time and the per-vertex `strength` (empty: none),
-  // progress throttled to ~10/s; the iterations done so far go to `report` as they complete.
+  // The flow (or, for JobSpec.enhance, the enhancement) with what is left of the job's time and
+  // the per-vertex `strength` (empty: none), progress throttled to ~10/s; the iterations done so
+  // far go to `report` as they complete, an enhancement's result too.
   absl::StatusOr<FlowResult> SmoothMesh(Mesh& mesh, const Topology& topo, Clock::time_point decoded,
                                         const StopToken& stop, std::vector<float> strength, JobReport& report);
   // Ridges and ravines as the result's attributes when the spec asks; counts in `report`.

@@ -200,9 +200,10 @@ enum class Phase {
   kNoiseEstimate,  // reading the input's noise
   kChoosing,       // trying `flow` to choose the flow and the count; no iteration numbers
   kWriting,        // encoding the result (reported by the server)
+  kEnhancing,      // shape enhancement's solve (core/job/enhance.h)
 };
 
-// "smoothing", "noise estimate", "choosing the flow", "writing".
+// "smoothing", "noise estimate", "choosing the flow", "writing", "enhancing".
 std::string_view PhaseName(Phase phase);
 
 struct Progress {

@@ -94,6 +94,8 @@ std::string_view PhaseName(Phase phase) {
       return "choosing the flow";
     case Phase::kWriting:
       return "writing";
+    case Phase::kEnhancing:
+      return "enhancing";
   }
   return "smoothing";
 }

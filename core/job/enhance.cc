@@ -1,5 +1,6 @@
 #include "core/job/enhance.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -19,6 +20,53 @@ namespace meshsmooth {
 
 double MaxEnhanceGain() { return 100.0; }
 
+std::vector<ParameterInfo> EnhanceParameters() {
+  const EnhanceParams d;
+  return {
+      {"enhance.gain",
+       "the factor detail shorter than the detail scale grows by; longer waves stay",
+       d.gain,
+       1.0,
+       MaxEnhanceGain(),
+       true,
+       false,
+       {}},
+      {"enhance.detail_scale",
+       "the detail scale d in mesh units: a wave of wavelength d grows by (1 + gain) / 2; 0 = detail_scale_h",
+       0.0,
+       0.0,
+       std::numeric_limits<double>::infinity(),
+       false,
+       true,
+       {}},
+      {"enhance.detail_scale_h",
+       absl::StrFormat("d in mean edge lengths of the input; 0 with detail_scale 0 = %g", d.detail_scale_h),
+       0.0,
+       0.0,
+       std::numeric_limits<double>::infinity(),
+       false,
+       true,
+       {}},
+      {"enhance.smooth_first",
+       "a noisy input (one the default job would smooth): 0 = refused (FAILED_PRECONDITION), 1 = smoothed by the "
+       "default job first",
+       0.0,
+       0.0,
+       1.0,
+       false,
+       false,
+       {}},
+      {"enhance.method",
+       "how: one screened-Poisson solve (stable for any gain)",
+       0,
+       0,
+       0,
+       false,
+       false,
+       {"ENHANCE_METHOD_SCREENED_POISSON"}},
+  };
+}
+
 namespace {
 
 absl::Status ValidateEnhanceParams(const Mesh& mesh, const EnhanceParams& p) {
@@ -32,6 +80,11 @@ absl::Status ValidateEnhanceParams(const Mesh& mesh, const EnhanceParams& p) {
     return absl::InvalidArgumentError(
         absl::StrFormat("the detail scale must be finite and >= 0 (mesh units; 0 = %g mean edge lengths), got %g",
                         p.detail_scale_h, p.detail_scale));
+  }
+  if (!(p.inverted_iterations >= 1) || !(p.inverted_step > 0.0 && p.inverted_step < 1.0)) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("the inverted flow needs at least one step and a step in (0, 1), got %d and %g",
+                        p.inverted_iterations, p.inverted_step));
   }
   const int32_t n = mesh.num_vertices();
   if (!p.locked.empty() && p.locked.size() != static_cast<size_t>(n)) {
@@ -59,6 +112,57 @@ absl::StatusOr<std::optional<std::pair<Mesh, FlowResult>>> SmoothIfNoisy(const M
   if (!r.ok()) return r.status();
   if (r->iterations_run == 0) return std::nullopt;  // no noise, no estimate, or no gain from smoothing
   return std::make_optional(std::pair{std::move(copy), *std::move(r)});
+}
+
+// U0 of eq. (3) at every vertex of `pos`: the mean of the ring less the vertex.
+void Umbrellas(const Topology& topo, const Vec3* pos, Vec3* out) {
+  for (int32_t v = 0; v < topo.num_vertices(); ++v) {
+    const int32_t begin = topo.ring_offsets[v], end = topo.ring_offsets[v + 1];
+    if (begin == end) {
+      out[v] = {};
+      continue;
+    }
+    Vec3 sum{};
+    for (int32_t k = begin; k < end; ++k) sum = sum + pos[topo.ring[k]];
+    out[v] = sum * (1.0 / (end - begin)) - pos[v];
+  }
+}
+
+// EnhanceMethod::kInvertedFlow from `input` (F) and `base` (B, F smoothed at the detail scale)
+// into `pos` (F on entry). Returns the steps run.
+absl::StatusOr<int> InvertedFlow(const Topology& topo, const uint8_t* role, const EnhanceParams& p, const Vec3* input,
+                                 const Vec3* base, double h, const RunControl& control, Vec3* pos) {
+  const int32_t n = topo.num_vertices();
+  std::vector<Vec3> target(n), bound(n), u(n);
+  std::vector<double> limit(n);
+  Umbrellas(topo, input, target.data());
+  Umbrellas(topo, base, bound.data());
+  for (int32_t v = 0; v < n; ++v) {
+    const Vec3 band = target[v] - bound[v];
+    target[v] = bound[v] + band * p.gain;              // U*
+    limit[v] = p.inverted_step * p.gain * Norm(band);  // eq. (14)'s bound: lambda T(P)
+  }
+  std::vector<Vec3> next(pos, pos + n);
+  const double converged = 1e-6 * h;
+  int step = 0;
+  while (step < p.inverted_iterations) {
+    if (absl::Status s = control.stop.Check(); !s.ok()) return s;
+    Umbrellas(topo, pos, u.data());
+    double largest = 0.0;
+    for (int32_t v = 0; v < n; ++v) {
+      if (role[v] != flows::kFree) continue;
+      Vec3 move = (u[v] - target[v]) * p.inverted_step;
+      const double length = Norm(move);
+      if (length > limit[v]) move = move * (limit[v] / length);
+      if (!p.strength.empty()) move = move * static_cast<double>(p.strength[v]);
+      next[v] = pos[v] + move;
+      largest = std::max(largest, Norm(move));
+    }
+    std::copy(next.begin(), next.end(), pos);
+    ++step;
+    if (largest < converged) break;
+  }
+  return step;
 }
 
 }  // namespace
@@ -112,9 +216,26 @@ absl::StatusOr<EnhanceResult> Enhance(Mesh& mesh, const Topology& topo, const En
   thread_params.threads = p.threads;
   const int threads = flows::ThreadsFor(n, thread_params);
   const double volume = closed ? job::EnclosedVolume(mesh.positions.data(), topo, threads) : 0.0;
-  flows::ImplicitStepper stepper(topo, system, role.data(), {1.0 / alpha, (p.gain - 1.0) / alpha}, h, threads);
+  // Screened Poisson solves for the result; the inverted flow solves for its base B, the same
+  // system with gain 0 (the input smoothed at the detail scale), and steps towards the result.
+  const bool poisson = p.method == EnhanceMethod::kScreenedPoisson;
+  flows::ImplicitStepper stepper(topo, system, role.data(), {1.0 / alpha, ((poisson ? p.gain : 0.0) - 1.0) / alpha}, h,
+                                 threads);
+  if (absl::Status s = control.stop.Check(); !s.ok()) return s;
+  if (control.on_progress) {
+    Progress progress;
+    progress.phase = Phase::kEnhancing;
+    control.on_progress(progress);
+  }
   std::vector<Vec3> enhanced(n);
   if (absl::Status s = stepper.Step(mesh.positions.data(), enhanced.data(), false); !s.ok()) return s;
+  if (!poisson) {
+    const std::vector<Vec3> base = std::exchange(enhanced, mesh.positions);
+    absl::StatusOr<int> steps =
+        InvertedFlow(topo, role.data(), p, mesh.positions.data(), base.data(), h, control, enhanced.data());
+    if (!steps.ok()) return steps.status();
+    result.inverted_steps = *steps;
+  }
   // Three Newton steps a call: a gain that grows the shape by a good share of its size takes a
   // few calls (the volume is cubic in the offset).
   for (int call = 0; closed && call < 4; ++call) {

@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "absl/status/statusor.h"
+#include "core/flows/catalogue.h"
 #include "core/flows/flow.h"
 #include "core/mesh.h"
 #include "core/topology.h"
@@ -28,6 +29,29 @@ namespace meshsmooth {
 
 // The largest gain Enhance takes (100).
 double MaxEnhanceGain();
+
+// The fields of the service's JobSpec.enhance ("enhance.gain", ...) with their defaults and
+// ranges, as ListFlows and the CLI's help state them. The service takes gains in (1, 100]: a
+// gain <= 1 smooths, which the smoothing jobs do.
+std::vector<ParameterInfo> EnhanceParameters();
+
+// How Enhance sharpens.
+enum class EnhanceMethod {
+  // One solve of the screened-Poisson system above: stable for any gain.
+  kScreenedPoisson,
+  // The paper's proposal (its conclusion: "simple inverting of a smoothing flow is usually
+  // unstable; stability can be achieved by a curvature-based local control similar to Section
+  // 4"): explicit steps of the umbrella flow run backwards on the band below d. With U the
+  // umbrella (eq. 3), B the input smoothed at scale d (the solve above with gain 0) and F the
+  // input, a step moves each free vertex by lambda (U(P) - U*), U* = U(B) + gain (U(F) - U(B)):
+  // against the smoothing direction by (gain - 1) times the input's band curvature at first, and
+  // by less as the vertex's own curvature nears gain times it. Eq. (14)'s local control, turned
+  // round: the move of a step is at most lambda T(P), T(P) = gain |U(F) - U(B)| at P, so a vertex
+  // without detail of its own does not move. The steps are Jacobi sweeps towards the screened-
+  // Poisson solution (I - W has eigenvalues in [0, 2], so lambda < 1 contracts every mode): they
+  // stay bounded however many run, and stop once no vertex moves by more than 1e-6 h.
+  kInvertedFlow,
+};
 
 struct EnhanceParams {
   double gain = 2.0;            // [0, MaxEnhanceGain()]: > 1 sharpens, 1 leaves the mesh, < 1 smooths
@@ -38,6 +62,9 @@ struct EnhanceParams {
   std::vector<float> strength;  // as FlowParams::strength
   ImplicitSolver solver = ImplicitSolver::kAuto;
   int threads = 0;  // 0 = all hardware threads
+  EnhanceMethod method = EnhanceMethod::kScreenedPoisson;
+  int inverted_iterations = 1000;  // kInvertedFlow: the most steps (fewer once converged), >= 1
+  double inverted_step = 0.9;      // kInvertedFlow: lambda, in (0, 1)
 };
 
 struct EnhanceResult {
@@ -45,12 +72,14 @@ struct EnhanceResult {
   double detail_scale = 0.0;      // d applied, mesh units
   // The default job's run when the input was noisy and EnhanceParams::smooth_first; else unset.
   std::optional<FlowResult> smoothing;
+  int inverted_steps = 0;  // kInvertedFlow: the steps run
 };
 
 // Enhances `mesh` in place (connectivity unchanged). InvalidArgument for a gain or detail scale
 // out of range, a bad strength or lock mask, non-finite coordinates; FailedPrecondition when the
 // input is noisy (the default job would smooth it: its estimated noise is named) and
-// smooth_first is not set, or when the solve fails.
+// smooth_first is not set, or when the solve fails. Reports Phase::kEnhancing to
+// control.on_progress before the solve.
 absl::StatusOr<EnhanceResult> Enhance(Mesh& mesh, const Topology& topo, const EnhanceParams& p,
                                       const RunControl& control = {});
 

@@ -159,6 +159,11 @@ SmoothOptions OptionsFrom(const py::dict& params) {
   Take(params, "ridge_threshold", o.ridge_threshold);
   Take(params, "job_id", o.job_id);
   Take(params, "max_displacement", o.max_displacement);
+  Take(params, "enhance", o.enhance);
+  Take(params, "gain", o.gain);
+  Take(params, "detail", o.detail);
+  Take(params, "smooth_first", o.smooth_first);
+  Take(params, "method", o.method);
   if (absl::Status s = client::CheckSmoothOptions(o); !s.ok()) Fail(s);
   return o;
 }

@@ -416,6 +416,26 @@ def cli_checks(a, check, tmp):
                 assert f.readline().strip() == "OFF"
         check(f"smooth through meshsmoothd at {address}", through_server)
 
+        def enhance_through_server():
+            local, remote = os.path.join(tmp, "enhanced-local.ply"), os.path.join(tmp, "enhanced-remote.ply")
+            r = run([cli, "enhance", "builtin:sphere", "-o", local, "--gain", "3", "--detail", "1", "-q"])
+            assert r.returncode == 0, r.stderr
+            r = run([cli, "enhance", "builtin:sphere", "-o", remote, "--gain", "3", "--detail", "1", "--json",
+                     "--server", address])
+            assert r.returncode == 0, r.stderr
+            e = json.loads(r.stdout)["parameters"]["enhance"]
+            assert e["gain"] == 3 and e["detail_scale"] == 1, e
+            with open(local, "rb") as f1, open(remote, "rb") as f2:
+                assert f1.read() == f2.read(), "the local and the server's results differ"
+            r = run([cli, "enhance", "builtin:noisy-sphere", "-o", local, "--server", address])
+            assert r.returncode == 1 and "the input is noisy" in r.stderr, (r.returncode, r.stderr)
+            r = run([cli, "enhance", "builtin:sphere", "-o", local, "--gain", "1"])
+            assert r.returncode == 2 and "enhance.gain" in r.stderr, (r.returncode, r.stderr)
+            r = run([cli, "enhance", "builtin:sphere", "-o", local, "--detail", "big"])
+            assert r.returncode == 2 and "--detail" in r.stderr, (r.returncode, r.stderr)
+        check("enhance through meshsmoothd gives the local run's bytes; a noisy input exits 1 naming it, a gain of 1 "
+              "or a bad --detail exits 2 naming it", enhance_through_server)
+
         def flows_are_the_servers():
             # meshsmoothd's ListFlows is the list: the CLI's in-process server offers the same
             # flows, in the same order.

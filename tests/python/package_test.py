@@ -169,6 +169,33 @@ def package_checks(a, check, tmp):
     check("survey coordinates with a per-vertex strength: the CLI's positions; strength 0 keeps a vertex exactly",
           survey_with_strength)
 
+    def enhanced_like_the_cli():
+        result = meshsmooth.enhance(vertices, faces, gain=2.5, detail="6h", smooth_first=True)
+        out = os.path.join(tmp, "cli-enhanced.obj")
+        r = run([a.cli, "enhance", bunny, "-o", out, "-q", "--gain", "2.5", "--detail", "6h", "--smooth-first"],
+                timeout=300)
+        require(r.returncode == 0, f"the CLI failed ({r.returncode}): {r.stderr}")
+        require(np.array_equal(result.vertices, obj_vertices(out)), "positions differ from the CLI's")
+        e = result.summary.parameters["enhance"]
+        require(e["gain"] == 2.5 and abs(e["detail_scale_h"] - 6) < 1e-9 and e["smooth_first"], e)
+        return result
+    enhanced = check("the bunny enhanced in this process (smoothed first, gain 2.5): the CLI's positions, exactly",
+                     enhanced_like_the_cli)
+
+    def enhance_refused(code, words, **kwargs):
+        try:
+            meshsmooth.enhance(**dict(dict(vertices=vertices, faces=faces), **kwargs))
+        except meshsmooth.Error as e:
+            require(e.code == code and all(w in e.message for w in words), f"{e.code}: {e.message}")
+            return
+        raise AssertionError("no meshsmooth.Error")
+    check("enhance(gain=1) raises INVALID_ARGUMENT naming enhance.gain",
+          enhance_refused, "INVALID_ARGUMENT", ["enhance.gain"], gain=1.0)
+    edges = np.linalg.norm(vertices[faces[:, 0]] - vertices[faces[:, 1]], axis=1).mean()
+    noisy = vertices + np.random.default_rng(1).normal(scale=0.3 * edges, size=vertices.shape)
+    check("enhance() of the bunny with noise of 0.3 edge lengths, without smooth_first, raises FAILED_PRECONDITION: "
+          "the input is noisy", enhance_refused, "FAILED_PRECONDITION", ["the input is noisy"], vertices=noisy)
+
     def gil_released():
         gaps, done = [], threading.Event()
         worker = threading.Thread(target=lambda: (meshsmooth.smooth(vertices, faces, flow="taubin", iterations=300),
@@ -215,6 +242,13 @@ def package_checks(a, check, tmp):
             require(result.summary.result_bytes > 0 and result.summary.job_id, result.summary)
         check("the bunny through meshsmoothd (TLS, a token): the CLI's positions, and the local run's",
               remote_like_the_cli)
+
+        def remote_enhanced():
+            result = meshsmooth.enhance(vertices, faces, gain=2.5, detail="6h", smooth_first=True, **remote)
+            if enhanced is not None:
+                require(np.array_equal(result.vertices, enhanced.vertices), "positions differ from the local run's")
+            require(result.summary.parameters["enhance"]["gain"] == 2.5, result.summary.parameters)
+        check("the bunny enhanced through meshsmoothd: the local run's positions", remote_enhanced)
 
         check("the server's own refusal: iterations above its limit raise INVALID_ARGUMENT naming iterations",
               expect_error, "INVALID_ARGUMENT", ["iterations", "limit"], vertices=vertices, faces=faces,

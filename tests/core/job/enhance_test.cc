@@ -1,6 +1,7 @@
-// Shape enhancement (core/job/enhance.h): a degree-8 spherical-harmonic bump on a sphere grows by
-// the gain while the radius stays, no face turns over, the same bits for any thread count,
-// strength 0 holds, a noisy input is refused or smoothed first, bad parameters are refused.
+// Shape enhancement (core/job/enhance.h), both methods: a degree-8 spherical-harmonic bump on a
+// sphere grows by the gain while the radius stays, the inverted flow stays bounded, no face turns over, the same bits
+// for any thread count, strength 0 holds, a noisy input is refused or smoothed first, bad parameters are refused.
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <string>
@@ -9,6 +10,7 @@
 #include "core/job/enhance.h"
 #include "core/shapes/parametric.h"
 #include "gtest/gtest.h"
+#include "tests/bump_sphere.h"
 #include "tests/flow_fixtures.h"
 
 namespace meshsmooth {
@@ -16,55 +18,11 @@ namespace {
 
 using namespace meshsmooth::testing;
 
-// Re((x + i y)^l) on the unit sphere: a spherical harmonic of degree l.
-double Harmonic(const Vec3& u, int l) {
-  double re = 1.0, im = 0.0;
-  for (int k = 0; k < l; ++k) {
-    const double next = re * u.x - im * u.y;
-    im = re * u.y + im * u.x;
-    re = next;
-  }
-  return re;
-}
-
-// The unit icosphere with a bump eps Y_l along its normals.
-Mesh BumpySphere(int level, int l, double eps) {
-  Mesh m = Icosphere(level);
-  for (Vec3& p : m.positions) p = p * (1.0 + eps * Harmonic(p, l));
-  return m;
-}
-
-struct Fit {
-  double radius = 0.0, amplitude = 0.0;
-};
-
-// Least squares of |p| = radius + amplitude Y_l(p / |p|) over the vertices.
-Fit FitBump(const Mesh& m, int l) {
-  double s11 = 0, s1y = 0, syy = 0, sr = 0, sry = 0;
-  for (const Vec3& p : m.positions) {
-    const double r = Norm(p), y = Harmonic(p * (1.0 / r), l);
-    s11 += 1, s1y += y, syy += y * y, sr += r, sry += r * y;
-  }
-  const double det = s11 * syy - s1y * s1y;
-  return {(sr * syy - sry * s1y) / det, (s11 * sry - s1y * sr) / det};
-}
-
-int64_t FlippedFaces(const Mesh& before, const Mesh& after) {
-  int64_t flipped = 0;
-  for (const Triangle& t : before.triangles) {
-    auto normal = [&](const Mesh& m) {
-      return Cross(m.positions[t[1]] - m.positions[t[0]], m.positions[t[2]] - m.positions[t[0]]);
-    };
-    flipped += Dot(normal(before), normal(after)) <= 0.0;
-  }
-  return flipped;
-}
-
 TEST(EnhanceTest, GainMultipliesADegreeEightBumpAndKeepsTheRadius) {
   const int l = 8;
   const Mesh start = BumpySphere(5, l, 0.002);
   const Topology topo = BuildTopology(start);
-  const Fit before = FitBump(start, l);
+  const BumpFit before = FitBump(start, l);
   ASSERT_NEAR(before.amplitude, 0.002, 2e-4);
   for (double gain : {2.0, 3.0, 0.5}) {
     SCOPED_TRACE(::testing::Message() << "gain " << gain);
@@ -75,7 +33,7 @@ TEST(EnhanceTest, GainMultipliesADegreeEightBumpAndKeepsTheRadius) {
     const absl::StatusOr<EnhanceResult> r = Enhance(m, topo, p);
     ASSERT_TRUE(r.ok()) << r.status();
     EXPECT_FALSE(r->smoothing.has_value());
-    const Fit after = FitBump(m, l);
+    const BumpFit after = FitBump(m, l);
     EXPECT_NEAR(after.amplitude / before.amplitude, gain, 0.1 * gain);
     EXPECT_NEAR(after.radius / before.radius, 1.0, 0.005);
     EXPECT_EQ(FlippedFaces(start, m), 0);
@@ -88,6 +46,43 @@ TEST(EnhanceTest, GainMultipliesADegreeEightBumpAndKeepsTheRadius) {
   for (size_t v = 0; v < same.positions.size(); ++v) ASSERT_LT(Norm(same.positions[v] - start.positions[v]), 1e-12);
 }
 
+// The paper's inverted flow with eq. (14)'s bound (EnhanceMethod::kInvertedFlow): at its default
+// of at most 1000 steps the bump grows by x 1.934 (gain 2) and x 2.868 (gain 3), the radius within
+// 0.02%; run until it converges (about 15,000 steps here) it stays there: x 1.934 and x 2.860,
+// the largest move 0.010 and 0.023 against 0.014 and 0.034 at 1000 steps: bounded.
+TEST(EnhanceTest, InvertedFlowMultipliesTheBumpAndStaysBounded) {
+  const int l = 8;
+  const Mesh start = BumpySphere(5, l, 0.002);
+  const Topology topo = BuildTopology(start);
+  const BumpFit before = FitBump(start, l);
+  for (double gain : {2.0, 3.0}) {
+    for (int steps : {EnhanceParams{}.inverted_iterations, 30000}) {
+      SCOPED_TRACE(::testing::Message() << "gain " << gain << ", at most " << steps << " steps");
+      Mesh m = start;
+      EnhanceParams p;
+      p.gain = gain;
+      p.detail_scale = 4.0;
+      p.method = EnhanceMethod::kInvertedFlow;
+      p.inverted_iterations = steps;
+      const absl::StatusOr<EnhanceResult> r = Enhance(m, topo, p);
+      ASSERT_TRUE(r.ok()) << r.status();
+      const BumpFit after = FitBump(m, l);
+      EXPECT_NEAR(after.amplitude / before.amplitude, gain, 0.1 * gain);
+      EXPECT_NEAR(after.radius / before.radius, 1.0, 0.005);
+      EXPECT_EQ(FlippedFaces(start, m), 0);
+      double largest = 0.0;
+      for (size_t v = 0; v < m.positions.size(); ++v) {
+        largest = std::max(largest, Norm(m.positions[v] - start.positions[v]));
+      }
+      // The bump's own amplitude is 0.002 and grows to at most 0.006: every move stays near it.
+      EXPECT_LT(largest, 0.05);
+      if (steps > EnhanceParams{}.inverted_iterations) {
+        EXPECT_LT(r->inverted_steps, steps) << "never converged";
+      }
+    }
+  }
+}
+
 TEST(EnhanceTest, SameBitsForAnyThreadCountAndStrengthZeroHolds) {
   const Mesh start = BumpySphere(6, 8, 0.01);
   const Topology topo = BuildTopology(start);
@@ -95,21 +90,25 @@ TEST(EnhanceTest, SameBitsForAnyThreadCountAndStrengthZeroHolds) {
   p.detail_scale = 1.0;
   p.strength.assign(start.num_vertices(), 1.0f);
   for (int32_t v = 0; v < start.num_vertices(); ++v) p.strength[v] = start.positions[v].z > 0.5 ? 0.0f : 1.0f;
-  Mesh one = start, four = start;
-  p.threads = 1;
-  ASSERT_TRUE(Enhance(one, topo, p).ok());
-  p.threads = 4;
-  ASSERT_TRUE(Enhance(four, topo, p).ok());
-  ASSERT_EQ(std::memcmp(one.positions.data(), four.positions.data(), one.positions.size() * sizeof(Vec3)), 0);
-  int64_t moved = 0;
-  for (int32_t v = 0; v < start.num_vertices(); ++v) {
-    if (p.strength[v] == 0.0f) {
-      ASSERT_EQ(std::memcmp(&one.positions[v], &start.positions[v], sizeof(Vec3)), 0) << "vertex " << v;
-    } else {
-      moved += !(one.positions[v] == start.positions[v]);
+  for (EnhanceMethod method : {EnhanceMethod::kScreenedPoisson, EnhanceMethod::kInvertedFlow}) {
+    SCOPED_TRACE(method == EnhanceMethod::kScreenedPoisson ? "screened Poisson" : "inverted flow");
+    p.method = method;
+    Mesh one = start, four = start;
+    p.threads = 1;
+    ASSERT_TRUE(Enhance(one, topo, p).ok());
+    p.threads = 4;
+    ASSERT_TRUE(Enhance(four, topo, p).ok());
+    ASSERT_EQ(std::memcmp(one.positions.data(), four.positions.data(), one.positions.size() * sizeof(Vec3)), 0);
+    int64_t moved = 0;
+    for (int32_t v = 0; v < start.num_vertices(); ++v) {
+      if (p.strength[v] == 0.0f) {
+        ASSERT_EQ(std::memcmp(&one.positions[v], &start.positions[v], sizeof(Vec3)), 0) << "vertex " << v;
+      } else {
+        moved += !(one.positions[v] == start.positions[v]);
+      }
     }
+    EXPECT_GT(moved, start.num_vertices() / 2);
   }
-  EXPECT_GT(moved, start.num_vertices() / 2);
 }
 
 // Noise is the finest detail: enhancing it would grow it most. Refused, or smoothed first.
