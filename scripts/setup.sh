@@ -25,7 +25,7 @@ packages=(
   build-essential cmake ninja-build pkgconf
   libgrpc++-dev libgrpc-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler
   libdraco-dev libabsl-dev libcli11-dev libeigen3-dev libpng-dev prometheus-cpp-dev nlohmann-json3-dev
-  libsqlite3-dev libssl-dev
+  libsqlite3-dev libssl-dev libpqxx-dev
 )
 # The Python package (python/): pybind11 and the headers of Debian's python3, numpy at run time.
 if [ "$preset" != image ] && [ "$preset" != asan ] && [ "$preset" != fuzz ]; then
@@ -37,7 +37,7 @@ if [ "$preset" != image ] && [ "$preset" != python ]; then
   packages+=(
     grpc-proto draco libopenmesh-dev libgtest-dev libgmock-dev libbenchmark-dev libopen3d-dev libcgal-dev
     python3-grpcio python3-protobuf python3-numpy python3-scipy python3-yaml python3-open3d openssl
-    nginx prometheus clang-format nodejs
+    nginx prometheus clang-format nodejs postgresql-15
   )
 fi
 # kubectl renders deploy/kubernetes in tests/deploy/kubernetes_test.py. Debian's is
@@ -56,7 +56,7 @@ if [ ${#missing[@]} -gt 0 ]; then
   echo "setup: installing ${#missing[@]} missing Debian packages: ${missing[*]}"
   "${sudo_cmd[@]}" apt-get update -qq
   # Debian starts a packaged service as it installs it (nginx: a system daemon on port 80;
-  # prometheus on 9090). The tests run their own, unprivileged; a policy-rc.d that refuses every
+  # prometheus on 9090; postgresql-15 its cluster 15/main on 5432). The tests run their own, unprivileged; a policy-rc.d that refuses every
   # start keeps the system ones stopped (one already there, as in Debian's container images, is
   # left alone).
   if [ ! -e /usr/sbin/policy-rc.d ]; then

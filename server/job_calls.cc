@@ -1,18 +1,16 @@
 #include "server/job_calls.h"
 
-#include <openssl/rand.h>
-
 #include <algorithm>
 #include <mutex>
 #include <optional>
 #include <string>
 
-#include "absl/strings/escaping.h"
 #include "absl/strings/str_cat.h"
 #include "server/convert.h"
 
-// The store's calls are short SQLite statements (a chunk of at most 1 MiB committed with one
-// fsync at most); they run inside the reactions, as a unary handler would.
+// The store's calls are short statements (a chunk of at most 1 MiB committed with one fsync at
+// most, in SQLite or on the PostgreSQL server); they run inside the reactions, as a unary handler
+// would.
 namespace meshsmooth::server {
 namespace {
 
@@ -316,12 +314,6 @@ class FetchReactor final : public grpc::ServerWriteReactor<v1::FetchResultRespon
 };
 
 }  // namespace
-
-std::string NewStoredJobId() {
-  unsigned char bytes[16];
-  if (RAND_bytes(bytes, sizeof bytes) != 1) std::abort();  // no randomness: no unguessable ids
-  return absl::BytesToHexString(absl::string_view(reinterpret_cast<const char*>(bytes), sizeof bytes));
-}
 
 grpc::ServerReadReactor<v1::SubmitRequest>* NewSubmitReactor(const grpc::Status& authenticated, JobRunner* runner,
                                                              const ServerOptions& options,

@@ -10,9 +10,6 @@
 
 namespace meshsmooth::server {
 
-// A new job id: 32 lowercase hex digits of 128 random bits (OpenSSL's RAND_bytes).
-std::string NewStoredJobId();
-
 grpc::ServerReadReactor<v1::SubmitRequest>* NewSubmitReactor(const grpc::Status& authenticated, JobRunner* runner,
                                                              const ServerOptions& options,
                                                              v1::SubmitResponse* response);

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <vector>
 
+#include "absl/strings/str_cat.h"
 #include "server/convert.h"
 #include "server/log.h"
 #include "server/smooth_job.h"
@@ -68,6 +69,9 @@ void JobRunner::Stop() {
     if (job) job->Detach();
   }
   if (thread_.joinable()) thread_.join();
+  // Their runs were cut: back to the queue now, for the next start or another replica, rather
+  // than when their leases run out.
+  for (auto& [id, job] : running) store_.Release(id, /*undo_attempt=*/job == nullptr);
 }
 
 void JobRunner::Loop() {
@@ -77,12 +81,37 @@ void JobRunner::Loop() {
     if (options_.job_retention_seconds > 0) {
       store_.ExpireEndedBefore(NowMicros() - static_cast<int64_t>(options_.job_retention_seconds * 1e6));
     }
+    RenewLeases();
     while (Dispatch()) {
     }
+    if (store_.shared()) NotifyWatched();
     lock.lock();
     cv_.wait_for(lock, kTick, [this] { return stopping_ || woken_; });
     woken_ = false;
   }
+}
+
+void JobRunner::RenewLeases() {
+  std::map<std::string, std::shared_ptr<SmoothJob>> active;
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    active = active_;
+  }
+  for (const auto& [id, job] : active) {
+    // Cancelled or taken over elsewhere: stop within one iteration; its late events go nowhere.
+    if (!store_.RenewLease(id, NowMicros()) && job) job->Detach();
+  }
+}
+
+void JobRunner::NotifyWatched() {
+  std::vector<std::string> ids;
+  {
+    std::lock_guard<std::mutex> lock(watch_mu_);
+    for (auto it = watchers_.begin(); it != watchers_.end(); it = watchers_.upper_bound(it->first)) {
+      ids.push_back(it->first);
+    }
+  }
+  for (const std::string& id : ids) Notify(id);
 }
 
 bool JobRunner::Dispatch() {
@@ -92,36 +121,49 @@ bool JobRunner::Dispatch() {
     if (stopping_ || static_cast<int>(active_.size()) >= pool_.workers()) return false;
     for (const auto& [id, job] : active_) skip.push_back(id);
   }
-  std::optional<std::string> id = store_.NextQueued(skip);
-  if (!id.has_value()) return false;
+  std::optional<ClaimedJob> claimed = store_.Claim(skip, NowMicros());
+  if (!claimed.has_value()) return false;
+  const std::string id = claimed->job_id;
+  if (claimed->takeover) {
+    lease_takeovers_.fetch_add(1);
+    LogEvent(options_.log_format, "warning", "lease_takeover",
+             absl::StrCat("job=", id, " taken over: the lease of the replica that ran it ran out"),
+             [&](JsonLine& l) { l.Str("job_id", id); });
+  }
   {
     std::lock_guard<std::mutex> lock(mu_);
-    active_.emplace(*id, nullptr);
+    active_.emplace(id, nullptr);
   }
-  if (!pool_.TrySubmit([this, id = *id] { Run(id); })) {  // the queue is full of Smooth calls: the next tick
+  Notify(id);
+  auto task = std::make_shared<ClaimedJob>(*std::move(claimed));
+  if (!pool_.TrySubmit([this, task] { Run(std::move(*task)); })) {  // the queue is full of Smooth calls
+    store_.Release(id, /*undo_attempt=*/true);
     std::lock_guard<std::mutex> lock(mu_);
-    active_.erase(*id);
+    active_.erase(id);
     return false;
   }
   return true;
 }
 
-void JobRunner::Run(const std::string& job_id) {
+void JobRunner::Run(ClaimedJob claimed) {
+  const std::string job_id = claimed.job_id;
   const auto done = [&] {
     std::lock_guard<std::mutex> lock(mu_);
     active_.erase(job_id);
     woken_ = true;
     cv_.notify_all();
   };
-  std::optional<JobInput> input;
+  bool stopping;
   {
     std::lock_guard<std::mutex> lock(mu_);
-    if (!stopping_) input = store_.StartRun(job_id, NowMicros());
+    stopping = stopping_;
   }
-  if (!input.has_value()) return done();  // cancelled or deleted while it waited, or stopping
-  Notify(job_id);
+  if (stopping) {  // never started: back to the queue for the next start or another replica
+    store_.Release(job_id, /*undo_attempt=*/true);
+    return done();
+  }
   StoreSink sink(job_id, *this);
-  v1::JobSpec spec = input->spec;
+  v1::JobSpec spec = claimed.input.spec;
   spec.clear_job_id();
   absl::StatusOr<JobParams> params = FromProto(spec, options_.max_iterations);
   if (!params.ok()) {  // checked at Submit; a server with a lower --max-iterations since then
@@ -129,17 +171,15 @@ void JobRunner::Run(const std::string& job_id) {
     return done();
   }
   params->job_id = job_id;
-  auto job = std::make_shared<SmoothJob>(job_id, *std::move(params), std::move(input->upload), BudgetHold(),
+  auto job = std::make_shared<SmoothJob>(job_id, *std::move(params), std::move(claimed.input.upload), BudgetHold(),
                                          Clock::now(), options_, &sink, "job-store", metrics_);
   {
     std::lock_guard<std::mutex> lock(mu_);
     active_[job_id] = job;
     if (stopping_) job->Detach();
   }
-  // A cancel between StartRun and here found no SmoothJob to stop: look at the store again.
-  if (absl::StatusOr<v1::Job> now = store_.Get(job_id); !now.ok() || now->state() != v1::JOB_STATE_RUNNING) {
-    job->Detach();
-  }
+  // A cancel (or a takeover) between the claim and here found no SmoothJob to stop: ask the store.
+  if (!store_.RenewLease(job_id, NowMicros())) job->Detach();
   job->Run();
   job->Detach();  // the sink goes with this frame
   done();

@@ -1,10 +1,13 @@
-// Runs the job store's jobs on the service's worker pool: takes the oldest QUEUED job whenever
-// fewer of the store's jobs than workers are on the pool, runs it as a SmoothJob whose events go
-// to the store (state, progress, result, error), and tells the watchers of a job (WatchJob) each
-// change. Also forgets ended jobs past --job-retention. Jobs from Smooth calls share the pool: at
-// most `workers` stored jobs sit on it at once, so they never fill its queue.
+// Runs the job store's jobs on the service's worker pool: claims the oldest QUEUED job (or one
+// whose lease ran out) whenever fewer of the store's jobs than workers are on the pool, runs it
+// as a SmoothJob whose events go to the store (state, progress, result, error), renews the
+// leases of its jobs at each tick, and tells the watchers of a job (WatchJob) each change — on a
+// store other replicas share, by reading the watched jobs' rows at each tick too. Also forgets
+// ended jobs past --job-retention. Jobs from Smooth calls share the pool: at most `workers`
+// stored jobs sit on it at once, so they never fill its queue.
 #pragma once
 
+#include <atomic>
 #include <condition_variable>
 #include <map>
 #include <memory>
@@ -54,21 +57,27 @@ class JobRunner {
   // Tells the watchers of `job_id` its state now.
   void Notify(const std::string& job_id);
 
-  // Stops scheduling and stops the running jobs within one iteration. They stay RUNNING in the
-  // store, so that the next start of the server runs them again from their input.
+  // Stops scheduling and stops the running jobs within one iteration. They go back to QUEUED in
+  // the store, so that the next start (or another replica) runs them again from their input.
   void Stop();
 
   int active() {
     std::lock_guard<std::mutex> lock(mu_);
     return static_cast<int>(active_.size());
   }
+  // Jobs this runner claimed after the lease of another run had run out.
+  int64_t lease_takeovers() const { return lease_takeovers_.load(); }
 
  private:
   void Loop();
-  // Puts one QUEUED job on the pool; false when there is none or no room.
+  // Claims one job and puts it on the pool; false when there is none or no room.
   bool Dispatch();
-  // On a worker: the job's run from the store to the store.
-  void Run(const std::string& job_id);
+  // Extends the leases of this runner's jobs; a job whose lease is lost stops.
+  void RenewLeases();
+  // Tells each watched job's watchers its row now (changes other replicas made).
+  void NotifyWatched();
+  // On a worker: the claimed job's run, to the store.
+  void Run(ClaimedJob claimed);
 
   JobStore& store_;
   WorkerPool& pool_;
@@ -80,6 +89,7 @@ class JobRunner {
   bool woken_ = false;
   // The store's jobs on the pool, queued there or running (then with their SmoothJob).
   std::map<std::string, std::shared_ptr<SmoothJob>> active_;
+  std::atomic<int64_t> lease_takeovers_{0};
   std::mutex watch_mu_;
   std::multimap<std::string, JobWatcher*> watchers_;
   std::thread thread_;

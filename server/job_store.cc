@@ -1,17 +1,14 @@
 #include "server/job_store.h"
 
-#include <fcntl.h>
 #include <openssl/evp.h>
-#include <sqlite3.h>
-#include <sys/file.h>
-#include <sys/stat.h>
+#include <openssl/rand.h>
 #include <unistd.h>
 
 #include <algorithm>
-#include <cerrno>
-#include <cstring>
+#include <cstdlib>
 #include <utility>
 
+#include "absl/strings/escaping.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_split.h"
 #include "server/options.h"
@@ -19,59 +16,10 @@
 namespace meshsmooth::server {
 namespace {
 
-constexpr char kSchema[] = R"sql(
-CREATE TABLE IF NOT EXISTS uploads(
-  request_id TEXT PRIMARY KEY, spec BLOB NOT NULL, total_bytes INTEGER NOT NULL, sha256 BLOB NOT NULL,
-  received INTEGER NOT NULL DEFAULT 0, job_id TEXT);
-CREATE TABLE IF NOT EXISTS upload_chunks(
-  request_id TEXT NOT NULL, offset INTEGER NOT NULL, data BLOB NOT NULL, PRIMARY KEY(request_id, offset));
-CREATE TABLE IF NOT EXISTS jobs(
-  job_id TEXT PRIMARY KEY, request_id TEXT NOT NULL UNIQUE, state INTEGER NOT NULL, spec BLOB NOT NULL,
-  upload_bytes INTEGER NOT NULL, upload_sha256 BLOB NOT NULL, progress BLOB, summary BLOB,
-  error_code INTEGER NOT NULL DEFAULT 0, error_message TEXT NOT NULL DEFAULT '',
-  create_us INTEGER NOT NULL, start_us INTEGER NOT NULL DEFAULT 0, end_us INTEGER NOT NULL DEFAULT 0,
-  attempts INTEGER NOT NULL DEFAULT 0, event_sequence INTEGER NOT NULL DEFAULT 1,
-  result_bytes INTEGER NOT NULL DEFAULT 0, result_sha256 BLOB);
-CREATE INDEX IF NOT EXISTS jobs_by_state ON jobs(state, create_us, job_id);
-CREATE INDEX IF NOT EXISTS jobs_by_time ON jobs(create_us, job_id);
-CREATE TABLE IF NOT EXISTS result_chunks(
-  job_id TEXT NOT NULL, offset INTEGER NOT NULL, data BLOB NOT NULL, PRIMARY KEY(job_id, offset));
-)sql";
+using Args = std::vector<SqlArg>;
+using A = SqlArg;
 
-// One prepared statement, finalized when it goes; Bind* take 1-based positions.
-class Stmt {
- public:
-  Stmt(sqlite3* db, const char* sql) { sqlite3_prepare_v2(db, sql, -1, &s_, nullptr); }
-  ~Stmt() { sqlite3_finalize(s_); }
-  Stmt(const Stmt&) = delete;
-  Stmt& operator=(const Stmt&) = delete;
-  Stmt& Text(int i, std::string_view v) {
-    sqlite3_bind_text(s_, i, v.data(), static_cast<int>(v.size()), SQLITE_TRANSIENT);
-    return *this;
-  }
-  Stmt& Blob(int i, std::string_view v) {
-    sqlite3_bind_blob64(s_, i, v.data(), v.size(), SQLITE_TRANSIENT);
-    return *this;
-  }
-  Stmt& Int(int i, int64_t v) {
-    sqlite3_bind_int64(s_, i, v);
-    return *this;
-  }
-  // True while a row is there.
-  bool Step() { return sqlite3_step(s_) == SQLITE_ROW; }
-  // Runs a statement that returns no row; its SQLite code.
-  int Run() { return sqlite3_step(s_); }
-  int64_t ColInt(int i) { return sqlite3_column_int64(s_, i); }
-  std::string ColBlob(int i) {
-    const void* p = sqlite3_column_blob(s_, i);
-    return p == nullptr ? std::string() : std::string(static_cast<const char*>(p), sqlite3_column_bytes(s_, i));
-  }
-
- private:
-  sqlite3_stmt* s_ = nullptr;
-};
-
-bool Ended(int state) {
+bool Ended(int64_t state) {
   return state == v1::JOB_STATE_SUCCEEDED || state == v1::JOB_STATE_FAILED || state == v1::JOB_STATE_CANCELLED;
 }
 
@@ -85,30 +33,30 @@ constexpr char kJobColumns[] =
     "create_us, start_us, end_us, attempts, event_sequence, result_bytes, result_sha256";
 
 // A row of kJobColumns as a Job; the spec, progress and summary only `with_details`.
-v1::Job JobOfRow(Stmt& q, bool with_details) {
+v1::Job JobOfRow(const SqlRow& q, bool with_details) {
   v1::Job j;
-  j.set_job_id(q.ColBlob(0));
-  j.set_request_id(q.ColBlob(1));
-  j.set_state(static_cast<v1::JobState>(q.ColInt(2)));
+  j.set_job_id(q.Bytes(0));
+  j.set_request_id(q.Bytes(1));
+  j.set_state(static_cast<v1::JobState>(q.Int(2)));
   if (with_details) {
-    j.mutable_spec()->ParseFromString(q.ColBlob(3));
-    if (std::string p = q.ColBlob(6); !p.empty()) j.mutable_progress()->ParseFromString(p);
-    if (std::string s = q.ColBlob(7); !s.empty()) j.mutable_summary()->ParseFromString(s);
+    j.mutable_spec()->ParseFromString(q.Bytes(3));
+    if (std::string p = q.Bytes(6); !p.empty()) j.mutable_progress()->ParseFromString(p);
+    if (std::string s = q.Bytes(7); !s.empty()) j.mutable_summary()->ParseFromString(s);
   }
-  j.set_upload_bytes(static_cast<uint64_t>(q.ColInt(4)));
-  j.set_upload_sha256(q.ColBlob(5));
+  j.set_upload_bytes(static_cast<uint64_t>(q.Int(4)));
+  j.set_upload_sha256(q.Bytes(5));
   if (j.state() == v1::JOB_STATE_FAILED) {
-    j.mutable_error()->set_code(static_cast<int32_t>(q.ColInt(8)));
-    j.mutable_error()->set_message(q.ColBlob(9));
+    j.mutable_error()->set_code(static_cast<int32_t>(q.Int(8)));
+    j.mutable_error()->set_message(q.Bytes(9));
   }
-  SetTime(q.ColInt(10), j.mutable_create_time());
-  if (q.ColInt(11) != 0) SetTime(q.ColInt(11), j.mutable_start_time());
-  if (q.ColInt(12) != 0) SetTime(q.ColInt(12), j.mutable_end_time());
-  j.set_attempts(static_cast<uint32_t>(q.ColInt(13)));
-  j.set_event_sequence(static_cast<uint64_t>(q.ColInt(14)));
+  SetTime(q.Int(10), j.mutable_create_time());
+  if (q.Int(11) != 0) SetTime(q.Int(11), j.mutable_start_time());
+  if (q.Int(12) != 0) SetTime(q.Int(12), j.mutable_end_time());
+  j.set_attempts(static_cast<uint32_t>(q.Int(13)));
+  j.set_event_sequence(static_cast<uint64_t>(q.Int(14)));
   if (j.state() == v1::JOB_STATE_SUCCEEDED) {
-    j.set_result_bytes(static_cast<uint64_t>(q.ColInt(15)));
-    j.set_result_sha256(q.ColBlob(16));
+    j.set_result_bytes(static_cast<uint64_t>(q.Int(15)));
+    j.set_result_sha256(q.Bytes(16));
   }
   return j;
 }
@@ -117,6 +65,36 @@ v1::Job JobOfRow(Stmt& q, bool with_details) {
 std::string PageToken(const v1::Job& j) {
   return absl::StrCat(j.create_time().seconds() * 1'000'000 + j.create_time().nanos() / 1000, ":", j.job_id());
 }
+
+// A transaction rolled back unless committed.
+class Transaction {
+ public:
+  explicit Transaction(JobDatabase& db) : db_(db), begun_(db.Begin()) {}
+  ~Transaction() {
+    if (begun_.ok() && !done_) db_.Rollback();
+  }
+  const absl::Status& begun() const { return begun_; }
+  absl::Status Commit() {
+    done_ = true;
+    return db_.Commit();
+  }
+
+ private:
+  JobDatabase& db_;
+  const absl::Status begun_;
+  bool done_ = false;
+};
+
+// host-pid-random: unique among the replicas, and says which one holds a lease.
+std::string MakeOwner() {
+  char host[256] = {};
+  gethostname(host, sizeof host - 1);
+  return absl::StrCat(host, "-", getpid(), "-", NewStoredJobId().substr(0, 8));
+}
+
+constexpr char kStoredBytes[] =
+    "SELECT (SELECT COALESCE(SUM(length(data)),0) FROM upload_chunks) + "
+    "(SELECT COALESCE(SUM(length(data)),0) FROM result_chunks)";
 
 }  // namespace
 
@@ -127,95 +105,85 @@ std::string Sha256(std::string_view bytes) {
   return std::string(reinterpret_cast<const char*>(digest), n);
 }
 
-absl::StatusOr<std::unique_ptr<JobStore>> JobStore::Open(const std::string& dir) {
-  if (mkdir(dir.c_str(), 0750) != 0 && errno != EEXIST) {
-    return absl::FailedPreconditionError(absl::StrCat("cannot make the job store ", dir, ": ", std::strerror(errno)));
+std::string NewStoredJobId() {
+  unsigned char bytes[16];
+  if (RAND_bytes(bytes, sizeof bytes) != 1) std::abort();  // no randomness: no unguessable ids
+  return absl::BytesToHexString(absl::string_view(reinterpret_cast<const char*>(bytes), sizeof bytes));
+}
+
+JobStore::JobStore(std::unique_ptr<JobDatabase> db, const JobStoreOptions& options)
+    : db_(std::move(db)), options_(options), owner_(MakeOwner()) {}
+
+absl::StatusOr<std::unique_ptr<JobStore>> JobStore::Open(const std::string& where, const JobStoreOptions& options) {
+  absl::StatusOr<std::unique_ptr<JobDatabase>> db =
+      IsPostgresUri(where) ? OpenPostgresJobDatabase(where) : OpenSqliteJobDatabase(where);
+  if (!db.ok()) return db.status();
+  std::unique_ptr<JobStore> store(new JobStore(*std::move(db), options));
+  if (!store->db_->shared()) {  // this process owns the store: what was RUNNING died with the last one
+    absl::StatusOr<SqlResult> requeued = store->Q(
+        "UPDATE jobs SET state=?1, lease_owner='', lease_until_us=0, event_sequence=event_sequence+1 WHERE state=?2",
+        {A::Int(v1::JOB_STATE_QUEUED), A::Int(v1::JOB_STATE_RUNNING)});
+    if (!requeued.ok()) return requeued.status();
+    store->requeued_at_open_ = static_cast<int>(requeued->changed);
   }
-  std::unique_ptr<JobStore> store(new JobStore());
-  const std::string lock = dir + "/lock";
-  store->lock_fd_ = open(lock.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0640);
-  if (store->lock_fd_ < 0) {
-    return absl::FailedPreconditionError(absl::StrCat("cannot open ", lock, ": ", std::strerror(errno)));
-  }
-  if (flock(store->lock_fd_, LOCK_EX | LOCK_NB) != 0) {
-    return absl::FailedPreconditionError(
-        absl::StrCat("the job store ", dir, " is in use by another meshsmoothd (one process per store)"));
-  }
-  const std::string path = dir + "/jobs.sqlite3";
-  if (sqlite3_open_v2(path.c_str(), &store->db_, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE | SQLITE_OPEN_NOMUTEX,
-                      nullptr) != SQLITE_OK) {
-    return absl::InternalError(absl::StrCat("cannot open the job store's database ", path, ": ",
-                                            store->db_ ? sqlite3_errmsg(store->db_) : "out of memory"));
-  }
-  // auto_vacuum takes effect only before the first table exists.
-  for (const char* pragma : {"PRAGMA auto_vacuum=INCREMENTAL", "PRAGMA journal_mode=WAL", "PRAGMA synchronous=FULL",
-                             "PRAGMA busy_timeout=5000"}) {
-    if (absl::Status s = store->Exec(pragma); !s.ok()) return s;
-  }
-  if (absl::Status s = store->Exec(kSchema); !s.ok()) return s;
-  Stmt requeue(store->db_, "UPDATE jobs SET state=?1, event_sequence=event_sequence+1 WHERE state=?2");
-  requeue.Int(1, v1::JOB_STATE_QUEUED).Int(2, v1::JOB_STATE_RUNNING).Run();
-  store->requeued_at_open_ = sqlite3_changes(store->db_);
   return store;
 }
 
-JobStore::~JobStore() {
-  if (db_ != nullptr) sqlite3_close_v2(db_);
-  if (lock_fd_ >= 0) close(lock_fd_);
+JobStore::~JobStore() = default;
+
+absl::StatusOr<SqlResult> JobStore::Q(std::string_view sql, const std::vector<SqlArg>& args) {
+  return db_->Run(sql, args);
 }
 
-absl::Status JobStore::Exec(const char* sql) {
-  char* err = nullptr;
-  if (sqlite3_exec(db_, sql, nullptr, nullptr, &err) != SQLITE_OK) {
-    absl::Status s = absl::InternalError(absl::StrCat("job store: ", err ? err : "error", " in ", sql));
-    sqlite3_free(err);
-    return s;
-  }
-  return absl::OkStatus();
+int64_t JobStore::StoredBytesLocked() {
+  absl::StatusOr<SqlResult> r = Q(kStoredBytes);
+  return r.ok() && !r->rows.empty() ? r->rows[0].Int(0) : 0;
 }
 
 int64_t JobStore::stored_bytes() {
   std::lock_guard<std::mutex> lock(mu_);
-  Stmt q(db_,
-         "SELECT (SELECT COALESCE(SUM(length(data)),0) FROM upload_chunks) + "
-         "(SELECT COALESCE(SUM(length(data)),0) FROM result_chunks)");
-  return q.Step() ? q.ColInt(0) : 0;
+  return StoredBytesLocked();
 }
 
 absl::StatusOr<UploadState> JobStore::StartUpload(const std::string& request_id, const std::string& spec,
                                                   uint64_t total_bytes, const std::string& sha256) {
   std::lock_guard<std::mutex> lock(mu_);
-  Stmt q(db_, "SELECT spec, total_bytes, sha256, received, job_id FROM uploads WHERE request_id=?1");
-  if (q.Text(1, request_id).Step()) {
-    if (q.ColBlob(0) != spec || static_cast<uint64_t>(q.ColInt(1)) != total_bytes || q.ColBlob(2) != sha256) {
-      return absl::AlreadyExistsError(absl::StrCat("request id '", request_id,
-                                                   "' was sent before with another spec, length or checksum; "
-                                                   "a new job needs a new request id"));
-    }
-    return UploadState{static_cast<uint64_t>(q.ColInt(3)), q.ColBlob(4)};
+  // Another replica may record the same request id at the same time: the first row stays.
+  absl::StatusOr<SqlResult> ins =
+      Q("INSERT INTO uploads(request_id, spec, total_bytes, sha256) VALUES(?1, ?2, ?3, ?4) ON CONFLICT DO NOTHING",
+        {A::Text(request_id), A::Bytes(spec), A::Int(static_cast<int64_t>(total_bytes)), A::Bytes(sha256)});
+  if (!ins.ok()) return ins.status();
+  if (ins->changed == 1) return UploadState{};
+  absl::StatusOr<SqlResult> q =
+      Q("SELECT spec, total_bytes, sha256, received, job_id FROM uploads WHERE request_id=?1", {A::Text(request_id)});
+  if (!q.ok()) return q.status();
+  if (q->rows.empty()) return absl::AbortedError(absl::StrCat("the upload '", request_id, "' went meanwhile: retry"));
+  const SqlRow& r = q->rows[0];
+  if (r.Bytes(0) != spec || static_cast<uint64_t>(r.Int(1)) != total_bytes || r.Bytes(2) != sha256) {
+    return absl::AlreadyExistsError(absl::StrCat("request id '", request_id,
+                                                 "' was sent before with another spec, length or checksum; "
+                                                 "a new job needs a new request id"));
   }
-  Stmt ins(db_, "INSERT INTO uploads(request_id, spec, total_bytes, sha256) VALUES(?1, ?2, ?3, ?4)");
-  if (ins.Text(1, request_id).Blob(2, spec).Int(3, static_cast<int64_t>(total_bytes)).Blob(4, sha256).Run() !=
-      SQLITE_DONE) {
-    return absl::InternalError(absl::StrCat("job store: ", sqlite3_errmsg(db_)));
-  }
-  return UploadState{};
+  return UploadState{static_cast<uint64_t>(r.Int(3)), r.Bytes(4)};
 }
 
 std::optional<UploadState> JobStore::QueryUpload(const std::string& request_id) {
   std::lock_guard<std::mutex> lock(mu_);
-  Stmt q(db_, "SELECT received, job_id FROM uploads WHERE request_id=?1");
-  if (!q.Text(1, request_id).Step()) return std::nullopt;
-  return UploadState{static_cast<uint64_t>(q.ColInt(0)), q.ColBlob(1)};
+  absl::StatusOr<SqlResult> q = Q("SELECT received, job_id FROM uploads WHERE request_id=?1", {A::Text(request_id)});
+  if (!q.ok() || q->rows.empty()) return std::nullopt;
+  return UploadState{static_cast<uint64_t>(q->rows[0].Int(0)), q->rows[0].Bytes(1)};
 }
 
 absl::StatusOr<uint64_t> JobStore::AppendChunk(const std::string& request_id, uint64_t offset,
                                                const std::string& data) {
   std::lock_guard<std::mutex> lock(mu_);
-  Stmt q(db_, "SELECT received, total_bytes, job_id FROM uploads WHERE request_id=?1");
-  if (!q.Text(1, request_id).Step()) return absl::NotFoundError(absl::StrCat("no upload '", request_id, "'"));
-  const uint64_t received = static_cast<uint64_t>(q.ColInt(0)), total = static_cast<uint64_t>(q.ColInt(1));
-  if (!q.ColBlob(2).empty()) {
+  absl::StatusOr<SqlResult> q =
+      Q("SELECT received, total_bytes, job_id FROM uploads WHERE request_id=?1", {A::Text(request_id)});
+  if (!q.ok()) return q.status();
+  if (q->rows.empty()) return absl::NotFoundError(absl::StrCat("no upload '", request_id, "'"));
+  const SqlRow& r = q->rows[0];
+  const uint64_t received = static_cast<uint64_t>(r.Int(0)), total = static_cast<uint64_t>(r.Int(1));
+  if (!r.Bytes(2).empty()) {
     return absl::FailedPreconditionError(
         absl::StrCat("the upload of request id '", request_id, "' is already committed: send no more chunks"));
   }
@@ -228,81 +196,82 @@ absl::StatusOr<uint64_t> JobStore::AppendChunk(const std::string& request_id, ui
     return absl::InvalidArgumentError(absl::StrCat("a chunk of ", data.size(), " bytes at offset ", offset,
                                                    " ends past the upload's total_bytes ", total));
   }
-  if (absl::Status s = Exec("BEGIN IMMEDIATE"); !s.ok()) return s;
-  Stmt ins(db_, "INSERT INTO upload_chunks(request_id, offset, data) VALUES(?1, ?2, ?3)");
-  Stmt up(db_, "UPDATE uploads SET received=?2 WHERE request_id=?1");
-  const bool ok = ins.Text(1, request_id).Int(2, static_cast<int64_t>(offset)).Blob(3, data).Run() == SQLITE_DONE &&
-                  up.Text(1, request_id).Int(2, static_cast<int64_t>(offset + data.size())).Run() == SQLITE_DONE;
-  if (!ok) {
-    absl::Status s = absl::InternalError(absl::StrCat("job store: ", sqlite3_errmsg(db_)));
-    Exec("ROLLBACK").IgnoreError();
-    return s;
-  }
-  if (absl::Status s = Exec("COMMIT"); !s.ok()) return s;
-  return offset + data.size();
+  Transaction tx(*db_);
+  if (!tx.begun().ok()) return tx.begun();
+  const int64_t end = static_cast<int64_t>(offset + data.size());
+  absl::StatusOr<SqlResult> ins = Q("INSERT INTO upload_chunks(request_id, \"offset\", data) VALUES(?1, ?2, ?3)",
+                                    {A::Text(request_id), A::Int(static_cast<int64_t>(offset)), A::Bytes(data)});
+  if (!ins.ok()) return ins.status();
+  // Only from the count read above: a replica that appended the same chunk meanwhile wins.
+  absl::StatusOr<SqlResult> up = Q("UPDATE uploads SET received=?2 WHERE request_id=?1 AND received=?3",
+                                   {A::Text(request_id), A::Int(end), A::Int(static_cast<int64_t>(offset))});
+  if (!up.ok()) return up.status();
+  if (up->changed != 1) return absl::AbortedError("another call appended to this upload meanwhile: QueryUpload");
+  if (absl::Status s = tx.Commit(); !s.ok()) return s;
+  return static_cast<uint64_t>(end);
 }
 
 absl::StatusOr<std::string> JobStore::Commit(const std::string& request_id, const std::string& job_id, int64_t now_us) {
   std::lock_guard<std::mutex> lock(mu_);
-  Stmt q(db_, "SELECT spec, total_bytes, sha256, received, job_id FROM uploads WHERE request_id=?1");
-  if (!q.Text(1, request_id).Step()) return absl::NotFoundError(absl::StrCat("no upload '", request_id, "'"));
-  if (std::string done = q.ColBlob(4); !done.empty()) return done;
-  const uint64_t total = static_cast<uint64_t>(q.ColInt(1)), received = static_cast<uint64_t>(q.ColInt(3));
-  const std::string spec = q.ColBlob(0), declared = q.ColBlob(2);
+  absl::StatusOr<SqlResult> q =
+      Q("SELECT spec, total_bytes, sha256, received, job_id FROM uploads WHERE request_id=?1", {A::Text(request_id)});
+  if (!q.ok()) return q.status();
+  if (q->rows.empty()) return absl::NotFoundError(absl::StrCat("no upload '", request_id, "'"));
+  const SqlRow& r = q->rows[0];
+  if (std::string done = r.Bytes(4); !done.empty()) return done;
+  const uint64_t total = static_cast<uint64_t>(r.Int(1)), received = static_cast<uint64_t>(r.Int(3));
+  const std::string spec = r.Bytes(0), declared = r.Bytes(2);
   if (received != total) {
     return absl::FailedPreconditionError(
         absl::StrCat("the upload holds ", received, " of its ", total, " bytes: send from offset ", received));
   }
+  absl::StatusOr<SqlResult> chunks =
+      Q("SELECT data FROM upload_chunks WHERE request_id=?1 ORDER BY \"offset\"", {A::Text(request_id)});
+  if (!chunks.ok()) return chunks.status();
   EVP_MD_CTX* ctx = EVP_MD_CTX_new();
   EVP_DigestInit_ex(ctx, EVP_sha256(), nullptr);
-  Stmt chunks(db_, "SELECT data FROM upload_chunks WHERE request_id=?1 ORDER BY offset");
-  chunks.Text(1, request_id);
-  while (chunks.Step()) {
-    const std::string data = chunks.ColBlob(0);
+  for (const SqlRow& c : chunks->rows) {
+    const std::string data = c.Bytes(0);
     EVP_DigestUpdate(ctx, data.data(), data.size());
   }
   unsigned char digest[EVP_MAX_MD_SIZE];
   unsigned int n = 0;
   EVP_DigestFinal_ex(ctx, digest, &n);
   EVP_MD_CTX_free(ctx);
-  if (absl::Status s = Exec("BEGIN IMMEDIATE"); !s.ok()) return s;
+  Transaction tx(*db_);
+  if (!tx.begun().ok()) return tx.begun();
   if (std::string(reinterpret_cast<const char*>(digest), n) != declared) {
-    Stmt del(db_, "DELETE FROM uploads WHERE request_id=?1");
-    Stmt del_chunks(db_, "DELETE FROM upload_chunks WHERE request_id=?1");
-    del.Text(1, request_id).Run();
-    del_chunks.Text(1, request_id).Run();
-    if (absl::Status s = Exec("COMMIT"); !s.ok()) return s;
-    ReclaimLocked();
+    for (const char* sql :
+         {"DELETE FROM uploads WHERE request_id=?1", "DELETE FROM upload_chunks WHERE request_id=?1"}) {
+      if (absl::StatusOr<SqlResult> d = Q(sql, {A::Text(request_id)}); !d.ok()) return d.status();
+    }
+    if (absl::Status s = tx.Commit(); !s.ok()) return s;
+    db_->Reclaim();
     return absl::DataLossError(absl::StrCat("the upload's ", total,
                                             " bytes do not match the SHA-256 given in SubmitStart.sha256; they "
                                             "were discarded and no job was queued: upload again from offset 0"));
   }
-  Stmt ins(db_,
-           "INSERT INTO jobs(job_id, request_id, state, spec, upload_bytes, upload_sha256, create_us) "
-           "VALUES(?1, ?2, ?3, ?4, ?5, ?6, ?7)");
-  Stmt up(db_, "UPDATE uploads SET job_id=?2 WHERE request_id=?1");
-  const bool ok = ins.Text(1, job_id)
-                          .Text(2, request_id)
-                          .Int(3, v1::JOB_STATE_QUEUED)
-                          .Blob(4, spec)
-                          .Int(5, static_cast<int64_t>(total))
-                          .Blob(6, declared)
-                          .Int(7, now_us)
-                          .Run() == SQLITE_DONE &&
-                  up.Text(1, request_id).Text(2, job_id).Run() == SQLITE_DONE;
-  if (!ok) {
-    absl::Status s = absl::InternalError(absl::StrCat("job store: ", sqlite3_errmsg(db_)));
-    Exec("ROLLBACK").IgnoreError();
-    return s;
-  }
-  if (absl::Status s = Exec("COMMIT"); !s.ok()) return s;
+  // Only while no job is recorded: a replica that committed the same upload meanwhile wins.
+  absl::StatusOr<SqlResult> up =
+      Q("UPDATE uploads SET job_id=?2 WHERE request_id=?1 AND job_id IS NULL", {A::Text(request_id), A::Text(job_id)});
+  if (!up.ok()) return up.status();
+  if (up->changed != 1) return absl::AbortedError("another call committed this upload meanwhile: QueryUpload");
+  absl::StatusOr<SqlResult> ins =
+      Q("INSERT INTO jobs(job_id, request_id, state, spec, upload_bytes, upload_sha256, create_us) "
+        "VALUES(?1, ?2, ?3, ?4, ?5, ?6, ?7)",
+        {A::Text(job_id), A::Text(request_id), A::Int(v1::JOB_STATE_QUEUED), A::Bytes(spec),
+         A::Int(static_cast<int64_t>(total)), A::Bytes(declared), A::Int(now_us)});
+  if (!ins.ok()) return ins.status();
+  if (absl::Status s = tx.Commit(); !s.ok()) return s;
   return job_id;
 }
 
 absl::StatusOr<v1::Job> JobStore::GetLocked(const std::string& job_id, bool with_details) {
-  Stmt q(db_, absl::StrCat("SELECT ", kJobColumns, " FROM jobs WHERE job_id=?1").c_str());
-  if (!q.Text(1, job_id).Step()) return absl::NotFoundError(absl::StrCat("no job '", job_id, "' in this job store"));
-  return JobOfRow(q, with_details);
+  absl::StatusOr<SqlResult> q =
+      Q(absl::StrCat("SELECT ", kJobColumns, " FROM jobs WHERE job_id=?1"), {A::Text(job_id)});
+  if (!q.ok()) return q.status();
+  if (q->rows.empty()) return absl::NotFoundError(absl::StrCat("no job '", job_id, "' in this job store"));
+  return JobOfRow(q->rows[0], with_details);
 }
 
 absl::StatusOr<v1::Job> JobStore::Get(const std::string& job_id) {
@@ -324,11 +293,11 @@ std::vector<v1::Job> JobStore::List(const std::vector<v1::JobState>& states, con
   const std::string sql = absl::StrCat(
       "SELECT ", kJobColumns, " FROM jobs WHERE (create_us > ?1 OR (create_us = ?1 AND job_id > ?2))",
       states.empty() ? "" : absl::StrCat(" AND state IN (", state_list, ")"), " ORDER BY create_us, job_id LIMIT ?3");
-  Stmt q(db_, sql.c_str());
-  q.Int(1, after_us).Text(2, after_id).Int(3, limit + 1);
   std::vector<v1::Job> jobs;
-  while (q.Step()) jobs.push_back(JobOfRow(q, /*with_details=*/false));
   next->clear();
+  absl::StatusOr<SqlResult> q = Q(sql, {A::Int(after_us), A::Text(after_id), A::Int(limit + 1)});
+  if (!q.ok()) return jobs;
+  for (const SqlRow& r : q->rows) jobs.push_back(JobOfRow(r, /*with_details=*/false));
   if (static_cast<int>(jobs.size()) > limit) {
     jobs.resize(limit);
     *next = PageToken(jobs.back());
@@ -336,116 +305,133 @@ std::vector<v1::Job> JobStore::List(const std::vector<v1::JobState>& states, con
   return jobs;
 }
 
-std::optional<std::string> JobStore::NextQueued(const std::vector<std::string>& skip) {
+std::optional<ClaimedJob> JobStore::Claim(const std::vector<std::string>& skip, int64_t now_us) {
   std::lock_guard<std::mutex> lock(mu_);
-  Stmt q(db_, "SELECT job_id FROM jobs WHERE state=?1 ORDER BY create_us, job_id");
-  q.Int(1, v1::JOB_STATE_QUEUED);
-  while (q.Step()) {
-    std::string id = q.ColBlob(0);
-    if (std::find(skip.begin(), skip.end(), id) == skip.end()) return id;
+  Transaction tx(*db_);
+  if (!tx.begun().ok()) return std::nullopt;
+  // The rows in `skip` come first in line too: one more than them holds a job to take.
+  absl::StatusOr<SqlResult> q =
+      Q(absl::StrCat(
+            "SELECT job_id, state, request_id, spec FROM jobs WHERE state=?1 OR (state=?2 AND lease_until_us<?3) "
+            "ORDER BY create_us, job_id LIMIT ?4",
+            db_->ClaimLock()),
+        {A::Int(v1::JOB_STATE_QUEUED), A::Int(v1::JOB_STATE_RUNNING), A::Int(now_us),
+         A::Int(static_cast<int64_t>(skip.size()) + 1)});
+  if (!q.ok()) return std::nullopt;
+  const SqlRow* row = nullptr;
+  for (const SqlRow& r : q->rows) {
+    if (std::find(skip.begin(), skip.end(), r.Bytes(0)) == skip.end()) {
+      row = &r;
+      break;
+    }
   }
-  return std::nullopt;
+  if (row == nullptr) return std::nullopt;
+  ClaimedJob claimed;
+  claimed.job_id = row->Bytes(0);
+  claimed.takeover = row->Int(1) == v1::JOB_STATE_RUNNING;
+  claimed.input.spec.ParseFromString(row->Bytes(3));
+  absl::StatusOr<SqlResult> up =
+      Q("UPDATE jobs SET state=?2, start_us=?3, attempts=attempts+1, event_sequence=event_sequence+1, progress=NULL, "
+        "lease_owner=?4, lease_until_us=?5 WHERE job_id=?1",
+        {A::Text(claimed.job_id), A::Int(v1::JOB_STATE_RUNNING), A::Int(now_us), A::Text(owner_),
+         A::Int(now_us + static_cast<int64_t>(options_.lease_seconds * 1e6))});
+  if (!up.ok() || up->changed != 1) return std::nullopt;
+  absl::StatusOr<SqlResult> chunks =
+      Q("SELECT data FROM upload_chunks WHERE request_id=?1 ORDER BY \"offset\"", {A::Text(row->Bytes(2))});
+  if (!chunks.ok()) return std::nullopt;
+  for (const SqlRow& c : chunks->rows) claimed.input.upload += c.Bytes(0);
+  if (!tx.Commit().ok()) return std::nullopt;
+  return claimed;
 }
 
-std::optional<JobInput> JobStore::StartRun(const std::string& job_id, int64_t now_us) {
+bool JobStore::RenewLease(const std::string& job_id, int64_t now_us) {
   std::lock_guard<std::mutex> lock(mu_);
-  Stmt up(db_,
-          "UPDATE jobs SET state=?2, start_us=?3, attempts=attempts+1, event_sequence=event_sequence+1, "
-          "progress=NULL WHERE job_id=?1 AND state=?4");
-  up.Text(1, job_id).Int(2, v1::JOB_STATE_RUNNING).Int(3, now_us).Int(4, v1::JOB_STATE_QUEUED).Run();
-  if (sqlite3_changes(db_) != 1) return std::nullopt;
-  Stmt q(db_, "SELECT spec, request_id FROM jobs WHERE job_id=?1");
-  if (!q.Text(1, job_id).Step()) return std::nullopt;
-  JobInput input;
-  input.spec.ParseFromString(q.ColBlob(0));
-  Stmt chunks(db_, "SELECT data FROM upload_chunks WHERE request_id=?1 ORDER BY offset");
-  chunks.Text(1, q.ColBlob(1));
-  while (chunks.Step()) input.upload += chunks.ColBlob(0);
-  return input;
+  absl::StatusOr<SqlResult> up =
+      Q("UPDATE jobs SET lease_until_us=?3 WHERE job_id=?1 AND state=?4 AND lease_owner=?2",
+        {A::Text(job_id), A::Text(owner_), A::Int(now_us + static_cast<int64_t>(options_.lease_seconds * 1e6)),
+         A::Int(v1::JOB_STATE_RUNNING)});
+  // A database out of reach is not a lost lease: the job runs on, and the next renewal tries.
+  return !up.ok() || up->changed == 1;
+}
+
+void JobStore::Release(const std::string& job_id, bool undo_attempt) {
+  std::lock_guard<std::mutex> lock(mu_);
+  Q("UPDATE jobs SET state=?3, attempts=attempts-?4, lease_owner='', lease_until_us=0, "
+    "event_sequence=event_sequence+1 WHERE job_id=?1 AND state=?5 AND lease_owner=?2",
+    {A::Text(job_id), A::Text(owner_), A::Int(v1::JOB_STATE_QUEUED), A::Int(undo_attempt ? 1 : 0),
+     A::Int(v1::JOB_STATE_RUNNING)})
+      .IgnoreError();
 }
 
 void JobStore::SetProgress(const std::string& job_id, const v1::Progress& progress) {
   std::lock_guard<std::mutex> lock(mu_);
-  Stmt up(db_, "UPDATE jobs SET progress=?2, event_sequence=event_sequence+1 WHERE job_id=?1 AND state=?3");
-  up.Text(1, job_id).Blob(2, progress.SerializeAsString()).Int(3, v1::JOB_STATE_RUNNING).Run();
+  Q("UPDATE jobs SET progress=?2, event_sequence=event_sequence+1 WHERE job_id=?1 AND state=?3 AND lease_owner=?4",
+    {A::Text(job_id), A::Bytes(progress.SerializeAsString()), A::Int(v1::JOB_STATE_RUNNING), A::Text(owner_)})
+      .IgnoreError();
 }
 
 bool JobStore::Succeed(const std::string& job_id, const std::string& result, const v1::Summary& summary,
                        int64_t now_us) {
   std::lock_guard<std::mutex> lock(mu_);
-  if (!Exec("BEGIN IMMEDIATE").ok()) return false;
-  Stmt up(db_,
-          "UPDATE jobs SET state=?2, end_us=?3, summary=?4, result_bytes=?5, result_sha256=?6, "
-          "event_sequence=event_sequence+1 WHERE job_id=?1 AND state=?7");
-  up.Text(1, job_id)
-      .Int(2, v1::JOB_STATE_SUCCEEDED)
-      .Int(3, now_us)
-      .Blob(4, summary.SerializeAsString())
-      .Int(5, static_cast<int64_t>(result.size()))
-      .Blob(6, Sha256(result))
-      .Int(7, v1::JOB_STATE_RUNNING)
-      .Run();
-  if (sqlite3_changes(db_) != 1) {
-    Exec("ROLLBACK").IgnoreError();
-    return false;
-  }
-  Stmt del(db_, "DELETE FROM result_chunks WHERE job_id=?1");  // an earlier attempt's, if any
-  del.Text(1, job_id).Run();
+  Transaction tx(*db_);
+  if (!tx.begun().ok()) return false;
+  absl::StatusOr<SqlResult> up =
+      Q("UPDATE jobs SET state=?2, end_us=?3, summary=?4, result_bytes=?5, result_sha256=?6, lease_until_us=0, "
+        "event_sequence=event_sequence+1 WHERE job_id=?1 AND state=?7 AND lease_owner=?8",
+        {A::Text(job_id), A::Int(v1::JOB_STATE_SUCCEEDED), A::Int(now_us), A::Bytes(summary.SerializeAsString()),
+         A::Int(static_cast<int64_t>(result.size())), A::Bytes(Sha256(result)), A::Int(v1::JOB_STATE_RUNNING),
+         A::Text(owner_)});
+  if (!up.ok() || up->changed != 1) return false;
+  // An earlier attempt's, if any.
+  if (!Q("DELETE FROM result_chunks WHERE job_id=?1", {A::Text(job_id)}).ok()) return false;
   for (size_t offset = 0; offset < result.size(); offset += kResultChunkBytes) {
-    Stmt ins(db_, "INSERT INTO result_chunks(job_id, offset, data) VALUES(?1, ?2, ?3)");
     const std::string_view piece = std::string_view(result).substr(offset, kResultChunkBytes);
-    if (ins.Text(1, job_id).Int(2, static_cast<int64_t>(offset)).Blob(3, piece).Run() != SQLITE_DONE) {
-      Exec("ROLLBACK").IgnoreError();
+    if (!Q("INSERT INTO result_chunks(job_id, \"offset\", data) VALUES(?1, ?2, ?3)",
+           {A::Text(job_id), A::Int(static_cast<int64_t>(offset)), A::Bytes(piece)})
+             .ok()) {
       return false;
     }
   }
-  return Exec("COMMIT").ok();
+  return tx.Commit().ok();
 }
 
 bool JobStore::Fail(const std::string& job_id, const absl::Status& status, int64_t now_us) {
   std::lock_guard<std::mutex> lock(mu_);
-  Stmt up(db_,
-          "UPDATE jobs SET state=?2, end_us=?3, error_code=?4, error_message=?5, event_sequence=event_sequence+1 "
-          "WHERE job_id=?1 AND state=?6");
-  up.Text(1, job_id)
-      .Int(2, v1::JOB_STATE_FAILED)
-      .Int(3, now_us)
-      .Int(4, static_cast<int>(status.code()))
-      .Text(5, std::string(status.message()))
-      .Int(6, v1::JOB_STATE_RUNNING)
-      .Run();
-  return sqlite3_changes(db_) == 1;
+  absl::StatusOr<SqlResult> up =
+      Q("UPDATE jobs SET state=?2, end_us=?3, error_code=?4, error_message=?5, lease_until_us=0, "
+        "event_sequence=event_sequence+1 WHERE job_id=?1 AND state=?6 AND lease_owner=?7",
+        {A::Text(job_id), A::Int(v1::JOB_STATE_FAILED), A::Int(now_us), A::Int(static_cast<int>(status.code())),
+         A::Text(std::string(status.message())), A::Int(v1::JOB_STATE_RUNNING), A::Text(owner_)});
+  return up.ok() && up->changed == 1;
 }
 
 absl::StatusOr<v1::Job> JobStore::Cancel(const std::string& job_id, int64_t now_us) {
   std::lock_guard<std::mutex> lock(mu_);
-  Stmt up(db_,
-          "UPDATE jobs SET state=?2, end_us=?3, event_sequence=event_sequence+1 WHERE job_id=?1 AND state IN (?4, ?5)");
-  up.Text(1, job_id)
-      .Int(2, v1::JOB_STATE_CANCELLED)
-      .Int(3, now_us)
-      .Int(4, v1::JOB_STATE_QUEUED)
-      .Int(5, v1::JOB_STATE_RUNNING)
-      .Run();
+  absl::StatusOr<SqlResult> up =
+      Q("UPDATE jobs SET state=?2, end_us=?3, lease_until_us=0, event_sequence=event_sequence+1 "
+        "WHERE job_id=?1 AND state IN (?4, ?5)",
+        {A::Text(job_id), A::Int(v1::JOB_STATE_CANCELLED), A::Int(now_us), A::Int(v1::JOB_STATE_QUEUED),
+         A::Int(v1::JOB_STATE_RUNNING)});
+  if (!up.ok()) return up.status();
   return GetLocked(job_id, /*with_details=*/true);
 }
 
-void JobStore::DeleteLocked(const std::string& job_id, const std::string& request_id) {
-  Stmt a(db_, "DELETE FROM jobs WHERE job_id=?1");
-  Stmt b(db_, "DELETE FROM result_chunks WHERE job_id=?1");
-  Stmt c(db_, "DELETE FROM uploads WHERE request_id=?1");
-  Stmt d(db_, "DELETE FROM upload_chunks WHERE request_id=?1");
-  a.Text(1, job_id).Run();
-  b.Text(1, job_id).Run();
-  c.Text(1, request_id).Run();
-  d.Text(1, request_id).Run();
-}
-
-void JobStore::ReclaimLocked() {
-  // The freed pages back to the file system: the WAL's into the database, then its free list.
-  Exec("PRAGMA wal_checkpoint(TRUNCATE)").IgnoreError();
-  Exec("PRAGMA incremental_vacuum").IgnoreError();
-  Exec("PRAGMA wal_checkpoint(TRUNCATE)").IgnoreError();
+void JobStore::ForgetLocked(const std::vector<std::pair<std::string, std::string>>& jobs_and_requests) {
+  if (jobs_and_requests.empty()) return;
+  for (const auto& [job_id, request_id] : jobs_and_requests) {
+    Transaction tx(*db_);
+    if (!tx.begun().ok()) return;
+    bool ok = true;
+    for (const char* sql : {"DELETE FROM jobs WHERE job_id=?1", "DELETE FROM result_chunks WHERE job_id=?1"}) {
+      ok = ok && Q(sql, {A::Text(job_id)}).ok();
+    }
+    for (const char* sql :
+         {"DELETE FROM uploads WHERE request_id=?1", "DELETE FROM upload_chunks WHERE request_id=?1"}) {
+      ok = ok && Q(sql, {A::Text(request_id)}).ok();
+    }
+    if (ok) tx.Commit().IgnoreError();
+  }
+  db_->Reclaim();
 }
 
 absl::Status JobStore::Delete(const std::string& job_id) {
@@ -456,10 +442,7 @@ absl::Status JobStore::Delete(const std::string& job_id) {
     return absl::FailedPreconditionError(absl::StrCat("job '", job_id, "' is ", v1::JobState_Name(job->state()),
                                                       ": DeleteJob does not cancel; cancel it first (CancelJob)"));
   }
-  if (absl::Status s = Exec("BEGIN IMMEDIATE"); !s.ok()) return s;
-  DeleteLocked(job_id, job->request_id());
-  if (absl::Status s = Exec("COMMIT"); !s.ok()) return s;
-  ReclaimLocked();
+  ForgetLocked({{job_id, job->request_id()}});
   return absl::OkStatus();
 }
 
@@ -477,11 +460,17 @@ absl::StatusOr<JobStore::ResultPiece> JobStore::ReadResult(const std::string& jo
     return absl::OutOfRangeError(
         absl::StrCat("offset ", offset, " is past the end of the result (", piece.total_bytes, " bytes)"));
   }
-  Stmt q(db_, "SELECT offset, data FROM result_chunks WHERE job_id=?1 AND offset + length(data) > ?2 ORDER BY offset");
-  q.Text(1, job_id).Int(2, static_cast<int64_t>(offset));
-  while (piece.data.size() < max_bytes && q.Step()) {
-    const uint64_t start = static_cast<uint64_t>(q.ColInt(0));
-    const std::string data = q.ColBlob(1);
+  // The chunks that hold bytes from `offset`, the first two at most (max_bytes is one chunk).
+  absl::StatusOr<SqlResult> q =
+      Q("SELECT \"offset\", data FROM result_chunks WHERE job_id=?1 AND \"offset\" + length(data) > ?2 "
+        "ORDER BY \"offset\" LIMIT ?3",
+        {A::Text(job_id), A::Int(static_cast<int64_t>(offset)),
+         A::Int(static_cast<int64_t>(max_bytes / kResultChunkBytes) + 2)});
+  if (!q.ok()) return q.status();
+  for (const SqlRow& r : q->rows) {
+    if (piece.data.size() >= max_bytes) break;
+    const uint64_t start = static_cast<uint64_t>(r.Int(0));
+    const std::string data = r.Bytes(1);
     const uint64_t from = offset + piece.data.size() - start;
     piece.data.append(data, from, max_bytes - piece.data.size());
   }
@@ -490,36 +479,37 @@ absl::StatusOr<JobStore::ResultPiece> JobStore::ReadResult(const std::string& jo
 
 int JobStore::ExpireEndedBefore(int64_t cutoff_us) {
   std::lock_guard<std::mutex> lock(mu_);
-  Stmt q(db_, "SELECT job_id, request_id FROM jobs WHERE end_us != 0 AND end_us < ?1");
-  q.Int(1, cutoff_us);
+  absl::StatusOr<SqlResult> q =
+      Q("SELECT job_id, request_id FROM jobs WHERE end_us != 0 AND end_us < ?1", {A::Int(cutoff_us)});
+  if (!q.ok()) return 0;
   std::vector<std::pair<std::string, std::string>> expired;
-  while (q.Step()) expired.emplace_back(q.ColBlob(0), q.ColBlob(1));
-  if (expired.empty() || !Exec("BEGIN IMMEDIATE").ok()) return 0;
-  for (const auto& [job, request] : expired) DeleteLocked(job, request);
-  Exec("COMMIT").IgnoreError();
-  ReclaimLocked();
+  for (const SqlRow& r : q->rows) expired.emplace_back(r.Bytes(0), r.Bytes(1));
+  ForgetLocked(expired);
   return static_cast<int>(expired.size());
 }
 
 bool JobStore::MakeRoom(int64_t bytes, int64_t budget) {
   for (;;) {
-    std::string oldest_id, oldest_request;
-    {
-      std::lock_guard<std::mutex> lock(mu_);
-      Stmt held(db_,
-                "SELECT (SELECT COALESCE(SUM(length(data)),0) FROM upload_chunks) + "
-                "(SELECT COALESCE(SUM(length(data)),0) FROM result_chunks)");
-      if (held.Step() && held.ColInt(0) + bytes <= budget) return true;
-      Stmt q(db_, "SELECT job_id, request_id FROM jobs WHERE end_us != 0 ORDER BY end_us LIMIT 1");
-      if (!q.Step()) return false;
-      oldest_id = q.ColBlob(0);
-      oldest_request = q.ColBlob(1);
-      if (!Exec("BEGIN IMMEDIATE").ok()) return false;
-      DeleteLocked(oldest_id, oldest_request);
-      Exec("COMMIT").IgnoreError();
-      ReclaimLocked();
-    }
+    std::lock_guard<std::mutex> lock(mu_);
+    if (StoredBytesLocked() + bytes <= budget) return true;
+    absl::StatusOr<SqlResult> q = Q("SELECT job_id, request_id FROM jobs WHERE end_us != 0 ORDER BY end_us LIMIT 1");
+    if (!q.ok() || q->rows.empty()) return false;
+    ForgetLocked({{q->rows[0].Bytes(0), q->rows[0].Bytes(1)}});
   }
+}
+
+JobCounts JobStore::Counts() {
+  std::lock_guard<std::mutex> lock(mu_);
+  JobCounts counts;
+  absl::StatusOr<SqlResult> q = Q("SELECT state, COUNT(*), MIN(create_us) FROM jobs GROUP BY state");
+  if (!q.ok()) return counts;
+  for (const SqlRow& r : q->rows) {
+    const int64_t state = r.Int(0);
+    if (state < 0 || state >= static_cast<int64_t>(counts.by_state.size())) continue;
+    counts.by_state[state] = r.Int(1);
+    if (state == v1::JOB_STATE_QUEUED) counts.oldest_queued_us = r.Int(2);
+  }
+  return counts;
 }
 
 }  // namespace meshsmooth::server

@@ -1,30 +1,39 @@
 // The job store: jobs that outlive a connection (smoothing.proto, Submit .. FetchResult) kept in
-// one SQLite database under a directory, so that they survive the process (SIGKILL included).
+// a database (server/job_database.h), so that they survive the process (SIGKILL included): a
+// SQLite file under a directory for one meshsmoothd, or a PostgreSQL database that any number of
+// replicas share.
 //
 // What it holds: uploads by the client's request id, their bytes in chunk rows as they arrive
 // (the resumable upload), the jobs once an upload is committed (spec, state, progress, summary,
-// error, times) and their results in chunk rows. Meshes go in rows of at most 1 MiB rather than
-// in files beside the database so that a chunk, the count of bytes held and a state change
+// error, times, lease) and their results in chunk rows. Meshes go in rows of at most 1 MiB rather
+// than in files beside the database so that a chunk, the count of bytes held and a state change
 // commit together in one transaction: after a crash the store holds exactly what it
-// acknowledged. WAL with synchronous=FULL: a committed transaction survives a SIGKILL and a
-// power cut. auto_vacuum=INCREMENTAL gives the pages of deleted bytes back to the file system.
+// acknowledged.
 //
-// One process owns a store at a time (an exclusive lock on DIR/lock); every method is
-// thread-safe (one connection behind a mutex). Times are microseconds since the Unix epoch.
+// A running job holds a lease: this store's owner id and a time (--job-lease from the claim or
+// the last renewal). The runner renews it while the job runs; a job whose lease ran out (its
+// replica died) is claimed again by the next replica that looks, as a QUEUED one is. A run's
+// progress and end are kept only while its lease is still this store's, so a replica that lost
+// its job never overwrites the run that took it over.
+//
+// Every method is thread-safe (one connection behind a mutex). Times are microseconds since the
+// Unix epoch.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <mutex>
 #include <optional>
 #include <string>
+#include <string_view>
+#include <utility>
 #include <vector>
 
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
 #include "meshsmooth/v1/smoothing.pb.h"
-
-struct sqlite3;
+#include "server/job_database.h"
 
 namespace meshsmooth::server {
 
@@ -40,21 +49,46 @@ struct JobInput {
   std::string upload;
 };
 
+// A job taken to run by Claim.
+struct ClaimedJob {
+  std::string job_id;
+  JobInput input;
+  bool takeover = false;  // it was RUNNING under a lease that had run out (its replica died)
+};
+
+// The jobs of the whole store by state, for the metrics.
+struct JobCounts {
+  std::array<int64_t, 6> by_state{};  // by v1::JobState
+  int64_t oldest_queued_us = 0;       // the oldest QUEUED job's create time; 0: none queued
+};
+
+struct JobStoreOptions {
+  // How long a claim or renewal keeps a running job this store's (--job-lease).
+  double lease_seconds = 30.0;
+};
+
 // SHA-256 of `bytes` (32 bytes).
 std::string Sha256(std::string_view bytes);
 
+// A new job id: 32 lowercase hex digits of 128 random bits (OpenSSL's RAND_bytes).
+std::string NewStoredJobId();
+
 class JobStore {
  public:
-  // Opens (creating when missing) DIR/jobs.sqlite3; jobs found RUNNING (the previous process
-  // died under them) are QUEUED again. FailedPrecondition when the directory cannot be made or
-  // another process holds the store; Internal for a database SQLite cannot open.
-  static absl::StatusOr<std::unique_ptr<JobStore>> Open(const std::string& dir);
+  // Opens `where`: a postgresql:// URI (OpenPostgresJobDatabase), else a directory
+  // (OpenSqliteJobDatabase, whose errors it returns). In a directory, jobs found RUNNING (the
+  // previous process died under them) are QUEUED again; in PostgreSQL their leases say when.
+  static absl::StatusOr<std::unique_ptr<JobStore>> Open(const std::string& where, const JobStoreOptions& options = {});
   ~JobStore();
   JobStore(const JobStore&) = delete;
   JobStore& operator=(const JobStore&) = delete;
 
   // Jobs found RUNNING at Open() and queued again.
   int requeued_at_open() const { return requeued_at_open_; }
+  // Other processes share the store (PostgreSQL): their changes show only in its rows.
+  bool shared() const { return db_->shared(); }
+  // This store's lease owner: host, process id and a random tag.
+  const std::string& owner() const { return owner_; }
   // Bytes of uploads and results held (the disk budget counts these).
   int64_t stored_bytes();
 
@@ -80,17 +114,22 @@ class JobStore {
   std::vector<v1::Job> List(const std::vector<v1::JobState>& states, const std::string& after, int limit,
                             std::string* next);
 
-  // The oldest QUEUED job not in `skip`, or nullopt.
-  std::optional<std::string> NextQueued(const std::vector<std::string>& skip);
-  // QUEUED -> RUNNING (start time, one attempt more) and the job's input; nullopt when the job
-  // is no longer QUEUED (cancelled or deleted meanwhile).
-  std::optional<JobInput> StartRun(const std::string& job_id, int64_t now_us);
-  // The newest progress of a RUNNING job (nothing once it left RUNNING).
+  // Takes the oldest job that is QUEUED, or RUNNING under a lease that ended before `now_us`,
+  // and not in `skip`: RUNNING under this store's lease (start time, one attempt more) with its
+  // input; nullopt when there is none. Replicas claiming at once take different jobs.
+  std::optional<ClaimedJob> Claim(const std::vector<std::string>& skip, int64_t now_us);
+  // Extends the lease of a job this store runs to `now_us` + the lease; false when the job is no
+  // longer RUNNING under this store's lease (cancelled, deleted, or taken over).
+  bool RenewLease(const std::string& job_id, int64_t now_us);
+  // A job this store claimed back to QUEUED, its lease given up (the server stops, or its pool
+  // had no room); `undo_attempt` when it never started to run.
+  void Release(const std::string& job_id, bool undo_attempt);
+  // The newest progress of a job running under this store's lease (nothing once it left it).
   void SetProgress(const std::string& job_id, const v1::Progress& progress);
   // RUNNING -> SUCCEEDED with the result and its summary; false when the job was no longer
-  // RUNNING (cancelled meanwhile), and nothing is kept.
+  // RUNNING under this store's lease (cancelled or taken over meanwhile), and nothing is kept.
   bool Succeed(const std::string& job_id, const std::string& result, const v1::Summary& summary, int64_t now_us);
-  // RUNNING -> FAILED with the status' code and message; false when no longer RUNNING.
+  // RUNNING -> FAILED with the status' code and message; false as for Succeed.
   bool Fail(const std::string& job_id, const absl::Status& status, int64_t now_us);
   // QUEUED or RUNNING -> CANCELLED; an ended job keeps its state. Returns the job afterwards;
   // NotFound naming the id.
@@ -114,17 +153,22 @@ class JobStore {
   // when even that does not make room.
   bool MakeRoom(int64_t bytes, int64_t budget);
 
+  // The jobs by state and the oldest queued one (the whole store, every replica's jobs).
+  JobCounts Counts();
+
  private:
-  JobStore() = default;
-  absl::Status Exec(const char* sql);
-  // Forgets an ended job's rows; mu_ held, inside a transaction.
-  void DeleteLocked(const std::string& job_id, const std::string& request_id);
+  JobStore(std::unique_ptr<JobDatabase> db, const JobStoreOptions& options);
+  // A statement; mu_ held.
+  absl::StatusOr<SqlResult> Q(std::string_view sql, const std::vector<SqlArg>& args = {});
+  // Forgets ended jobs' rows, each in its own transaction, then gives the pages back; mu_ held.
+  void ForgetLocked(const std::vector<std::pair<std::string, std::string>>& jobs_and_requests);
   absl::StatusOr<v1::Job> GetLocked(const std::string& job_id, bool with_details);
-  void ReclaimLocked();
+  int64_t StoredBytesLocked();
 
   std::mutex mu_;
-  sqlite3* db_ = nullptr;
-  int lock_fd_ = -1;
+  std::unique_ptr<JobDatabase> db_;
+  const JobStoreOptions options_;
+  const std::string owner_;
   int requeued_at_open_ = 0;
 };
 

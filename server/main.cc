@@ -105,12 +105,19 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::IsMember({"text", "json"}));
   app.add_option("--job-store", o.job_store,
-                 "directory of the job store (a SQLite database) for jobs that outlive a connection (Submit, GetJob, "
-                 "WatchJob, FetchResult, ...); made when missing, one meshsmoothd per directory; default: none, and "
-                 "those methods answer UNIMPLEMENTED (the container image has /var/lib/meshsmooth/jobs for a volume)");
+                 "the job store for jobs that outlive a connection (Submit, GetJob, WatchJob, FetchResult, ...): a "
+                 "directory (a SQLite database, made when missing, one meshsmoothd per directory; the container image "
+                 "has /var/lib/meshsmooth/jobs for a volume), or postgresql://USER@HOST:PORT/DB for a PostgreSQL "
+                 "database that any number of replicas share (the password from PGPASSWORD or ~/.pgpass rather "
+                 "than in the URI); default: none, and those methods answer UNIMPLEMENTED");
   std::string retention = "24h";
   app.add_option("--job-retention", retention,
                  "how long the job store keeps an ended job and its result after its end (e.g. 24h, 30m, 90s)")
+      ->capture_default_str();
+  std::string lease = "30s";
+  app.add_option("--job-lease", lease,
+                 "how long a running job stays this replica's without a renewal (renewed twice a second while it "
+                 "runs); a job whose replica died is run again by another one this long after its last renewal")
       ->capture_default_str();
   app.add_option("--job-store-max-bytes", o.job_store_max_bytes,
                  "bytes of uploads and results the job store may hold; an upload beyond gets RESOURCE_EXHAUSTED "
@@ -128,6 +135,12 @@ int main(int argc, char** argv) {
     o.job_retention_seconds = absl::ToDoubleSeconds(d);
   } else {
     std::fprintf(stderr, "--job-retention: '%s' is not a positive duration (e.g. 24h, 30m, 90s)\n", retention.c_str());
+    return 2;
+  }
+  if (absl::Duration d; absl::ParseDuration(lease, &d) && d >= absl::Seconds(1)) {
+    o.job_lease_seconds = absl::ToDoubleSeconds(d);
+  } else {
+    std::fprintf(stderr, "--job-lease: '%s' is not a duration of 1 s or more (e.g. 30s, 2m)\n", lease.c_str());
     return 2;
   }
   o.log_format = log_format == "json" ? meshsmooth::server::LogFormat::kJson : meshsmooth::server::LogFormat::kText;

@@ -10,7 +10,9 @@
 #include <utility>
 #include <vector>
 
+#include "absl/strings/ascii.h"
 #include "absl/strings/str_cat.h"
+#include "meshsmooth/v1/smoothing.pb.h"
 #include "prometheus/collectable.h"
 #include "prometheus/counter.h"
 #include "prometheus/exposer.h"
@@ -130,6 +132,28 @@ MetricFamily Single(std::string name, std::string help, MetricType type, double 
   return f;
 }
 
+// The job store's queue: the whole store's (the same from every replica that shares it: take the
+// max, not the sum, across replicas), and this process's lease takeovers.
+void AddJobStore(const ServiceGauges& g, std::vector<MetricFamily>& out) {
+  out.push_back(Single("meshsmooth_job_store_queue_depth", "Jobs QUEUED in the job store (the whole store).",
+                       MetricType::Gauge, static_cast<double>(g.stored_jobs[v1::JOB_STATE_QUEUED])));
+  out.push_back(Single("meshsmooth_job_store_oldest_queued_seconds",
+                       "Age of the oldest QUEUED job in the job store; 0 when none is queued.", MetricType::Gauge,
+                       g.oldest_queued_seconds));
+  MetricFamily by_state{
+      "meshsmooth_job_store_jobs", "Jobs in the job store by state (the whole store).", MetricType::Gauge, {}};
+  for (int s = v1::JOB_STATE_QUEUED; s <= v1::JOB_STATE_CANCELLED; ++s) {
+    ClientMetric m;
+    m.label.push_back({"state", absl::AsciiStrToLower(v1::JobState_Name(static_cast<v1::JobState>(s)).substr(10))});
+    m.gauge.value = static_cast<double>(g.stored_jobs[s]);
+    by_state.metric.push_back(std::move(m));
+  }
+  out.push_back(std::move(by_state));
+  out.push_back(Single("meshsmooth_job_lease_takeovers_total",
+                       "Jobs this process claimed after the lease of the replica that ran them had run out.",
+                       MetricType::Counter, static_cast<double>(g.lease_takeovers)));
+}
+
 // The gauges read at each scrape: the service's state and the process's CPU and memory.
 class ScrapeCollector final : public prometheus::Collectable {
  public:
@@ -158,6 +182,7 @@ class ScrapeCollector final : public prometheus::Collectable {
                              static_cast<double>(g.workers)));
         out.push_back(Single("meshsmooth_queue_capacity", "Jobs that may wait for a worker (--queue-depth).",
                              MetricType::Gauge, static_cast<double>(g.queue_capacity)));
+        if (g.job_store) AddJobStore(g, out);
       }
     }
     if (const std::optional<ProcessSamples> p = ReadProcessSamples()) {

@@ -6,6 +6,7 @@
 // bytes) and the process's CPU and memory from /proc at each scrape, and serves GET /metrics.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -61,6 +62,13 @@ struct ServiceGauges {
   int64_t buffered_bytes_limit = 0;
   int64_t workers = 0;         // --workers in effect
   int64_t queue_capacity = 0;  // --queue-depth
+  // With a job store (--job-store): its jobs by state (index: v1::JobState; the whole store, so
+  // every replica on one PostgreSQL reports the same), the age of its oldest QUEUED job, and
+  // the jobs this process claimed after another run's lease had run out.
+  bool job_store = false;
+  std::array<int64_t, 6> stored_jobs{};
+  double oldest_queued_seconds = 0.0;  // 0 when none is queued
+  int64_t lease_takeovers = 0;
 };
 
 class MetricsExporter {

@@ -42,9 +42,12 @@ struct ServerOptions {
   bool log_refusals = true;                 // one line per refused call on stderr (not --quiet's)
   LogFormat log_format = LogFormat::kText;
   // The job store (smoothing.proto's Submit .. FetchResult, server/job_store.h): a directory
-  // holding the SQLite database of jobs that outlive a connection; empty: no store, and those
-  // methods answer UNIMPLEMENTED.
+  // holding the SQLite database of jobs that outlive a connection, or a postgresql:// URI of a
+  // database that replicas share; empty: no store, and those methods answer UNIMPLEMENTED.
   std::string job_store;
+  // How long a running job stays this process's without a renewal (twice a second while it
+  // runs): a replica that died leaves its jobs to the others this long after.
+  double job_lease_seconds = 30.0;
   // An ended job and its bytes are forgotten this long after its end.
   double job_retention_seconds = 24 * 3600.0;
   // Bytes of uploads and results the job store may hold; an upload that does not fit, even after

@@ -76,7 +76,7 @@ absl::StatusOr<std::unique_ptr<Server>> Server::Start(const ServerOptions& optio
   grpc::reflection::InitProtoReflectionServerBuilderPlugin();
   std::unique_ptr<JobStore> store;
   if (!options.job_store.empty()) {
-    absl::StatusOr<std::unique_ptr<JobStore>> opened = JobStore::Open(options.job_store);
+    absl::StatusOr<std::unique_ptr<JobStore>> opened = JobStore::Open(options.job_store, {options.job_lease_seconds});
     if (!opened.ok()) return opened.status();
     store = *std::move(opened);
   }

@@ -158,6 +158,15 @@ ServiceGauges MeshSmootherService::Gauges() {
   g.buffered_bytes_limit = admission_.budget().limit();
   g.workers = pool_.workers();
   g.queue_capacity = options_.queue_depth;
+  if (runner_) {
+    const JobCounts counts = store_->Counts();
+    g.job_store = true;
+    g.stored_jobs = counts.by_state;
+    if (counts.oldest_queued_us != 0) {
+      g.oldest_queued_seconds = std::max(0.0, static_cast<double>(NowMicros() - counts.oldest_queued_us) / 1e6);
+    }
+    g.lease_takeovers = runner_->lease_takeovers();
+  }
   return g;
 }
 

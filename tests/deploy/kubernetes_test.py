@@ -6,7 +6,9 @@ itself (no schema): kinds and API versions, label selectors against the pod's la
 probes and Services against the port the image listens on, every server flag against
 `meshsmoothd --help`, the termination grace against --grace-seconds, the memory limit against the
 measured peak per vertex, the image's user, and the metrics: the scrape annotations and the
-named port against --metrics-listen. With kubectl on PATH, `kubectl kustomize` must also render
+named port against --metrics-listen; the job store: --job-store names the PostgreSQL Service and
+its port, and the password reaches the database and the replicas from one Secret, never in a
+command line. With kubectl on PATH, `kubectl kustomize` must also render
 the directory. With --alerts, the PrometheusRule's rules pass `promtool check rules`, and
 `promtool test rules` fires each alert on made-up series (and not on healthy ones).
 
@@ -177,14 +179,16 @@ def manifest_checks(a, check):
 
     def kinds():
         want = {"Kustomization": "kustomize.config.k8s.io/v1beta1", "Namespace": "v1",
-                "Deployment": "apps/v1", "PodDisruptionBudget": "policy/v1", "Service": "v1"}
+                "Deployment": "apps/v1", "PodDisruptionBudget": "policy/v1", "Service": "v1",
+                "StatefulSet": "apps/v1", "Secret": "v1"}
         for d in objs:
             assert d["kind"] in want, f"unexpected kind {d['kind']}"
             assert d["apiVersion"] == want[d["kind"]], f"{d['kind']}: apiVersion {d['apiVersion']}"
         counts = {k: len(of_kind(k)) for k in want}
-        assert counts == {"Kustomization": 1, "Namespace": 1, "Deployment": 1,
-                          "PodDisruptionBudget": 1, "Service": 2}, counts
-    check("one Deployment, one PodDisruptionBudget, two Services, a Namespace, a Kustomization", kinds)
+        assert counts == {"Kustomization": 1, "Namespace": 1, "Deployment": 1, "PodDisruptionBudget": 1,
+                          "Service": 3, "StatefulSet": 1, "Secret": 1}, counts
+    check("one Deployment, one PodDisruptionBudget, three Services, the database's StatefulSet and Secret, "
+          "a Namespace, a Kustomization", kinds)
 
     def kustomization():
         k = of_kind("Kustomization")[0]
@@ -197,6 +201,11 @@ def manifest_checks(a, check):
     dep = of_kind("Deployment")[0]
     pod = dep["spec"]["template"]["spec"]
     pod_labels = dep["spec"]["template"]["metadata"]["labels"]
+    db = of_kind("StatefulSet")[0]
+    db_labels = db["spec"]["template"]["metadata"]["labels"]
+    # meshsmoothd's Services (the database's selects its StatefulSet's pod).
+    services_of_pods = [s for s in of_kind("Service") if s["spec"].get("selector")
+                        and subset(s["spec"]["selector"], pod_labels)]
     containers = pod["containers"]
     c = containers[0]
     args = c.get("args", [])
@@ -216,8 +225,10 @@ def manifest_checks(a, check):
         assert len(containers) == 1, "one container"
         assert subset(dep["spec"]["selector"]["matchLabels"], pod_labels), "Deployment selector"
         for s in of_kind("Service"):
-            assert s["spec"]["selector"] and subset(s["spec"]["selector"], pod_labels), \
+            assert s["spec"]["selector"] and (subset(s["spec"]["selector"], pod_labels)
+                                              or subset(s["spec"]["selector"], db_labels)), \
                 f"Service {s['metadata']['name']} selects no pod"
+        assert subset(db["spec"]["selector"]["matchLabels"], db_labels), "StatefulSet selector"
         pdb = of_kind("PodDisruptionBudget")[0]
         assert subset(pdb["spec"]["selector"]["matchLabels"], pod_labels), "PDB selector"
         for t in pod.get("topologySpreadConstraints", []):
@@ -230,14 +241,14 @@ def manifest_checks(a, check):
         for probe in ("readinessProbe", "livenessProbe"):
             assert c[probe]["grpc"]["port"] == image_port, f"{probe}: {c[probe]}"
             assert "service" not in c[probe]["grpc"], f"{probe}: the server reports health for \"\""
-        for s in of_kind("Service"):
+        for s in services_of_pods:
             (p,) = s["spec"]["ports"]
             target = p.get("targetPort", p["port"])
             assert target == "grpc" or target == image_port, f"{s['metadata']['name']}: targetPort {target}"
     check(f"gRPC probes and Services reach the image's port {image_port}", ports)
 
     def services():
-        by_ip = {s["spec"].get("clusterIP"): s for s in of_kind("Service")}
+        by_ip = {s["spec"].get("clusterIP"): s for s in services_of_pods}
         assert "None" in by_ip, "a headless Service (clusterIP: None) for client-side balancing"
         other = [s for ip, s in by_ip.items() if ip != "None"]
         assert len(other) == 1 and other[0]["spec"].get("type", "ClusterIP") == "ClusterIP", \
@@ -296,6 +307,27 @@ def manifest_checks(a, check):
         assert c["securityContext"]["allowPrivilegeEscalation"] is False
         assert c["securityContext"]["readOnlyRootFilesystem"] is True
     check(f"runs as the image's uid {image_uid}, not root", security)
+
+    def job_store():
+        m = re.fullmatch(r"postgresql://([a-z_]+)@([a-z0-9-]+):(\d+)/([a-z_]+)", flags.get("--job-store", ""))
+        assert m, f"--job-store={flags.get('--job-store')!r}: postgresql://USER@HOST:PORT/DB, no password"
+        user, host, port, database = m.groups()
+        (svc,) = [s for s in of_kind("Service") if s["metadata"]["name"] == host]
+        assert subset(svc["spec"]["selector"], db_labels), f"Service {host} selects the database's pod"
+        (sp,) = svc["spec"]["ports"]
+        (dbc,) = db["spec"]["template"]["spec"]["containers"]
+        db_ports = {p["name"]: p["containerPort"] for p in dbc["ports"]}
+        assert sp["port"] == int(port) and db_ports.get(sp["targetPort"], sp["targetPort"]) == 5432, sp
+        db_env = {e["name"]: e for e in dbc["env"]}
+        assert db_env["POSTGRES_USER"]["value"] == user and db_env["POSTGRES_DB"]["value"] == database, db_env
+        secret = of_kind("Secret")[0]
+        ref = {"name": secret["metadata"]["name"], "key": "password"}
+        assert "password" in secret.get("stringData", secret.get("data", {})), "the Secret holds a password"
+        env = {e["name"]: e for e in c.get("env", [])}
+        assert env["PGPASSWORD"]["valueFrom"]["secretKeyRef"] == ref, "the replicas' PGPASSWORD"
+        assert db_env["POSTGRES_PASSWORD"]["valueFrom"]["secretKeyRef"] == ref, "the database's password"
+        assert db["spec"]["volumeClaimTemplates"], "the database on a persistent volume"
+    check("--job-store names the database's Service; one Secret gives both ends the password", job_store)
 
     def disruption():
         pdb = of_kind("PodDisruptionBudget")[0]["spec"]
