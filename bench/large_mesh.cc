@@ -17,10 +17,14 @@
 // below 0.37).
 //
 // Usage: meshsmooth_large_mesh [--vertices N] [--sigma 0.2] [--seed 1] [--workdir DIR]
-//                              [--reference MESH.ply]...
+//                              [--reference MESH.ply]... [--service]
 //   --reference: also the default job on that mesh (e.g. the noisy dragon that
 //   `meshsmooth_quality --write-noisy stanford-dragon 0.2 1 FILE` writes), for its time per
 //   vertex beside the height field's.
+//   --service: instead, the CLI itself (build/client/meshsmooth beside this program's folder) on
+//   the height field, locally and through a meshsmoothd of the same build started with the limits
+//   of docs/deployment.md's "Large meshes" (CompareWithService): each process's time and peak,
+//   and whether the two outputs hold the same bytes (exit 1 when not).
 #include <fcntl.h>
 #include <spawn.h>
 #include <sys/resource.h>
@@ -29,6 +33,7 @@
 
 #include <cerrno>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -217,39 +222,165 @@ int Child(const std::string& in, const std::string& out) {
   return 0;
 }
 
-struct ChildRun {
+// A process of ours that ended: its exit status, time and peak (wait4's ru_maxrss).
+struct Ended {
   int exit_code = -1;
   double seconds = 0.0, max_rss_bytes = 0.0;
+};
+
+// `argv` started with stdout (and stderr, when not empty) to files; -1 when it cannot start.
+pid_t Spawn(const std::vector<std::string>& argv, const fs::path& out, const fs::path& err = {}) {
+  std::vector<std::string> copy = argv;
+  std::vector<char*> args;
+  for (std::string& a : copy) args.push_back(a.data());
+  args.push_back(nullptr);
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, 1, out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  if (!err.empty()) posix_spawn_file_actions_addopen(&actions, 2, err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  pid_t pid = 0;
+  const int spawned = posix_spawn(&pid, args[0], &actions, nullptr, args.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  return spawned == 0 ? pid : -1;
+}
+
+Ended Wait(pid_t pid, Clock::time_point start) {
+  Ended e;
+  if (pid < 0) return e;
+  int status = 0;
+  rusage usage{};
+  while (wait4(pid, &status, 0, &usage) < 0 && errno == EINTR) {
+  }
+  e.seconds = Seconds(start, Clock::now());
+  e.max_rss_bytes = 1024.0 * static_cast<double>(usage.ru_maxrss);
+  if (WIFEXITED(status)) e.exit_code = WEXITSTATUS(status);
+  return e;
+}
+
+struct ChildRun : Ended {
   std::map<std::string, std::string> figures;
 };
 
 // This program with --child IN OUT, its stdout parsed into figures.
 ChildRun RunChild(const std::string& self, const fs::path& in, const fs::path& out, const fs::path& dir) {
   ChildRun r;
-  const std::string stdout_path = (dir / "child-stdout.txt").string();
-  std::vector<std::string> argv = {self, "--child", in.string(), out.string()};
-  std::vector<char*> args;
-  for (std::string& a : argv) args.push_back(a.data());
-  args.push_back(nullptr);
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_addopen(&actions, 1, stdout_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  pid_t pid = 0;
+  const fs::path stdout_path = dir / "child-stdout.txt";
   const Clock::time_point start = Clock::now();
-  const int spawned = posix_spawn(&pid, args[0], &actions, nullptr, args.data(), environ);
-  posix_spawn_file_actions_destroy(&actions);
-  if (spawned != 0) return r;
-  int status = 0;
-  rusage usage{};
-  while (wait4(pid, &status, 0, &usage) < 0 && errno == EINTR) {
-  }
-  r.seconds = Seconds(start, Clock::now());
-  r.max_rss_bytes = 1024.0 * static_cast<double>(usage.ru_maxrss);
-  if (WIFEXITED(status)) r.exit_code = WEXITSTATUS(status);
+  static_cast<Ended&>(r) = Wait(Spawn({self, "--child", in.string(), out.string()}, stdout_path), start);
   std::ifstream figures(stdout_path);
   std::string key, value;
   while (figures >> key >> value) r.figures[key] = value;
   return r;
+}
+
+// The first byte at which the files differ; -1 when they hold the same bytes.
+int64_t FirstDifference(const fs::path& a, const fs::path& b) {
+  std::ifstream fa(a, std::ios::binary), fb(b, std::ios::binary);
+  std::vector<char> ba(1 << 20), bb(1 << 20);
+  for (int64_t offset = 0;; offset += static_cast<int64_t>(ba.size())) {
+    fa.read(ba.data(), static_cast<std::streamsize>(ba.size()));
+    fb.read(bb.data(), static_cast<std::streamsize>(bb.size()));
+    const std::streamsize na = fa.gcount(), nb = fb.gcount();
+    for (std::streamsize i = 0; i < std::min(na, nb); ++i) {
+      if (ba[i] != bb[i]) return offset + i;
+    }
+    if (na != nb) return offset + std::min(na, nb);
+    if (na == 0) return -1;
+  }
+}
+
+// The port meshsmoothd printed ("meshsmoothd listening on HOST:PORT") in `out`, waiting up to
+// 10 s; 0 when it did not.
+int ListeningPort(const fs::path& out) {
+  for (int tries = 0; tries < 100; ++tries) {
+    std::ifstream in(out);
+    std::string line;
+    while (std::getline(in, line)) {
+      const size_t colon = line.rfind(':');
+      if (line.rfind("meshsmoothd listening on ", 0) == 0 && colon != std::string::npos) {
+        return std::atoi(line.c_str() + colon + 1);
+      }
+    }
+    usleep(100'000);
+  }
+  return 0;
+}
+
+// --service: `meshsmooth smooth IN -o OUT` locally, then through a meshsmoothd started with the
+// limits docs/deployment.md's "Large meshes" gives for this machine (one worker, uploads and
+// buffers of 2 GiB, --max-job-bytes the rest of MemTotal, an hour a job), from the build tree
+// this benchmark is in; prints each process's time and peak and whether the outputs hold the same
+// bytes. 0 when they do.
+int CompareWithService(const std::string& self, const fs::path& input, int64_t vertices, const fs::path& dir) {
+  const fs::path build = fs::path(self).parent_path().parent_path();
+  const std::string cli = (build / "client" / "meshsmooth").string();
+  const std::string daemon = (build / "server" / "meshsmoothd").string();
+  const fs::path local = dir / "cli-local.ply", served = dir / "cli-service.ply";
+  constexpr int64_t kBuffers = int64_t{2} << 30;
+  const int64_t job_bytes =
+      static_cast<int64_t>(sysconf(_SC_PHYS_PAGES)) * sysconf(_SC_PAGESIZE) - kBuffers - (int64_t{64} << 20);
+  std::fprintf(stderr, "the CLI's local run on %s\n", input.c_str());
+  Clock::time_point start = Clock::now();
+  const Ended cli_local =
+      Wait(Spawn({cli, "smooth", input.string(), "-o", local.string(), "--quiet", "--timeout", "7200"},
+                 dir / "cli-local.txt"),
+           start);
+  const std::vector<std::string> server_argv = {daemon,
+                                                "--listen",
+                                                "127.0.0.1:0",
+                                                "--workers",
+                                                "1",
+                                                "--quiet",
+                                                "--max-upload-bytes",
+                                                std::to_string(kBuffers),
+                                                "--max-buffered-bytes",
+                                                std::to_string(kBuffers),
+                                                "--max-job-bytes",
+                                                std::to_string(job_bytes),
+                                                "--max-job-seconds",
+                                                "3600"};
+  std::string command;
+  for (const std::string& a : server_argv) command += (command.empty() ? "" : " ") + a;
+  std::fprintf(stderr, "%s\n", command.c_str());
+  const Clock::time_point server_start = Clock::now();
+  const pid_t server = Spawn(server_argv, dir / "meshsmoothd-out.txt", dir / "meshsmoothd-err.txt");
+  const int port = ListeningPort(dir / "meshsmoothd-out.txt");
+  Ended client;
+  if (port > 0) {
+    start = Clock::now();
+    client = Wait(Spawn({cli, "smooth", input.string(), "-o", served.string(), "--quiet", "--timeout", "7200",
+                         "--server", absl::StrFormat("127.0.0.1:%d", port)},
+                        dir / "cli-service.txt"),
+                  start);
+  }
+  if (server > 0) kill(server, SIGTERM);
+  const Ended daemon_run = Wait(server, server_start);
+  std::printf("\n| run (%lld vertices) | exit | seconds | peak RSS | bytes/vertex |\n|---|---|---|---|---|\n",
+              static_cast<long long>(vertices));
+  auto row = [&](const char* name, const Ended& e) {
+    std::printf("| %s | %d | %.2f | %.2f GB | %.0f |\n", name, e.exit_code, e.seconds, e.max_rss_bytes / 1e9,
+                e.max_rss_bytes / static_cast<double>(vertices));
+  };
+  row("meshsmooth smooth IN -o OUT (local)", cli_local);
+  row("meshsmooth smooth IN -o OUT --server (the client)", client);
+  row("meshsmoothd (its whole life, idle included)", daemon_run);
+  if (cli_local.exit_code != 0 || client.exit_code != 0) {
+    std::printf("\na run failed: see %s\n", dir.c_str());
+    return 1;
+  }
+  const int64_t differ = FirstDifference(local, served);
+  std::error_code ignored;
+  if (differ < 0) {
+    std::printf("\nlocal and service outputs: the same %lld bytes\n",
+                static_cast<long long>(fs::file_size(local, ignored)));
+  } else {
+    std::printf("\nlocal and service outputs DIFFER from byte %lld (kept in %s)\n", static_cast<long long>(differ),
+                dir.c_str());
+    return 1;
+  }
+  fs::remove(local, ignored);
+  fs::remove(served, ignored);
+  return 0;
 }
 
 double Figure(const ChildRun& r, const std::string& key) {
@@ -260,7 +391,7 @@ double Figure(const ChildRun& r, const std::string& key) {
 int Usage(const char* why) {
   std::fprintf(stderr,
                "%s\nusage: meshsmooth_large_mesh [--vertices N] [--sigma 0.2] [--seed 1] [--workdir DIR] "
-               "[--reference MESH.ply]...\n",
+               "[--reference MESH.ply]... [--service]\n",
                why);
   return 2;
 }
@@ -272,8 +403,13 @@ int Main(int argc, char** argv) {
   uint32_t seed = 1;
   fs::path dir;
   std::vector<std::string> references;
+  bool service = false;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
+    if (a == "--service") {
+      service = true;
+      continue;
+    }
     if (i + 1 >= argc) return Usage(("missing value after " + a).c_str());
     const std::string v = argv[++i];
     if (a == "--vertices") {
@@ -299,6 +435,11 @@ int Main(int argc, char** argv) {
   const fs::path input = dir / absl::StrFormat("height-field-%d.ply", int64_t{side} * side);
   std::fprintf(stderr, "writing %s (%d x %d vertices, sigma %g h)\n", input.c_str(), side, side, sigma);
   if (!WriteHeightField(input, side, sigma, seed)) return Usage("cannot write the height field");
+  if (service) {
+    const int differ = CompareWithService(self, input, int64_t{side} * side, dir);
+    std::fprintf(stderr, "input kept in %s\n", dir.c_str());
+    return differ;
+  }
 
   std::printf(
       "| mesh | vertices | flow, iterations (stop) | read | prepare (weld, validate, metrics) | noise estimate + "

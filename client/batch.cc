@@ -162,8 +162,9 @@ void BatchRun::Report(size_t i, const FileOutcome& f, const std::vector<std::str
                                                    : "FAILED",
                  seconds);
     if (ok) {
-      std::printf("%s -> %s: %s; %.2f s\n", file.input.c_str(), file.output.c_str(), OneLineSummary(f.summary).c_str(),
-                  seconds);
+      const std::string note = f.upload_note.empty() ? "" : absl::StrCat("; ", f.upload_note);
+      std::printf("%s -> %s: %s%s; %.2f s\n", file.input.c_str(), file.output.c_str(),
+                  OneLineSummary(f.summary).c_str(), note.c_str(), seconds);
     } else {
       std::printf("failed: %s\n", NamedError(file.input, f.error).c_str());
     }

@@ -75,6 +75,7 @@ int RunSmooth(const SmoothOptions& o, const ConnectionOptions& c) {
     std::printf("%s", ToJson(SummaryWithWarnings(f)).c_str());
   } else if (!o.quiet) {
     PrintSummary(f.summary);
+    if (!f.upload_note.empty()) std::printf("%s\n", f.upload_note.c_str());
     std::printf("wrote %s\n", o.output.c_str());
   }
   return 0;

@@ -28,6 +28,9 @@ struct SmoothOptions {
   std::string boundary = "auto";
   double tolerance = 0.0;
   unsigned quantization_bits = 0;
+  // --quantize-upload: the upload's positions quantized to this fraction of the input's mean edge
+  // (client/upload_quantization.h); 0 = a lossless upload.
+  double quantize_upload = 0.0;
   bool edgebreaker = false;
   bool gltf_draco = false;  // glTF output: Draco-compressed primitives
   bool quiet = false, json = false;

@@ -42,6 +42,7 @@
 #include "client/inputs.h"
 #include "client/job_commands.h"
 #include "client/transfer.h"
+#include "client/upload_quantization.h"
 #include "core/flows/catalogue.h"
 #include "core/flows/flow.h"
 #include "core/io/draco_codec.h"
@@ -510,6 +511,22 @@ int main(int argc, char** argv) {
                    "before it starts, naming both figures. 0 = what this machine has available (MemAvailable)")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
+  std::string quantize_upload;
+  CLI::Option* quantize_option =
+      smooth
+          ->add_option(
+              "--quantize-upload", quantize_upload,
+              absl::StrCat(
+                  "with --server, for a mesh too large to send losslessly (about 36 bytes a vertex): "
+                  "send positions quantized so that no coordinate moves more than FRACTION of the mean edge length "
+                  "(0 < FRACTION <= ",
+                  kMaxUploadQuantization, "; default ", kDefaultUploadQuantization,
+                  "); the summary states the bound in mesh units and the bits. The result comes back as the service "
+                  "smoothed it (lossless unless --quantization-bits); a vertex the job does not move comes back at "
+                  "its quantized position. Give the value with '=' before the input file "
+                  "(--quantize-upload=0.001). Default: a lossless upload"))
+          ->expected(0, 1)
+          ->type_name("[FRACTION]");
 
   ConnectionOptions fc;
   bool flows_json = false;
@@ -568,6 +585,18 @@ int main(int argc, char** argv) {
   }
   bool batch_mode = false;
   if (smooth->parsed()) {
+    // Before the inputs: given alone before the input file, the flag takes the file as its value.
+    if (quantize_option->count() > 0) {
+      absl::StatusOr<double> fraction = ParseUploadQuantization(quantize_upload);
+      if (!fraction.ok() || sc.server.empty()) {
+        std::fprintf(stderr, "meshsmooth: %s\n",
+                     fraction.ok() ? "--quantize-upload quantizes what is sent to --server; without --server the job "
+                                     "runs on the mesh as read (nothing is uploaded)"
+                                   : std::string(fraction.status().message()).c_str());
+        return kExitUsage;
+      }
+      so.quantize_upload = *fraction;
+    }
     if (const int code = SettleSmoothInputs(so, batch, batch_mode); code != 0) return code;
   }
   if (smooth->parsed() || enhance->parsed()) {

@@ -34,6 +34,7 @@ FileOutcome Failed(const std::string& prefix, const absl::Status& s, FileOutcome
 v1::Summary SummaryWithWarnings(const FileOutcome& outcome) {
   v1::Summary summary;
   for (const std::string& w : outcome.upload_warnings) summary.add_warnings(w);
+  if (!outcome.upload_note.empty()) summary.add_warnings(outcome.upload_note);
   for (const std::string& d : outcome.dropped) summary.add_warnings(absl::StrCat("not kept: ", d));
   summary.MergeFrom(outcome.summary);
   return summary;
@@ -80,8 +81,9 @@ FileOutcome SmoothFile(const SmoothOptions& o, ServiceLink& service, JobCancels&
   const bool in_memory = RunsInMemory(o, c, *format);
   // The attributes go to the service only for a .drc output, which is written as it comes back.
   absl::StatusOr<Upload> upload =
-      PrepareUpload(o.input, *format == MeshFormat::kDraco, o.gltf_draco, o.strength, in_memory);
+      PrepareUpload(o.input, *format == MeshFormat::kDraco, o.gltf_draco, o.strength, in_memory, o.quantize_upload);
   if (!upload.ok()) return Failed("", upload.status(), std::move(out));
+  if (o.quantize_upload > 0.0) out.upload_note = DescribeUploadQuantization(upload->quantization);
   out.upload_warnings = upload->warnings;
   if (hooks.upload_warnings) hooks.upload_warnings(out.upload_warnings);
   const v1::JobSpec spec = SpecFrom(o);

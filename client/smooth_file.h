@@ -32,10 +32,12 @@ struct FileOutcome {
   v1::Summary summary;                       // the job's
   std::vector<std::string> upload_warnings;  // the CLI's, about the input
   std::vector<std::string> dropped;          // what the output does not hold, one phrase each
+  // With --quantize-upload: how the upload was quantized (DescribeUploadQuantization).
+  std::string upload_note;
 };
 
-// The summary as --json gives it: the CLI's warnings (about the input, then "not kept: ..."),
-// then the job's summary with its own.
+// The summary as --json gives it: the CLI's warnings (about the input, then "not kept: ..."; the
+// upload's quantization, which changed the input, among them), then the job's summary with its own.
 v1::Summary SummaryWithWarnings(const FileOutcome& outcome);
 
 // True when --edgebreaker may encode the result of `input` written to `output`: a .drc or glTF

@@ -145,14 +145,15 @@ std::string Float32Loss(const std::vector<Vec3>& positions, const char* format) 
                       " at these coordinates; .obj, .off and .ply keep them)");
 }
 
-// EncodeDraco(mesh) with `strength` (when not empty) as the property kStrengthAttribute, which
-// replaces one of that name for the upload only: the mesh keeps its own properties.
-absl::StatusOr<std::string> EncodeWithStrength(Mesh& mesh, const std::vector<float>& strength) {
-  if (strength.empty()) return EncodeDraco(mesh);
+// EncodeDraco(mesh, options) with `strength` (when not empty) as the property kStrengthAttribute,
+// which replaces one of that name for the upload only: the mesh keeps its own properties.
+absl::StatusOr<std::string> EncodeWithStrength(Mesh& mesh, const std::vector<float>& strength,
+                                               const DracoOptions& options) {
+  if (strength.empty()) return EncodeDraco(mesh, options);
   std::vector<VertexProperty> own = mesh.properties;
   std::erase_if(mesh.properties, [](const VertexProperty& p) { return p.name == kStrengthAttribute; });
   mesh.properties.push_back({kStrengthAttribute, "float", std::vector<double>(strength.begin(), strength.end())});
-  absl::StatusOr<std::string> bytes = EncodeDraco(mesh);
+  absl::StatusOr<std::string> bytes = EncodeDraco(mesh, options);
   mesh.properties = std::move(own);
   return bytes;
 }
@@ -160,9 +161,10 @@ absl::StatusOr<std::string> EncodeWithStrength(Mesh& mesh, const std::vector<flo
 // The end of an upload of a mesh read in double (`double_read`: its file held double), in its
 // own coordinates, with its strength (VertexStrength) computed: faces naming a vertex that does
 // not exist left out, the positions moved to the local origin, then the mesh kept for a job in
-// memory or encoded (with its attributes or bare).
+// memory or encoded (with its attributes or bare; positions quantized to `quantize` of the mean
+// edge when above 0).
 absl::Status FinishUpload(Upload& upload, Mesh mesh, std::vector<float> weights, bool double_read, bool with_attributes,
-                          bool in_memory) {
+                          bool in_memory, double quantize = 0.0) {
   // Faces naming a vertex that does not exist cannot be sent (Draco cannot store them); the
   // server checks the rest of the mesh. Only this count is needed here: the full validation
   // builds the topology, 11% of the CLI's whole process on the dragon.
@@ -189,14 +191,19 @@ absl::Status FinishUpload(Upload& upload, Mesh mesh, std::vector<float> weights,
     upload.kept = std::move(mesh);
     return absl::OkStatus();
   }
+  DracoOptions options;
+  if (quantize > 0.0) {
+    upload.quantization = ChooseUploadQuantization(mesh, quantize);
+    options.quantization_bits = upload.quantization.bits;
+  }
   absl::StatusOr<std::string> bytes;
   if (with_attributes) {
-    bytes = EncodeWithStrength(mesh, weights);
+    bytes = EncodeWithStrength(mesh, weights, options);
   } else {  // the positions and faces lent to a mesh of their own, then given back
     Mesh bare;
     bare.positions = std::move(mesh.positions);
     bare.triangles = std::move(mesh.triangles);
-    bytes = EncodeWithStrength(bare, weights);
+    bytes = EncodeWithStrength(bare, weights, options);
     mesh.positions = std::move(bare.positions);
     mesh.triangles = std::move(bare.triangles);
   }
@@ -294,10 +301,15 @@ bool IsGltfPath(const std::string& path) {
 }
 
 absl::StatusOr<Upload> PrepareUpload(const std::string& input, bool with_attributes, bool gltf_draco,
-                                     const StrengthOptions& strength, bool in_memory) {
+                                     const StrengthOptions& strength, bool in_memory, double quantize_upload) {
   Upload upload;
   upload.input = input;
   const absl::StatusOr<MeshFormat> format = FormatFromPath(input);
+  if (quantize_upload > 0.0 && (IsGltfPath(input) || (format.ok() && *format == MeshFormat::kDraco))) {
+    return absl::InvalidArgumentError(
+        "--quantize-upload quantizes an OBJ, PLY, OFF or STL input (or builtin:NAME); a .drc or glTF input is sent "
+        "as it is");
+  }
   if (strength.any() && (IsGltfPath(input) || (format.ok() && *format == MeshFormat::kDraco))) {
     return absl::InvalidArgumentError(
         "--weight, --fixed and --region read OBJ, PLY, OFF or STL input (or builtin:NAME), not a .drc or glTF file");
@@ -330,7 +342,7 @@ absl::StatusOr<Upload> PrepareUpload(const std::string& input, bool with_attribu
   absl::StatusOr<std::vector<float>> weights = VertexStrength(*mesh, strength);
   if (!weights.ok()) return weights.status();
   if (absl::Status s = FinishUpload(upload, *std::move(mesh), *std::move(weights), info.double_positions,
-                                    with_attributes, in_memory);
+                                    with_attributes, in_memory, quantize_upload);
       !s.ok()) {
     return s;
   }

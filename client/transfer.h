@@ -11,6 +11,7 @@
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
 #include "client/strength.h"
+#include "client/upload_quantization.h"
 #include "core/io/draco_codec.h"
 #include "core/io/gltf.h"
 #include "core/mesh.h"
@@ -40,6 +41,8 @@ struct Upload {
   bool strength = false;
   // For a job run in memory (no `draco`): the strength's values, one per vertex of `kept`.
   std::vector<float> strength_values;
+  // --quantize-upload: how `draco`'s positions were quantized (fraction 0: lossless).
+  UploadQuantization quantization;
 };
 
 // True for a path whose extension is .gltf or .glb (case-insensitive).
@@ -65,8 +68,14 @@ bool IsGltfPath(const std::string& path);
 // this process as it is (server::MeshUpload over `kept`, the strength in `strength_values`)
 // instead of being encoded; the same checks as the encoder's (CheckPositionsEncodable), with
 // the same errors, so that the local run fails where the upload would.
+//
+// `quantize_upload` above 0 (--quantize-upload, a mesh file or builtin:NAME going to the service):
+// the positions are quantized by Draco so that no coordinate moves more than that fraction of the
+// mean edge length (ChooseUploadQuantization; what was done in `quantization`); every other
+// attribute goes lossless. InvalidArgument for a .drc or glTF input, which goes as it is.
 absl::StatusOr<Upload> PrepareUpload(const std::string& input, bool with_attributes = true, bool gltf_draco = false,
-                                     const StrengthOptions& strength = {}, bool in_memory = false);
+                                     const StrengthOptions& strength = {}, bool in_memory = false,
+                                     double quantize_upload = 0.0);
 
 // A mesh in memory (positions in double, in its own coordinates; the Python package's input)
 // made into an upload as PrepareUpload makes a mesh file's: faces naming a vertex that does not

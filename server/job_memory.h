@@ -5,9 +5,10 @@
 // The model: a fixed part + per vertex + per face, by what the job asks for. One model for both
 // places a job runs (docs/performance.md, "Large meshes"): the local run's peak was 195-197 bytes
 // a vertex on 10M- and 50M-vertex height fields, against 270 here for a mesh of two faces a
-// vertex, the margin for meshsmoothd's own peak (223 bytes a vertex on the 10M one,
-// scripts/peak-memory.sh), which also holds the upload's Draco bytes until they are decoded and
-// the decoded points beside the welded mesh; the normal-filtering flows from
+// vertex, with a margin for meshsmoothd's own peak (188 bytes a vertex on the 10M one for an
+// upload of positions and faces alone; an upload with attributes keeps its decoded Draco mesh
+// beside the welded one, about 36 more) and for the 19.4M one's copy into Morton order (237
+// locally, 251 in meshsmoothd: docs/deployment.md, "Large meshes"); the normal-filtering flows from
 // docs/deployment.md's "Memory" table (904-1,010 bytes a vertex on the dragon). The estimate is
 // meant to be reached by no run of that kind, not to match one. Counts are the mesh's as it
 // reaches the job: Draco's points (the upload's head, DracoDeclaredCounts: the points split at

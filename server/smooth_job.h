@@ -99,11 +99,11 @@ class SmoothJob {
   // Ridges and ravines as the result's attributes when the spec asks; counts in `report`.
   absl::StatusOr<std::vector<GenericAttribute>> DetectFeaturesIfAsked(const Mesh& mesh, const Topology& topo,
                                                                       const StopToken& stop, JobReport& report) const;
-  // The result's Draco bytes; the after metrics and the displacement go to `report`.
+  // The result's Draco bytes; the after metrics and the displacement from `input` (freed before
+  // the encoding) go to `report`.
   absl::StatusOr<std::string> EncodeAndMeasure(JobMesh& upload, const Mesh& mesh, const Topology& topo,
-                                               const std::vector<Vec3>& input,
-                                               const std::vector<GenericAttribute>& attributes, const StopToken& stop,
-                                               JobReport& report) const;
+                                               std::vector<Vec3> input, const std::vector<GenericAttribute>& attributes,
+                                               const StopToken& stop, JobReport& report) const;
 
   const std::string id_;
   const JobParams params_;

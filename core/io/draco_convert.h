@@ -37,6 +37,15 @@ absl::StatusOr<Mesh> PointMesh(const draco::Mesh& dm);
 // ResourceExhausted when Draco's encoder runs out of memory.
 absl::StatusOr<std::string> EncodeWithOptions(const draco::Mesh& dm, const DracoOptions& options);
 
+// EncodeWithOptions on a mesh of the caller's that is not needed afterwards: `dm` is freed as
+// soon as Draco's encoder is done with it, before its bytes are copied out (a large job's peak
+// then holds the encoded bytes twice, but not the Draco mesh beside them).
+absl::StatusOr<std::string> EncodeReleasing(std::unique_ptr<draco::Mesh> dm, const DracoOptions& options);
+
+// A Draco mesh of `mesh`'s float32 positions, one point a vertex, and its faces with every index
+// in range: what EncodeDraco() encodes for a mesh without attributes.
+std::unique_ptr<draco::Mesh> PositionsAndFacesMesh(const Mesh& mesh);
+
 // The name of attribute `id` (index in `dm`): its metadata entry "name", how Draco files label
 // generic data. False when it has none.
 bool AttributeName(const draco::Mesh& dm, int32_t id, std::string* name);

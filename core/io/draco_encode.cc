@@ -185,7 +185,10 @@ absl::StatusOr<std::string> EncodeDraco(const Mesh& mesh, const DracoOptions& op
   return EncodeWithOptions(dm, options);
 }
 
-absl::StatusOr<std::string> EncodeWithOptions(const draco::Mesh& dm, const DracoOptions& options) {
+namespace {
+
+// Draco's encoder on `dm` into `out` (EncodeWithOptions' checks and errors).
+absl::Status EncodeToBuffer(const draco::Mesh& dm, const DracoOptions& options, draco::EncoderBuffer& out) {
   if (absl::Status s = CheckDracoOptions(options); !s.ok()) return s;
   // Draco's sequential decoder takes more than three points per face for corrupt data and
   // refuses the bytes: write none rather than a file that nothing can read.
@@ -201,7 +204,6 @@ absl::StatusOr<std::string> EncodeWithOptions(const draco::Mesh& dm, const Draco
     if (absl::Status s = CheckQuantizedExtent(*positions); !s.ok()) return s;
     encoder.SetAttributeQuantization(draco::GeometryAttribute::POSITION, options.quantization_bits);
   }
-  draco::EncoderBuffer out;
   draco::Status status;
   try {
     status = encoder.EncodeMeshToBuffer(dm, &out);
@@ -211,7 +213,30 @@ absl::StatusOr<std::string> EncodeWithOptions(const draco::Mesh& dm, const Draco
   if (!status.ok()) {
     return absl::InvalidArgumentError(absl::StrCat("Draco encoding failed: ", status.error_msg_string()));
   }
+  return absl::OkStatus();
+}
+
+}  // namespace
+
+absl::StatusOr<std::string> EncodeWithOptions(const draco::Mesh& dm, const DracoOptions& options) {
+  draco::EncoderBuffer out;
+  if (absl::Status s = EncodeToBuffer(dm, options, out); !s.ok()) return s;
   return std::string(out.data(), out.size());
+}
+
+absl::StatusOr<std::string> EncodeReleasing(std::unique_ptr<draco::Mesh> dm, const DracoOptions& options) {
+  draco::EncoderBuffer out;
+  const absl::Status s = EncodeToBuffer(*dm, options, out);
+  dm.reset();
+  if (!s.ok()) return s;
+  return std::string(out.data(), out.size());
+}
+
+std::unique_ptr<draco::Mesh> PositionsAndFacesMesh(const Mesh& mesh) {
+  auto dm = std::make_unique<draco::Mesh>();
+  dm->set_num_points(static_cast<uint32_t>(mesh.num_vertices()));
+  AddPositionsAndFaces(mesh, nullptr, *dm);
+  return dm;
 }
 
 }  // namespace meshsmooth

@@ -16,7 +16,11 @@
 namespace meshsmooth {
 
 struct DracoMesh::Impl {
+  // Released after decoding for a bare upload (Bare()), made anew from the smoothed mesh to encode.
   std::unique_ptr<draco::Mesh> draco;
+  // A bare upload's positions as decoded (x, y, z float32 a point), for InputPositions().
+  std::vector<float> bare_points;
+  int64_t points = 0;
   WeldedMesh weld;           // the mesh (taken by TakeWelded) and each point's vertex
   int64_t num_vertices = 0;  // of weld.mesh, also once it has been taken
   int32_t VertexOf(uint32_t p) const { return weld.VertexOf(p); }
@@ -31,6 +35,17 @@ struct DracoMesh::Impl {
   void SetPositions(const std::vector<Vec3>& positions);
   void RecomputeNormals(const std::vector<Vec3>& positions);
 };
+
+// True for what the CLI uploads for most outputs: float32 positions and faces, nothing else, one
+// point a vertex. Its Draco mesh is then the welded mesh's own positions and faces, which a job
+// keeps: holding it through the run would cost 36 bytes a vertex.
+bool Bare(const draco::Mesh& dm, const WeldedMesh& weld) {
+  if (dm.num_attributes() != 1 || dm.GetMetadata() != nullptr || !weld.point_to_vertex.empty()) return false;
+  const draco::PointAttribute* pos = dm.GetNamedAttribute(draco::GeometryAttribute::POSITION);
+  return pos != nullptr && pos->data_type() == draco::DT_FLOAT32 && pos->num_components() == 3 &&
+         weld.mesh.triangles.size() == dm.num_faces() &&
+         static_cast<uint32_t>(weld.mesh.num_vertices()) == dm.num_points();
+}
 
 void DracoMesh::Impl::CountEdgebreakerDrops() {
   std::vector<uint8_t> kept(num_vertices, 0);
@@ -140,6 +155,15 @@ absl::StatusOr<DracoMesh> DracoMesh::Decode(std::string_view bytes, const StopTo
   impl->num_vertices = impl->weld.mesh.num_vertices();
   if (absl::Status s = stop.Check(); !s.ok()) return s;
   impl->CountEdgebreakerDrops();
+  impl->points = impl->draco->num_points();
+  if (Bare(*impl->draco, impl->weld)) {
+    impl->bare_points.resize(3 * static_cast<size_t>(impl->points));
+    const draco::PointAttribute* pos = impl->draco->GetNamedAttribute(draco::GeometryAttribute::POSITION);
+    for (uint32_t p = 0; p < impl->points; ++p) {
+      pos->GetMappedValue(draco::PointIndex(p), &impl->bare_points[3 * static_cast<size_t>(p)]);
+    }
+    impl->draco.reset();
+  }
   return DracoMesh(std::move(impl));
 }
 
@@ -153,18 +177,25 @@ absl::Status DracoMesh::CheckEncodable(const DracoOptions& options) const {
 
 const Mesh& DracoMesh::welded() const { return impl_->weld.mesh; }
 Mesh DracoMesh::TakeWelded() { return std::exchange(impl_->weld.mesh, Mesh{}); }
-int64_t DracoMesh::num_points() const { return impl_->draco->num_points(); }
+int64_t DracoMesh::num_points() const { return impl_->points; }
 
 std::vector<Vec3> DracoMesh::InputPositions() const {
+  if (impl_->draco == nullptr) {  // bare: one point a vertex
+    const std::vector<float>& xyz = impl_->bare_points;
+    std::vector<Vec3> positions(xyz.size() / 3);
+    for (size_t v = 0; v < positions.size(); ++v) positions[v] = {xyz[3 * v], xyz[3 * v + 1], xyz[3 * v + 2]};
+    return positions;
+  }
   // Decode() checked every point's position.
   return FirstPointPositions(PointPositions(*impl_->draco).value(), impl_->weld, impl_->num_vertices);
 }
 int64_t DracoMesh::seam_points() const { return impl_->weld.merged; }
 
 absl::StatusOr<std::vector<float>> DracoMesh::VertexValues(std::string_view name) const {
+  const std::string what = absl::StrCat("attribute '", std::string(name), "'");
+  if (impl_->draco == nullptr) return absl::NotFoundError(absl::StrCat("the mesh has no ", what));  // bare
   const draco::Mesh& dm = *impl_->draco;
   const int id = NamedAttributeId(dm, name);
-  const std::string what = absl::StrCat("attribute '", std::string(name), "'");
   if (id < 0) return absl::NotFoundError(absl::StrCat("the mesh has no ", what));
   const draco::PointAttribute& a = *dm.attribute(id);
   if (absl::Status s = CheckNumericValues(a, what); !s.ok()) return s;
@@ -194,12 +225,23 @@ absl::StatusOr<std::string> DracoMesh::Encode(const Mesh& smoothed, const DracoO
       return s;
     }
   }
+  // A bare upload's Draco mesh again, from the smoothed positions and the faces, which the job
+  // does not change; released once encoded.
+  const bool bare = impl_->draco == nullptr;
+  if (bare) impl_->draco = PositionsAndFacesMesh(smoothed);
   for (const GenericAttribute& g : extra) {
-    if (absl::Status s = impl_->AddGeneric(g, smoothed.positions.size()); !s.ok()) return s;
+    if (absl::Status s = impl_->AddGeneric(g, smoothed.positions.size()); !s.ok()) {
+      if (bare) impl_->draco.reset();
+      return s;
+    }
   }
-  impl_->SetPositions(smoothed.positions);
+  if (!bare) impl_->SetPositions(smoothed.positions);
   impl_->RecomputeNormals(smoothed.positions);
-  if (absl::Status s = stop.Check(); !s.ok()) return s;  // Draco's encoder runs as one call
+  if (absl::Status s = stop.Check(); !s.ok()) {  // Draco's encoder runs as one call
+    if (bare) impl_->draco.reset();
+    return s;
+  }
+  if (bare) return EncodeReleasing(std::move(impl_->draco), options);
   return EncodeWithOptions(*impl_->draco, options);
 }
 
