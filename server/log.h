@@ -13,9 +13,10 @@
 // limit, a full queue or memory budget, an idle upload, a shutdown) adds method ("Smooth" or
 // "ListFlows"), reason (the metrics' refusal label, metrics.h), status, error, peer and, once
 // the call's spec was read, job_id. An event of a kept job ("event" "job_submitted",
-// "job_cancelled", "job_deleted" or "callback") adds job_id, and a callback's entry attempt,
-// http_status (0 when no answer came), outcome ("delivered", "retry", "gave_up", "dropped") and
-// error. gRPC's own log lines become entries with "event":"grpc".
+// "job_cancelled", "job_deleted" or "callback") adds job_id, a submit's request_id and
+// upload_bytes, and a callback's attempt, http_status (0 when no answer came), outcome
+// ("delivered", "retry", "gave_up", "dropped") and error. gRPC's own log lines become entries
+// with "event":"grpc".
 #pragma once
 
 #include <cstdint>
