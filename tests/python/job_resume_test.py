@@ -11,7 +11,7 @@ Checks: a 100 MB upload (a height field encoded losslessly) cut a third in resum
 meshsmooth_job_upload_bytes_total grown by at most 1.05x the upload); the same submit sent three
 times, the first cut a third in, is one job and one run; `meshsmooth fetch --retries` cut at half
 the result resumes to the bytes of an uninterrupted fetch; a running job cancelled stops within
-one iteration's time (its progress: elapsed seconds over iterations) plus 0.1 s for the log line
+one iteration's time (its progress: elapsed seconds over iterations) plus 0.2 s for the log line
 to reach the test.
 Needs python3-grpcio, python3-numpy, protobuf-compiler-grpc and draco (draco_encoder).
 """
@@ -36,8 +36,9 @@ BIG_SIDE = 1667
 MID_SIDE = 500
 # One implicit step a solve: ~75 ms an iteration on the 500 x 500 field in the dev build.
 CANCEL_SPEC = {"flow": "laplacian", "iterations": 100000, "integration": 1, "step": 1.0}
-# The time the cancelled run's log line may take beyond one iteration to reach the test.
-CANCEL_MARGIN_S = 0.1
+# The time the cancelled run's log line may take beyond one iteration to reach the test, with
+# the job sharing two cores with other tests under ctest -j2.
+CANCEL_MARGIN_S = 0.2
 
 
 class CuttingProxy:
@@ -260,7 +261,7 @@ def main():
             if big_id:
                 c.stub.CancelJob(pb2.CancelJobRequest(job_id=big_id), timeout=DEADLINE_S)
             if long_id:
-                checks.check("a running job cancelled stops within one iteration's time (+0.1 s)",
+                checks.check("a running job cancelled stops within one iteration's time (+0.2 s)",
                              check_cancel_timed, c, s, long_id)
             c.close()
 
