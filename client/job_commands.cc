@@ -237,6 +237,7 @@ int RunSubmit(const JobCommand& command, const ConnectionOptions& c) {
   v1::JobSpec spec;
   spec.set_flow(command.flow);
   spec.set_iterations(command.iterations);
+  spec.set_callback_url(command.callback_url);
   const std::string request_id =
       !command.request_id.empty()
           ? command.request_id

@@ -453,6 +453,9 @@ JobSubcommands AddJobSubcommands(CLI::App& app, JobCommand& jc, ConnectionOption
   submit->add_option("--request-id", jc.request_id,
                      "the upload's request id (1-128 printable characters); default: the SHA-256 of the spec and the "
                      "upload, so that submitting the same input again gives the same job");
+  submit->add_option("--callback", jc.callback_url,
+                     "an http:// or https:// URL the server POSTs the job to, signed, when it ends (a server with "
+                     "--callback-secret-file; docs/deployment.md)");
   submit->add_flag("--wait", jc.wait, "watch the job to its end, then fetch the result into -o");
   submit->add_option("-o,--output", jc.output, "with --wait: the result's .drc file");
   AddConnectionOptions(submit, jcc);

@@ -25,7 +25,7 @@ packages=(
   build-essential cmake ninja-build pkgconf
   libgrpc++-dev libgrpc-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler
   libdraco-dev libabsl-dev libcli11-dev libeigen3-dev libpng-dev prometheus-cpp-dev nlohmann-json3-dev
-  libsqlite3-dev libssl-dev libpqxx-dev
+  libsqlite3-dev libssl-dev libpqxx-dev libcurl4-openssl-dev
 )
 # The Python package (python/): pybind11 and the headers of Debian's python3, numpy at run time.
 if [ "$preset" != image ] && [ "$preset" != asan ] && [ "$preset" != fuzz ]; then

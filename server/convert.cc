@@ -362,4 +362,9 @@ std::string JobLogLine(const JobReport& report, const JobParams& params, std::st
       report.error.empty() ? "" : absl::StrCat(" error=", JsonQuote(report.error)));
 }
 
+std::string JobStateName(v1::JobState state) {
+  std::string name = v1::JobState_Name(state);
+  return name.rfind("JOB_STATE_", 0) == 0 ? name.substr(10) : name;
+}
+
 }  // namespace meshsmooth::server

@@ -94,4 +94,7 @@ void ToProto(const Progress& p, v1::Progress* out);
 void ToProto(const ParameterInfo& p, v1::ParameterInfo* out);
 void ToProto(const JobParams& params, const FlowResult& result, v1::EffectiveParameters* out);
 
+// "SUCCEEDED" for JOB_STATE_SUCCEEDED: a kept job's state in the log and in its callback.
+std::string JobStateName(v1::JobState state);
+
 }  // namespace meshsmooth::server

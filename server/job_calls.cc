@@ -6,7 +6,9 @@
 #include <string>
 
 #include "absl/strings/str_cat.h"
+#include "server/callbacks.h"
 #include "server/convert.h"
+#include "server/log.h"
 
 // The store's calls are short statements (a chunk of at most 1 MiB committed with one fsync at
 // most, in SQLite or on the PostgreSQL server); they run inside the reactions, as a unary handler
@@ -87,6 +89,14 @@ class SubmitReactor final : public grpc::ServerReadReactor<v1::SubmitRequest> {
     if (absl::StatusOr<JobParams> params = FromProto(start.spec(), options_.max_iterations); !params.ok()) {
       return ToGrpc(params.status());
     }
+    if (const std::string& url = start.spec().callback_url(); !url.empty()) {
+      if (options_.callback_secret.empty()) {
+        return Invalid(
+            "callback_url: this server sends no callbacks (start meshsmoothd with --callback-secret-file to sign "
+            "them)");
+      }
+      if (absl::Status s = CheckCallbackUrl(url); !s.ok()) return ToGrpc(s);
+    }
     if (start.total_bytes() == 0) return Invalid("total_bytes is 0: an upload holds a Draco mesh");
     if (start.total_bytes() > static_cast<uint64_t>(options_.max_upload_bytes)) {
       return grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
@@ -130,6 +140,7 @@ class SubmitReactor final : public grpc::ServerReadReactor<v1::SubmitRequest> {
       return grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
                           absl::StrCat("a chunk of ", chunk.data().size(), " bytes; at most ", kMaxChunkBytes));
     }
+    runner_->metrics().JobUploadReceived(static_cast<int64_t>(chunk.data().size()));
     absl::StatusOr<uint64_t> held = runner_->store().AppendChunk(request_id_, chunk.offset(), chunk.data());
     if (!held.ok()) return ToGrpc(held.status());
     received_ = *held;
@@ -144,8 +155,15 @@ class SubmitReactor final : public grpc::ServerReadReactor<v1::SubmitRequest> {
       response_->set_bytes_received(received_);
       return End(grpc::Status::OK);
     }
-    absl::StatusOr<std::string> id = runner_->store().Commit(request_id_, NewStoredJobId(), NowMicros());
+    const std::string new_id = NewStoredJobId();
+    absl::StatusOr<std::string> id = runner_->store().Commit(request_id_, new_id, NowMicros());
     if (!id.ok()) return End(ToGrpc(id.status()));
+    if (*id == new_id) {
+      LogJobEvent(options_.log_format, "info", "job_submitted", *id,
+                  absl::StrCat("submitted (request ", request_id_, ", ", total_, " bytes)"), [&](JsonLine& l) {
+                    l.Str("request_id", request_id_).Int("upload_bytes", static_cast<int64_t>(total_));
+                  });
+    }
     runner_->Wake();
     End(Respond(*id));
   }
@@ -378,7 +396,7 @@ grpc::Status CancelJob(JobRunner* runner, const v1::CancelJobRequest& request, v
 
 grpc::Status DeleteJob(JobRunner* runner, const v1::DeleteJobRequest& request) {
   if (grpc::Status s = Precheck(grpc::Status::OK, runner, &request.job_id()); !s.ok()) return s;
-  return ToGrpc(runner->store().Delete(request.job_id()));
+  return ToGrpc(runner->Delete(request.job_id()));
 }
 
 }  // namespace meshsmooth::server

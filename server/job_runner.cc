@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "absl/strings/str_cat.h"
+#include "server/callbacks.h"
 #include "server/convert.h"
 #include "server/log.h"
 #include "server/smooth_job.h"
@@ -25,12 +26,14 @@ class StoreSink final : public JobSink {
     runner_.Notify(job_id_);
   }
   void OnResult(std::string draco_bytes, const v1::Summary& summary) override {
-    runner_.store().Succeed(job_id_, draco_bytes, summary, NowMicros());
+    const bool ended = runner_.store().Succeed(job_id_, draco_bytes, summary, NowMicros());
     runner_.Notify(job_id_);
+    if (ended) runner_.Ended(job_id_);
   }
   void OnError(const absl::Status& status) override {
-    runner_.store().Fail(job_id_, status, NowMicros());
+    const bool ended = runner_.store().Fail(job_id_, status, NowMicros());
     runner_.Notify(job_id_);
+    if (ended) runner_.Ended(job_id_);
   }
 
  private:
@@ -46,7 +49,14 @@ int64_t NowMicros() {
 }
 
 JobRunner::JobRunner(JobStore& store, WorkerPool& pool, const ServerOptions& options, ServiceMetrics& metrics)
-    : store_(store), pool_(pool), options_(options), metrics_(metrics), thread_([this] { Loop(); }) {}
+    : store_(store),
+      pool_(pool),
+      options_(options),
+      metrics_(metrics),
+      callbacks_(options.callback_secret.empty()
+                     ? nullptr
+                     : std::make_unique<CallbackSender>(options.callback_secret, options.log_format)),
+      thread_([this] { Loop(); }) {}
 
 JobRunner::~JobRunner() { Stop(); }
 
@@ -72,6 +82,7 @@ void JobRunner::Stop() {
   // Their runs were cut: back to the queue now, for the next start or another replica, rather
   // than when their leases run out.
   for (auto& [id, job] : running) store_.Release(id, /*undo_attempt=*/job == nullptr);
+  if (callbacks_) callbacks_->Stop();
 }
 
 void JobRunner::Loop() {
@@ -186,8 +197,20 @@ void JobRunner::Run(ClaimedJob claimed) {
 }
 
 absl::StatusOr<v1::Job> JobRunner::Cancel(const std::string& job_id) {
+  std::unique_lock<std::mutex> one_at_a_time(cancel_mu_);
+  const absl::StatusOr<v1::Job> before = store_.Get(job_id);
   absl::StatusOr<v1::Job> job = store_.Cancel(job_id, NowMicros());
   if (!job.ok()) return job;
+  // This call ended it when it was QUEUED or RUNNING before and is CANCELLED now (a run that
+  // succeeded or failed in between keeps its own end).
+  const bool ended_here = before.ok() &&
+                          (before->state() == v1::JOB_STATE_QUEUED || before->state() == v1::JOB_STATE_RUNNING) &&
+                          job->state() == v1::JOB_STATE_CANCELLED;
+  one_at_a_time.unlock();
+  if (ended_here) {
+    LogJobEvent(options_.log_format, "info", "job_cancelled", job_id,
+                absl::StrCat("cancelled (was ", JobStateName(before->state()), ")"));
+  }
   std::shared_ptr<SmoothJob> running;
   {
     std::lock_guard<std::mutex> lock(mu_);
@@ -195,7 +218,27 @@ absl::StatusOr<v1::Job> JobRunner::Cancel(const std::string& job_id) {
   }
   if (running) running->Detach();  // stops within one iteration; its late events go nowhere
   Notify(job_id);
+  if (ended_here) Ended(job_id);
   return job;
+}
+
+absl::Status JobRunner::Delete(const std::string& job_id) {
+  absl::Status s = store_.Delete(job_id);
+  if (s.ok()) LogJobEvent(options_.log_format, "info", "job_deleted", job_id, "deleted with its upload and result");
+  return s;
+}
+
+void JobRunner::Ended(const std::string& job_id) {
+  absl::StatusOr<v1::Job> job = store_.Get(job_id);
+  if (!job.ok() || job->spec().callback_url().empty()) return;
+  if (callbacks_ == nullptr) {  // queued by a server that had a secret
+    LogJobEvent(options_.log_format, "warning", "callback", job_id,
+                "callback not sent: this server has no --callback-secret-file", [](JsonLine& l) {
+                  l.Int("attempt", 0).Int("http_status", 0).Str("outcome", "dropped").Str("error", "no secret");
+                });
+    return;
+  }
+  callbacks_->Send(*job);
 }
 
 void JobRunner::Watch(const std::string& job_id, JobWatcher* watcher) {

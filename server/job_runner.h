@@ -3,7 +3,8 @@
 // as a SmoothJob whose events go to the store (state, progress, result, error), renews the
 // leases of its jobs at each tick, and tells the watchers of a job (WatchJob) each change — on a
 // store other replicas share, by reading the watched jobs' rows at each tick too. Also forgets
-// ended jobs past --job-retention. Jobs from Smooth calls share the pool: at most `workers`
+// ended jobs past --job-retention, and sends a job's completion callback (JobSpec.callback_url)
+// when it ends, with --callback-secret-file. Jobs from Smooth calls share the pool: at most `workers`
 // stored jobs sit on it at once, so they never fill its queue.
 #pragma once
 
@@ -25,6 +26,7 @@
 
 namespace meshsmooth::server {
 
+class CallbackSender;
 class SmoothJob;
 
 // Told each change of a watched job (WatchJob's reactor); called on whichever thread made it,
@@ -47,10 +49,16 @@ class JobRunner {
   JobRunner& operator=(const JobRunner&) = delete;
 
   JobStore& store() { return store_; }
+  ServiceMetrics& metrics() { return metrics_; }
   // A job was queued: schedule now rather than at the next tick.
   void Wake();
   // CancelJob: the store's state first, then a running job stopped within one iteration.
   absl::StatusOr<v1::Job> Cancel(const std::string& job_id);
+  // DeleteJob: the store's Delete, logged.
+  absl::Status Delete(const std::string& job_id);
+  // The job's own change of state has just ended it (SUCCEEDED, FAILED or CANCELLED, once per
+  // job): its callback, when its spec names one.
+  void Ended(const std::string& job_id);
   // Each change of `job_id` goes to `watcher` until Unwatch.
   void Watch(const std::string& job_id, JobWatcher* watcher);
   void Unwatch(const std::string& job_id, JobWatcher* watcher);
@@ -59,6 +67,7 @@ class JobRunner {
 
   // Stops scheduling and stops the running jobs within one iteration. They go back to QUEUED in
   // the store, so that the next start (or another replica) runs them again from their input.
+  // Callbacks not yet delivered are dropped.
   void Stop();
 
   int active() {
@@ -90,6 +99,8 @@ class JobRunner {
   // The store's jobs on the pool, queued there or running (then with their SmoothJob).
   std::map<std::string, std::shared_ptr<SmoothJob>> active_;
   std::atomic<int64_t> lease_takeovers_{0};
+  std::mutex cancel_mu_;                       // one CancelJob at a time: its state before and after are its own
+  std::unique_ptr<CallbackSender> callbacks_;  // null without --callback-secret-file
   std::mutex watch_mu_;
   std::multimap<std::string, JobWatcher*> watchers_;
   std::thread thread_;

@@ -173,6 +173,17 @@ void LogEvent(LogFormat format, std::string_view level, std::string_view event, 
   WriteLine(line.str());
 }
 
+void LogJobEvent(LogFormat format, std::string_view level, std::string_view event, std::string_view job_id,
+                 std::string_view message, const std::function<void(JsonLine&)>& fields) {
+  using io::Sv;
+  const std::string text = absl::StrCat("meshsmoothd job=", Sv(job_id), " ", Sv(message));
+  if (format == LogFormat::kText) return WriteLine(text);
+  JsonLine line(level, event);
+  line.Str("message", text).Str("job_id", job_id);
+  if (fields) fields(line);
+  WriteLine(line.str());
+}
+
 void RouteGrpcLog(LogFormat format) {
   if (format == LogFormat::kJson) gpr_set_log_function(GrpcLogToJson);
 }

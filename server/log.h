@@ -1,6 +1,6 @@
-// meshsmoothd's log on stderr: one entry per job, per refused call and per lifecycle event
-// (listening, shutting down, stopped, a shutdown cut short), as text for a terminal or, with
-// --log-format json, as one JSON object a line for a log pipeline.
+// meshsmoothd's log on stderr: one entry per job, per refused call, per event of a kept job and
+// per lifecycle event (listening, shutting down, stopped, a shutdown cut short), as text for a
+// terminal or, with --log-format json, as one JSON object a line for a log pipeline.
 //
 // Every JSON entry has "time" (RFC 3339, UTC, milliseconds), "level" ("info", "warning" or
 // "error"), "event" and "message". A job's entry ("event":"job"; level "info" when it succeeded,
@@ -12,7 +12,11 @@
 // ran ("event":"refused", level "warning": a wrong token, a bad spec or message order, a size
 // limit, a full queue or memory budget, an idle upload, a shutdown) adds method ("Smooth" or
 // "ListFlows"), reason (the metrics' refusal label, metrics.h), status, error, peer and, once
-// the call's spec was read, job_id. gRPC's own log lines become entries with "event":"grpc".
+// the call's spec was read, job_id. An event of a kept job ("event" "job_submitted",
+// "job_cancelled", "job_deleted" or "callback") adds job_id, a submit's request_id and
+// upload_bytes, and a callback's attempt, http_status (0 when no answer came), outcome
+// ("delivered", "retry", "gave_up", "dropped") and error. gRPC's own log lines become entries
+// with "event":"grpc".
 #pragma once
 
 #include <cstdint>
@@ -69,6 +73,12 @@ void LogRefusal(LogFormat format, const RefusedCall& call);
 // `fields` adds after "message". `level`: "info", "warning" or "error".
 void LogEvent(LogFormat format, std::string_view level, std::string_view event, std::string_view message,
               const std::function<void(JsonLine&)>& fields = nullptr);
+
+// Writes an event of a kept job (its commit, cancel or deletion, a callback's delivery) on
+// stderr: "meshsmoothd job=ID <message>" as text (never with " status=", which the run's line
+// has); as JSON, "job_id" and the fields `fields` adds after "message".
+void LogJobEvent(LogFormat format, std::string_view level, std::string_view event, std::string_view job_id,
+                 std::string_view message, const std::function<void(JsonLine&)>& fields = nullptr);
 
 // With kJson, gRPC's own log lines go to stderr as JSON entries ("event":"grpc") too.
 void RouteGrpcLog(LogFormat format);

@@ -124,6 +124,11 @@ int main(int argc, char** argv) {
                  "after ended jobs are forgotten, oldest first, to make room")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
+  std::string callback_secret_file;
+  app.add_option("--callback-secret-file", callback_secret_file,
+                 "file holding the key of the completion callbacks' HMAC-SHA256 (JobSpec.callback_url: a POST of the "
+                 "ended job, header X-Meshsmooth-Signature: sha256=HEX); default: none, and a submit naming a "
+                 "callback is INVALID_ARGUMENT");
   app.add_option("--metrics-listen", o.metrics_listen,
                  "host:port of a Prometheus endpoint (GET /metrics; port 0 picks a free one); default: none");
   try {
@@ -151,6 +156,14 @@ int main(int argc, char** argv) {
       return 1;
     }
     o.auth_token = *std::move(token);
+  }
+  if (!callback_secret_file.empty()) {
+    absl::StatusOr<std::string> secret = meshsmooth::ReadTokenFile(callback_secret_file);
+    if (!secret.ok()) {
+      meshsmooth::server::LogEvent(o.log_format, "error", "start_failed", std::string(secret.status().message()));
+      return 1;
+    }
+    o.callback_secret = *std::move(secret);
   }
 
   // Block the shutdown signals before gRPC starts its threads, then wait for them on one

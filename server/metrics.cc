@@ -58,6 +58,7 @@ class Discard final : public ServiceMetrics {
   void JobEnded(const JobReport&, const JobParams&) override {}
   void Refused(Refusal) override {}
   void UploadReceived(int64_t) override {}
+  void JobUploadReceived(int64_t) override {}
 };
 
 // The first line of `path` that starts with `key`, without it; empty when there is none.
@@ -244,6 +245,12 @@ class PrometheusEvents final : public ServiceMetrics {
                           .Help("Draco bytes received in mesh chunks.")
                           .Register(r)
                           .Add({})),
+        job_upload_bytes_(
+            prometheus::BuildCounter()
+                .Name("meshsmooth_job_upload_bytes_total")
+                .Help("Draco bytes received in Submit chunks (kept jobs' uploads), resent bytes included.")
+                .Register(r)
+                .Add({})),
         auto_iterations_(prometheus::BuildHistogram()
                              .Name("meshsmooth_auto_iterations")
                              .Help("Iterations automatic stopping ran, by job that succeeded.")
@@ -284,6 +291,7 @@ class PrometheusEvents final : public ServiceMetrics {
   void Refused(Refusal reason) override { refused_[static_cast<int>(reason)]->Increment(); }
 
   void UploadReceived(int64_t bytes) override { upload_bytes_.Increment(static_cast<double>(bytes)); }
+  void JobUploadReceived(int64_t bytes) override { job_upload_bytes_.Increment(static_cast<double>(bytes)); }
 
  private:
   prometheus::Family<prometheus::Counter>& jobs_;
@@ -292,6 +300,7 @@ class PrometheusEvents final : public ServiceMetrics {
   prometheus::Counter& vertices_;
   prometheus::Counter& iterations_;
   prometheus::Counter& upload_bytes_;
+  prometheus::Counter& job_upload_bytes_;
   prometheus::Histogram& auto_iterations_;
   std::array<prometheus::Histogram*, 4> steps_{};
   std::array<prometheus::Counter*, kRefusalCount> refused_{};

@@ -49,6 +49,8 @@ class ServiceMetrics {
   virtual void Refused(Refusal reason) = 0;
   // Mesh bytes of an upload, as each chunk is kept.
   virtual void UploadReceived(int64_t bytes) = 0;
+  // Bytes of a Submit chunk (a kept job's upload), as it arrives, before the store checks it.
+  virtual void JobUploadReceived(int64_t bytes) = 0;
 };
 
 // The metrics of a server without --metrics-listen: every call does nothing.

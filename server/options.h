@@ -53,6 +53,9 @@ struct ServerOptions {
   // Bytes of uploads and results the job store may hold; an upload that does not fit, even after
   // forgetting ended jobs (oldest end first), gets RESOURCE_EXHAUSTED before any byte is kept.
   int64_t job_store_max_bytes = 10ll << 30;
+  // The key of the completion callbacks' HMAC-SHA256 (JobSpec.callback_url, server/callbacks.h),
+  // read from --callback-secret-file; empty: no callbacks, and a Submit naming one is refused.
+  std::string callback_secret;
   // host:port of the Prometheus endpoint (GET /metrics; port 0 picks a free one); empty: none.
   std::string metrics_listen;
 };

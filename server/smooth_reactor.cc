@@ -89,6 +89,10 @@ class SmoothReactor final : public grpc::ServerBidiReactor<v1::SmoothRequest, v1
         }
         absl::StatusOr<JobParams> params = FromProto(request_.spec(), options.max_iterations);
         if (!params.ok()) return Refuse({Refusal::kInvalidRequest, ToGrpc(params.status())});
+        if (!request_.spec().callback_url().empty()) {
+          return Refuse(InvalidArgument(
+              "callback_url is for kept jobs (Submit): a Smooth call gets its result and summary on the call itself"));
+        }
         params_ = std::move(params).value();
         break;
       }
