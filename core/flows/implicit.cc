@@ -381,8 +381,8 @@ class ImplicitStepper::Impl {
     });
     reduce(rr, rz);
     auto done = [&](int c) { return (&rr.x)[c] <= (&goal.x)[c]; };
-    // The largest residual against its goal over the coordinates not done: it must halve in every
-    // window of kCgStallWindow iterations.
+    // The largest residual against its goal over the coordinates (one done is at most 1, and the
+    // loop runs while one is above): it must halve in every window of kCgStallWindow iterations.
     auto behind = [&] {
       double worst = 0.0;
       for (int c = 0; c < 3; ++c) worst = std::max(worst, (&rr.x)[c] / (&goal.x)[c]);
