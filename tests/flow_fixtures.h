@@ -28,15 +28,17 @@ inline Mesh NoisyTorus(int32_t* dense = nullptr, double noise = 0.3, uint64_t se
 }
 
 // An icosphere(3) whose every fifth face f is split into a needle along its first edge and two
-// fat triangles by a point a hundredth of the face's height from that edge: the needle stays
-// face f, (t0, t1, new point); normal noise folds many needles over, as on raw scans.
-inline Mesh SphereWithNeedles() {
+// fat triangles by a point `height` of the face's height (default a hundredth) from that edge:
+// the needle stays face f, (t0, t1, new point); normal noise folds many needles over, as on raw
+// scans. The needle's angles are about 2 height, 2 height and 180 degrees less both.
+inline Mesh SphereWithNeedles(double height = 0.01) {
   Mesh m = Icosphere(3);
   const size_t faces = m.triangles.size();
   for (size_t f = 0; f < faces; f += 5) {
     const Triangle t = m.triangles[f];
     const auto p = m.num_vertices();
-    m.positions.push_back(m.positions[t[0]] * 0.495 + m.positions[t[1]] * 0.495 + m.positions[t[2]] * 0.01);
+    const double side = (1.0 - height) / 2;
+    m.positions.push_back(m.positions[t[0]] * side + m.positions[t[1]] * side + m.positions[t[2]] * height);
     m.triangles[f] = {t[0], t[1], p};  // the needle along edge t0 t1
     m.triangles.push_back({t[1], t[2], p});
     m.triangles.push_back({t[2], t[0], p});

@@ -4,6 +4,7 @@
 #include <Eigen/SparseCore>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <vector>
 
 #include "absl/strings/str_format.h"
@@ -45,7 +46,8 @@ Vec3 SumBlocks(int32_t n, int threads, std::vector<Vec3>& partial, Fn&& fn) {
 }
 
 // The cotangent weights of v's ring entries and its mixed Voronoi area, with the arithmetic of
-// MeanCurvatureLanes (operators.h) one vertex at a time: H n = sum_e w_e (Q_e - P) / (4 area).
+// MeanCurvatureLanes (operators.h) one vertex at a time, H n = sum_e w_e (Q_e - P) / (4 area),
+// but at needle triangles: K must stay positive semi-definite for conjugate gradients.
 double CotangentRing(const int32_t* offsets, const int32_t* ring, const Vec3* pos, int32_t v, double* w) {
   const int32_t b = offsets[v], e = offsets[v + 1], count = e - b;
   if (count == 0) return 0.0;
@@ -58,12 +60,19 @@ double CotangentRing(const int32_t* offsets, const int32_t* ring, const Vec3* po
     const double lq = SquaredNorm(q);
     const double dbl_area = Norm(Cross(a, q));
     const double dot_p = Dot(a, q), dot_a = la - dot_p, dot_q = lq - dot_p;
-    const bool ok = 1e-12 * (la + lq) < dbl_area;
+    // The test sees the triangle's three edges, so its three vertices agree on it.
+    const bool ok = 1e-12 * (2.0 * (la + lq) - 2.0 * dot_p) < dbl_area;
     const double inv = ok ? 1.0 / dbl_area : 0.0;
     const double cot_a = std::clamp(dot_a * inv, -kCotMax, kCotMax);
     const double cot_q = std::clamp(dot_q * inv, -kCotMax, kCotMax);
-    w[k] += cot_a;                           // edge P-Q_k, angle at Q_{k-1}
-    w[k == 0 ? count - 1 : k - 1] += cot_q;  // edge P-Q_{k-1}, angle at Q_k
+    // The weights scale the triangle's three cotangents together so that none exceeds kCotMax.
+    // Clamping each one alone, as the area does, can make c1 c2 + c2 c3 + c3 c1 negative (a
+    // needle with angles near 0, 0 and 180 degrees: +kCotMax, +kCotMax, -kCotMax), and then the
+    // triangle's stiffness, hence K and the system, is indefinite; scaled, it stays >= 0.
+    const double largest = std::max({std::abs(dot_a), std::abs(dot_q), std::abs(dot_p)}) * inv;
+    const double scale = largest > kCotMax ? inv * (kCotMax / largest) : inv;
+    w[k] += dot_a * scale;                           // edge P-Q_k, angle at Q_{k-1}
+    w[k == 0 ? count - 1 : k - 1] += dot_q * scale;  // edge P-Q_{k-1}, angle at Q_k
     const double voronoi = (lq * cot_a + la * cot_q) * 0.125;
     const double part = dbl_area * (dot_p < 0.0 ? 0.25 : 0.125);
     const double least = std::min(dot_p, std::min(dot_a, dot_q));
@@ -372,6 +381,14 @@ class ImplicitStepper::Impl {
     });
     reduce(rr, rz);
     auto done = [&](int c) { return (&rr.x)[c] <= (&goal.x)[c]; };
+    // The largest residual against its goal over the coordinates (one done is at most 1, and the
+    // loop runs while one is above): it must halve in every window of kCgStallWindow iterations.
+    auto behind = [&] {
+      double worst = 0.0;
+      for (int c = 0; c < 3; ++c) worst = std::max(worst, (&rr.x)[c] / (&goal.x)[c]);
+      return worst;
+    };
+    double best = behind(), window_best = std::numeric_limits<double>::infinity();
     for (cg_iterations_ = 0; !(done(0) && done(1) && done(2)); ++cg_iterations_) {
       if (cg_iterations_ == kMaxCgIterations) {
         return absl::FailedPreconditionError(absl::StrFormat(
@@ -382,7 +399,13 @@ class ImplicitStepper::Impl {
       Vec3 alpha;
       for (int c = 0; c < 3; ++c) {
         const double den = (&pq.x)[c];
-        (&alpha.x)[c] = done(c) || !(den > 0.0) ? 0.0 : (&rz.x)[c] / den;
+        if (!done(c) && !(den > 0.0)) {
+          return absl::FailedPreconditionError(absl::StrFormat(
+              "the implicit step's matrix is not positive definite (conjugate gradients met p.Ap = %g at "
+              "iteration %d)",
+              den, cg_iterations_));
+        }
+        (&alpha.x)[c] = done(c) ? 0.0 : (&rz.x)[c] / den;
       }
       ForBlocks(n_, threads_, [&](int32_t blk, int32_t begin, int32_t end) {
         for (int32_t v = begin; v < end; ++v) {
@@ -393,6 +416,17 @@ class ImplicitStepper::Impl {
       });
       const Vec3 old_rz = rz;
       reduce(rr, rz);
+      window_best = std::min(window_best, behind());
+      if ((cg_iterations_ + 1) % kCgStallWindow == 0) {
+        if (!(window_best < 0.5 * best)) {
+          return absl::FailedPreconditionError(absl::StrFormat(
+              "the implicit step's conjugate gradients stopped converging (the residual did not halve in %d "
+              "iterations, %d in all); try a smaller step",
+              kCgStallWindow, cg_iterations_ + 1));
+        }
+        best = window_best;
+        window_best = std::numeric_limits<double>::infinity();
+      }
       Vec3 beta;
       for (int c = 0; c < 3; ++c) {
         const double den = (&old_rz.x)[c];

@@ -33,8 +33,12 @@ namespace meshsmooth::flows {
 // "Implicit steps").
 inline constexpr int32_t kMaxDirectVertices = 20000;
 
-// CG fails after this many iterations (it stops at FlowParams::cg_tolerance).
+// CG fails after this many iterations (it stops at FlowParams::cg_tolerance), or earlier when
+// its largest residual (against its goal) does not halve in a window of kCgStallWindow: the
+// tolerance asks for some 50 halvings, so such a solve would not end within the bound anyway.
+// It fails at once when p.Ap <= 0 (the matrix is not positive definite).
 inline constexpr int kMaxCgIterations = 5000;
+inline constexpr int kCgStallWindow = 500;
 
 // The system of one step: (M / s + lhs K) d = rhs K P. A flow's step at effective step lambda is
 // {theta lambda, -lambda}; shape enhancement (core/job/enhance.h) is {1 / alpha, (gain - 1) / alpha}.
