@@ -241,7 +241,9 @@ def replica_checks(a, check, tmp):
         return channel
 
     def sigterm_drains():
-        grace = 6.0
+        # The grace is ~5x the short job's run alone: under ASan beside another test, the short
+        # job shares two cores with the long one and the CLIs, and took over 6 s on a CI machine.
+        grace = 12.0
         rep = Replica(server, "--workers", "2", "--threads-per-job", "1", "--grace-seconds", str(grace),
                       "--metrics-listen", "127.0.0.1:0")
         statuses = []
