@@ -409,8 +409,8 @@ CLI::App* AddEnhanceSubcommand(CLI::App& app, SmoothOptions& eo, ConnectionOptio
       "Sharpen a mesh's detail, the inverse of smoothing, through meshsmoothd (or an in-process server): waves "
       "along the surface shorter than --detail grow by --gain, longer ones stay (screened-Poisson sharpening, one "
       "sparse solve, stable for any gain, or --method inverted-flow); boundary fixed, a closed mesh keeps its "
-      "volume. A noisy input is "
-      "refused (noise is the finest detail and would grow most; exit 1) unless --smooth-first");
+      "volume, and no face turns over (where one would, its vertices are held back; the summary counts them). A "
+      "noisy input is refused (noise is the finest detail and would grow most; exit 1) unless --smooth-first");
   enhance->add_option("input", eo.input, "mesh file or builtin:NAME")->required()->check(KnownInput());
   enhance->add_option("-o,--output", eo.output, "output mesh file")->required()->check(KnownOutputFormat());
   enhance->add_option("--gain", eo.gain, "the factor the detail grows by, in (1, 100]")->capture_default_str();

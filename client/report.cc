@@ -105,6 +105,10 @@ void PrintSummary(const v1::Summary& s) {
                 s.job_id().c_str(),
                 p.enhance().method() == v1::ENHANCE_METHOD_INVERTED_FLOW ? "inverted flow" : "screened Poisson",
                 p.enhance().gain(), p.enhance().detail_scale(), p.enhance().detail_scale_h());
+    if (p.enhance_held_back() > 0) {
+      std::printf("held back at %lld vertices, where faces would turn over\n",
+                  static_cast<long long>(p.enhance_held_back()));
+    }
     if (p.iterations_run() > 0) {
       std::printf(
           "after smoothing the noisy input: %s, %u iterations (stopped by %s), noise estimate %.4f mean edges\n",

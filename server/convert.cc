@@ -331,6 +331,7 @@ v1::Summary MakeSummary(const JobReport& report, const JobParams& params) {
     e->set_smooth_first(params.enhance->smooth_first);
     e->set_method(params.enhance->method == EnhanceMethod::kInvertedFlow ? v1::ENHANCE_METHOD_INVERTED_FLOW
                                                                          : v1::ENHANCE_METHOD_SCREENED_POISSON);
+    p->set_enhance_held_back(report.enhanced->held_back);
   }
   summary.set_result_bytes(report.result_bytes);
   for (const std::string& w : report.warnings) summary.add_warnings(w);

@@ -81,6 +81,9 @@ absl::Status ValidateEnhanceParams(const Mesh& mesh, const EnhanceParams& p) {
         absl::StrFormat("the detail scale must be finite and >= 0 (mesh units; 0 = %g mean edge lengths), got %g",
                         p.detail_scale_h, p.detail_scale));
   }
+  if (!(p.turn_halvings >= 0)) {
+    return absl::InvalidArgumentError(absl::StrFormat("turn_halvings must be >= 0, got %d", p.turn_halvings));
+  }
   if (!(p.inverted_iterations >= 1) || !(p.inverted_step > 0.0 && p.inverted_step < 1.0)) {
     return absl::InvalidArgumentError(
         absl::StrFormat("the inverted flow needs at least one step and a step in (0, 1), got %d and %g",
@@ -165,6 +168,50 @@ absl::StatusOr<int> InvertedFlow(const Topology& topo, const uint8_t* role, cons
   return step;
 }
 
+// Holds the enhancement back where it turns a face over (Enhance's comment in enhance.h): writes
+// F + t_v (E - F) into `enhanced` (E on entry) and the vertices held back and the share kept into
+// `result`. `input` is the mesh's positions before any smoothing, `start` (F) those enhanced.
+void HoldBackTurnedFaces(const Mesh& mesh, const Topology& topo, const Vec3* input, const Vec3* start, int halvings,
+                         std::vector<Vec3>& enhanced, EnhanceResult& result) {
+  const int32_t n = topo.num_vertices();
+  const std::vector<Vec3> full = enhanced;  // E
+  // A face the smoothing turned stays turned at t = 0: not the enhancement's to undo.
+  std::vector<uint8_t> turned_at_start(topo.faces.size(), 0);
+  if (input != start) {
+    for (size_t i = 0; i < topo.faces.size(); ++i) {
+      turned_at_start[i] = NormalFlipped(mesh.triangles[topo.faces[i]], input, start);
+    }
+  }
+  std::vector<double> share(n, 1.0);  // t
+  std::vector<uint8_t> lower(n);
+  for (int round = 0;; ++round) {
+    std::fill(lower.begin(), lower.end(), 0);
+    bool any = false;
+    for (size_t i = 0; i < topo.faces.size(); ++i) {
+      const Triangle& t = mesh.triangles[topo.faces[i]];
+      if (turned_at_start[i] || !NormalFlipped(t, input, enhanced.data())) continue;
+      for (int32_t v : t) lower[v] = 1;
+      any = true;
+    }
+    if (!any) break;
+    // Each round past `halvings` sets a share > 0 to 0 (a face with every share 0 is F's, not
+    // turned): the rounds end.
+    for (int32_t v = 0; v < n; ++v) {
+      if (!lower[v]) continue;
+      share[v] = round < halvings ? 0.5 * share[v] : 0.0;
+      enhanced[v] = start[v] + (full[v] - start[v]) * share[v];
+    }
+  }
+  double moved = 0.0, kept = 0.0;
+  for (int32_t v = 0; v < n; ++v) {
+    const double m = Norm(full[v] - start[v]);
+    moved += m * m;
+    kept += share[v] * share[v] * m * m;
+    result.held_back += share[v] < 1.0 && m > 0.0;
+  }
+  result.kept = moved > 0.0 ? std::sqrt(kept / moved) : 1.0;
+}
+
 }  // namespace
 
 absl::StatusOr<EnhanceResult> Enhance(Mesh& mesh, const Topology& topo, const EnhanceParams& p,
@@ -181,6 +228,7 @@ absl::StatusOr<EnhanceResult> Enhance(Mesh& mesh, const Topology& topo, const En
   result.mean_edge_length = h;
   result.detail_scale = p.detail_scale > 0.0 ? p.detail_scale : p.detail_scale_h * h;
 
+  std::vector<Vec3> input;  // the positions given, when smoothing moved them first
   absl::StatusOr<std::optional<std::pair<Mesh, FlowResult>>> smoothed = SmoothIfNoisy(mesh, topo, p, control);
   if (!smoothed.ok()) return smoothed.status();
   if (smoothed->has_value()) {
@@ -192,7 +240,7 @@ absl::StatusOr<EnhanceResult> Enhance(Mesh& mesh, const Topology& topo, const En
           "--smooth-first)",
           run.auto_stop ? run.auto_stop->noise_sigma_h : 0.0, run.iterations_run, FlowName(run.flow)));
     }
-    mesh.positions = std::move((*smoothed)->first.positions);
+    input = std::exchange(mesh.positions, std::move((*smoothed)->first.positions));
     result.smoothing = run;
   }
 
@@ -237,10 +285,16 @@ absl::StatusOr<EnhanceResult> Enhance(Mesh& mesh, const Topology& topo, const En
     result.inverted_steps = *steps;
   }
   // Three Newton steps a call: a gain that grows the shape by a good share of its size takes a
-  // few calls (the volume is cubic in the offset).
+  // few calls (the volume is cubic in the offset). Before the faces are checked: the offset
+  // undoes the growth of the shape's own curvature, which is the enhancement's, and a vertex held
+  // back after it would get it all the same, a dent of the whole offset, where one held back
+  // before it keeps F; the volume then differs from the input's by the held-back vertices' share
+  // of their moves.
   for (int call = 0; closed && call < 4; ++call) {
     job::RestoreVolume(enhanced.data(), topo, role.data(), h, threads, volume, std::numeric_limits<double>::infinity());
   }
+  HoldBackTurnedFaces(mesh, topo, input.empty() ? mesh.positions.data() : input.data(), mesh.positions.data(),
+                      p.turn_halvings, enhanced, result);
   mesh.positions = std::move(enhanced);
   return result;
 }

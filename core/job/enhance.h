@@ -65,6 +65,7 @@ struct EnhanceParams {
   EnhanceMethod method = EnhanceMethod::kScreenedPoisson;
   int inverted_iterations = 1000;  // kInvertedFlow: the most steps (fewer once converged), >= 1
   double inverted_step = 0.9;      // kInvertedFlow: lambda, in (0, 1)
+  int turn_halvings = 4;           // rounds a turned face's vertices' share is halved before it goes to 0
 };
 
 struct EnhanceResult {
@@ -73,6 +74,11 @@ struct EnhanceResult {
   // The default job's run when the input was noisy and EnhanceParams::smooth_first; else unset.
   std::optional<FlowResult> smoothing;
   int inverted_steps = 0;  // kInvertedFlow: the steps run
+  // The vertices held back (given less than their whole move) so that no face turns over, and
+  // the share of the enhancement's move kept: the RMS of the moves returned over the RMS of the
+  // moves enhanced (1 when none was held back).
+  int64_t held_back = 0;
+  double kept = 1.0;
 };
 
 // Enhances `mesh` in place (connectivity unchanged). InvalidArgument for a gain or detail scale
@@ -80,6 +86,15 @@ struct EnhanceResult {
 // input is noisy (the default job would smooth it: its estimated noise is named) and
 // smooth_first is not set, or when the solve fails. Reports Phase::kEnhancing to
 // control.on_progress before the solve.
+//
+// No face turns over: sharpening grows the finest detail most, and on needles and thin triangles
+// it grows a vertex across its face's far edge. The result is F + t_v (E - F) per vertex, F the
+// mesh enhanced (the input, or the input smoothed first), E the enhancement with its volume given
+// back, t_v = 1 at first; each round halves t_v at the vertices of every face whose normal turned
+// by more than 90 degrees from the input's (NormalFlipped, core/measure/metrics.h: the summary's
+// flipped normals) and had not at F, and after turn_halvings rounds sets it to 0 (there the face
+// is F's). The same bits for any thread count.
+
 absl::StatusOr<EnhanceResult> Enhance(Mesh& mesh, const Topology& topo, const EnhanceParams& p,
                                       const RunControl& control = {});
 

@@ -211,12 +211,7 @@ absl::StatusOr<Displacement> CompareMeshes(const std::vector<Vec3>& before, cons
   if (!before.empty()) d.rms = std::sqrt(sq / static_cast<double>(before.size()));
   const int32_t n = after.num_vertices();
   for (const Triangle& t : after.triangles) {
-    if (!IsUsableTriangle(t, n)) continue;
-    auto normal = [&t](const std::vector<Vec3>& pos) {
-      const Vec3& p = pos[t[0]];
-      return Cross(pos[t[1]] - p, pos[t[2]] - p);
-    };
-    if (Dot(normal(before), normal(after.positions)) < 0.0) ++d.flipped_normals;
+    if (IsUsableTriangle(t, n) && NormalFlipped(t, before.data(), after.positions.data())) ++d.flipped_normals;
   }
   return d;
 }

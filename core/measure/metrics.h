@@ -43,6 +43,16 @@ MeshMetrics ComputeMetricsBeside(const Mesh& mesh, const Topology& topo, const s
 // a ten-thousandth of the coordinates' magnitude.
 inline constexpr double kAtBoundTolerance = 1e-3;
 
+// Whether triangle `t`'s normal turned by more than 90 degrees from positions `before` to
+// `after`: Displacement::flipped_normals counts the usable faces where it did, and an enhancement
+// holds its vertices back until none did (core/job/enhance.h). A face of zero area at either
+// positions has not turned.
+inline bool NormalFlipped(const Triangle& t, const Vec3* before, const Vec3* after) {
+  const Vec3 a = Cross(before[t[1]] - before[t[0]], before[t[2]] - before[t[0]]);
+  const Vec3 b = Cross(after[t[1]] - after[t[0]], after[t[2]] - after[t[0]]);
+  return Dot(a, b) < 0.0;
+}
+
 struct Displacement {
   double rms = 0.0;  // RMS of |after_i - before_i| over all vertices
   double max = 0.0;

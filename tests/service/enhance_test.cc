@@ -1,6 +1,7 @@
 // Shape enhancement through the service (JobSpec.enhance): a degree-8 bump on a sphere grows by
 // the gain through a real (loopback) server, equal to the core's result bit for bit, with the
-// radius kept and no face turned over, by either method; strength 0 holds a vertex; a noisy input is refused or
+// radius kept and no face turned over, by either method; the summary counts the vertices held back where a face
+// would turn; strength 0 holds a vertex; a noisy input is refused or
 // smoothed first; bad gains, scales, methods and smoothing fields are refused naming the field;
 // ListFlows lists the fields.
 #include <cmath>
@@ -51,6 +52,8 @@ TEST(EnhanceServiceTest, GainMultipliesTheBumpThroughARealServer) {
     EXPECT_NEAR(p.enhance().detail_scale_h() * p.mean_edge_length(), 4.0, 1e-9);
     EXPECT_EQ(p.iterations_run(), 0u);
     EXPECT_EQ(p.flow(), "");
+    EXPECT_EQ(p.enhance_held_back(), 0);
+    EXPECT_EQ(out->summary.flipped_normals(), 0);
     // The service runs the core's Enhance: the same positions, rounded to float32.
     Mesh expected = start;
     EnhanceParams e;
@@ -78,6 +81,24 @@ TEST(EnhanceServiceTest, TheInvertedFlowThroughTheServiceMultipliesTheBump) {
   EXPECT_NEAR(after.amplitude / before.amplitude, 2.0, 0.2);
   EXPECT_NEAR(after.radius / before.radius, 1.0, 0.005);
   EXPECT_EQ(FlippedFaces(start, *got), 0);
+}
+
+// Sharpening a needle's apex across its base turns the needle over: the service's result turns
+// none, and its summary counts the vertices held back, as the core's Enhance does.
+TEST(EnhanceServiceTest, TheSummaryCountsTheVerticesHeldBack) {
+  auto server = StartServer();
+  const Mesh start = FloatMesh(SphereWithNeedles(1e-5));
+  absl::StatusOr<SmoothOutcome> out = Call(server->InProcessChannel(), EnhanceSpec(3.0, 0.5), *EncodeDraco(start));
+  ASSERT_TRUE(out.ok()) << out.status();
+  EXPECT_EQ(out->summary.flipped_normals(), 0);
+  Mesh expected = start;
+  EnhanceParams e;
+  e.gain = 3.0;
+  e.detail_scale = 0.5;
+  const absl::StatusOr<EnhanceResult> r = Enhance(expected, BuildTopology(expected), e);
+  ASSERT_TRUE(r.ok()) << r.status();
+  EXPECT_GE(r->held_back, 256);  // a vertex of each needle at least
+  EXPECT_EQ(out->summary.parameters().enhance_held_back(), r->held_back);
 }
 
 TEST(EnhanceServiceTest, StrengthZeroHoldsAVertex) {
