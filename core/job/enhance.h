@@ -79,8 +79,8 @@ struct EnhanceResult {
 // out of range, a bad strength or lock mask, non-finite coordinates; FailedPrecondition when the
 // input is noisy (the default job would smooth it: its estimated noise is named) and
 // smooth_first is not set, or when the solve fails. Reports Phase::kEnhancing to
-// control.on_progress before the solve.
-absl::StatusOr<EnhanceResult> Enhance(Mesh& mesh, const Topology& topo, const EnhanceParams& p,
+// control.on_progress before the solve. `topo` is lent as Smooth()'s is (flow.h).
+absl::StatusOr<EnhanceResult> Enhance(Mesh& mesh, Topology& topo, const EnhanceParams& p,
                                       const RunControl& control = {});
 
 }  // namespace meshsmooth

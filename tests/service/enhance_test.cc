@@ -56,7 +56,8 @@ TEST(EnhanceServiceTest, GainMultipliesTheBumpThroughARealServer) {
     EnhanceParams e;
     e.gain = gain;
     e.detail_scale = 4.0;
-    ASSERT_TRUE(Enhance(expected, BuildTopology(expected), e).ok());
+    Topology topo = BuildTopology(expected);
+    ASSERT_TRUE(Enhance(expected, topo, e).ok());
     for (size_t v = 0; v < start.positions.size(); ++v) {
       ASSERT_EQ(got->positions[v], RoundToFloat(expected.positions[v])) << "vertex " << v;
     }

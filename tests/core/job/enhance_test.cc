@@ -21,7 +21,7 @@ using namespace meshsmooth::testing;
 TEST(EnhanceTest, GainMultipliesADegreeEightBumpAndKeepsTheRadius) {
   const int l = 8;
   const Mesh start = BumpySphere(5, l, 0.002);
-  const Topology topo = BuildTopology(start);
+  Topology topo = BuildTopology(start);
   const BumpFit before = FitBump(start, l);
   ASSERT_NEAR(before.amplitude, 0.002, 2e-4);
   for (double gain : {2.0, 3.0, 0.5}) {
@@ -53,7 +53,7 @@ TEST(EnhanceTest, GainMultipliesADegreeEightBumpAndKeepsTheRadius) {
 // turns over at any move of that size across it).
 TEST(EnhanceTest, NeedleTrianglesSolveWithBothSolvers) {
   const Mesh start = SphereWithNeedles(1e-5);
-  const Topology topo = BuildTopology(start);
+  Topology topo = BuildTopology(start);
   Mesh fat = start;  // the faces other than the needles (every fifth of the icosphere's)
   fat.triangles.clear();
   for (size_t f = 0; f < start.triangles.size(); ++f) {
@@ -88,7 +88,7 @@ TEST(EnhanceTest, NeedleTrianglesSolveWithBothSolvers) {
 TEST(EnhanceTest, InvertedFlowMultipliesTheBumpAndStaysBounded) {
   const int l = 8;
   const Mesh start = BumpySphere(5, l, 0.002);
-  const Topology topo = BuildTopology(start);
+  Topology topo = BuildTopology(start);
   const BumpFit before = FitBump(start, l);
   for (double gain : {2.0, 3.0}) {
     for (int steps : {EnhanceParams{}.inverted_iterations, 30000}) {
@@ -120,7 +120,7 @@ TEST(EnhanceTest, InvertedFlowMultipliesTheBumpAndStaysBounded) {
 
 TEST(EnhanceTest, SameBitsForAnyThreadCountAndStrengthZeroHolds) {
   const Mesh start = BumpySphere(6, 8, 0.01);
-  const Topology topo = BuildTopology(start);
+  Topology topo = BuildTopology(start);
   EnhanceParams p;
   p.detail_scale = 1.0;
   p.strength.assign(start.num_vertices(), 1.0f);
@@ -149,7 +149,7 @@ TEST(EnhanceTest, SameBitsForAnyThreadCountAndStrengthZeroHolds) {
 // Noise is the finest detail: enhancing it would grow it most. Refused, or smoothed first.
 TEST(EnhanceTest, ANoisyInputIsRefusedOrSmoothedFirst) {
   const Mesh noisy = NoisySphere(4);
-  const Topology topo = BuildTopology(noisy);
+  Topology topo = BuildTopology(noisy);
   Mesh m = noisy;
   const absl::StatusOr<EnhanceResult> refused = Enhance(m, topo, EnhanceParams{});
   ASSERT_FALSE(refused.ok());
@@ -170,7 +170,7 @@ TEST(EnhanceTest, ANoisyInputIsRefusedOrSmoothedFirst) {
 
 TEST(EnhanceTest, BadParametersAreRefused) {
   Mesh m = Icosphere(2);
-  const Topology topo = BuildTopology(m);
+  Topology topo = BuildTopology(m);
   for (double gain : {-1.0, 101.0, std::nan("")}) {
     EnhanceParams p;
     p.gain = gain;
