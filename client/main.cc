@@ -445,9 +445,9 @@ CLI::Option* AddQuantizeUploadOption(CLI::App* command, std::string& value, cons
                                 "send positions quantized so that no coordinate moves more than FRACTION of the mean "
                                 "edge length (0 < FRACTION <= ",
                                 kMaxUploadQuantization, "; default ", kDefaultUploadQuantization,
-                                "); the bound is printed in mesh units and bits. The result comes back as the service "
-                                "smoothed it (lossless unless --quantization-bits); a vertex the job does not move "
-                                "comes back at its quantized position. Give the value with '=' before the input file "
+                                "); the bound is printed in mesh units and bits. The job smooths the quantized "
+                                "positions: a vertex it does not move comes back at its quantized position. Give the "
+                                "value with '=' before the input file "
                                 "(--quantize-upload=0.001). Default: a lossless upload"))
       ->expected(0, 1)
       ->type_name("[FRACTION]");
