@@ -78,7 +78,7 @@ void MeshSection(const NamedMesh& nm, const Options& opt, const std::vector<Peer
   const int iterations = IterationsFor(n);
   const double valence = static_cast<double>(topo.ring.size()) / std::max(n, 1);
   std::printf("\n## %s (%d vertices, %d iterations per run, %s)\n\n", nm.name.c_str(), n, iterations,
-              MortonOrderPaysOff(topo, iterations) ? "run on a Morton-ordered copy" : "run in its own order");
+              MortonOrderPaysOff(topo, iterations) ? "run in Morton order" : "run in its own order");
   std::printf(
       "| flow | ms/iteration, 1 thread | 2 threads | speed-up | Mvertex-it/s (2 threads) | bytes/vertex | share of "
       "DRAM bound (2 threads) | set-up ms (1 thread) |\n|---|---|---|---|---|---|---|---|\n");

@@ -33,7 +33,7 @@ struct OurTiming {
 OurTiming TimeOurs(const Mesh& mesh, const Topology& topo, FlowParams p, int iterations, int threads, int runs);
 
 // The ceiling of our layout: ms per iteration of a plain CSR U0 loop (no roles, statistics,
-// caps or checks) over the Morton-ordered copy Smooth() runs on; median of `runs`.
+// caps or checks) over the Morton-ordered arrays Smooth() runs on; median of `runs`.
 double PlainU0Ms(const Mesh& mesh, const Topology& topo, int iterations, int threads, int runs);
 
 // Iterations per timed run on a mesh of `n` vertices: about 40 million vertex-iterations, 3..200.

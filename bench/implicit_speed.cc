@@ -117,7 +117,7 @@ int PeakChild(const Options& opt, const std::vector<std::string>& args) {
   in->truth.reset();
   Mesh mesh = std::move(in->noisy);
   in->clean = Mesh();
-  const Topology topo = BuildTopology(mesh);
+  Topology topo = BuildTopology(mesh);
   malloc_trim(0);  // the input's making (the clean mesh, the ground truth) gives its memory back
   { std::ofstream("/proc/self/clear_refs") << "5"; }  // VmHWM back to the resident set
   const double base = StatusKb("VmRSS:") * 1024.0;
@@ -179,7 +179,7 @@ int RunMesh(const std::string& self, const std::string& name, const Options& opt
     std::fprintf(stderr, "%s: %s\n", name.c_str(), in.status().ToString().c_str());
     return 1;
   }
-  const Topology topo = BuildTopology(in->noisy);
+  Topology topo = BuildTopology(in->noisy);
   const int32_t n = in->noisy.num_vertices();
   std::vector<Row> rows;
   rows.push_back({"noisy input", in->Rms(in->noisy), 0.0, {}});

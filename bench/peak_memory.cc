@@ -26,7 +26,7 @@ int PeakChild(const std::string& draco_path) {
   if (!dm.ok()) return 1;
   std::string().swap(upload);
   Mesh mesh = dm->TakeWelded();
-  const Topology topo = BuildTopology(mesh);
+  Topology topo = BuildTopology(mesh);
   FlowParams p;
   p.flow = FlowId::kMedian;
   p.iterations = 5;

@@ -66,9 +66,10 @@ void PaperTable(std::string& out, const std::string& title, const GroundTruth& t
       {"mcf_tangential (step 0.1 h^2, C 5)", make("mcf_tangential")},
       {"median (step 0.1 h^2, eps 0.1)", make("median")},
       {"median + adaptive T(P) 1+2 rings", adaptive}};
+  Topology topo = truth.topology();  // lent to each run
   for (const auto& [label, params] : variants) {
     Mesh m = noisy;
-    absl::StatusOr<FlowResult> r = Smooth(m, truth.topology(), params);
+    absl::StatusOr<FlowResult> r = Smooth(m, topo, params);
     if (!r.ok()) {
       absl::StrAppendFormat(&out, "| %s | failed: %s | | | | | | |\n", label, r.status().message());
       continue;

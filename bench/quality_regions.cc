@@ -225,9 +225,10 @@ struct SeedRun {
 // `iterations`. Exits on a failed job.
 Mesh DefaultJob(const RegionInput& in, const std::vector<float>& strength, int* iterations) {
   Mesh m = in.mesh;
+  Topology topo = in.topology;  // lent to the job
   FlowParams p;
   p.strength = strength;
-  absl::StatusOr<FlowResult> r = job::SmoothWithPolicy(m, in.topology, p, {}, job::kPolicy);
+  absl::StatusOr<FlowResult> r = job::SmoothWithPolicy(m, topo, p, {}, job::kPolicy);
   if (!r.ok()) {
     std::fprintf(stderr, "meshsmooth_quality_regions: %s\n", r.status().ToString().c_str());
     std::exit(1);

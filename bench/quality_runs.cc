@@ -21,8 +21,9 @@ job::JobPolicy job_policy = job::kPolicy;
 Run RunJob(const Input& input, const FlowParams& p) {
   Run run;
   Mesh m = *input.mesh;
+  Topology topo = *input.topology;  // lent to the job (Smooth()), which may renumber it meanwhile
   const Clock::time_point t0 = Clock::now();
-  absl::StatusOr<FlowResult> r = job::SmoothWithPolicy(m, *input.topology, p, {}, job_policy);
+  absl::StatusOr<FlowResult> r = job::SmoothWithPolicy(m, topo, p, {}, job_policy);
   run.seconds = Seconds(t0, Clock::now());
   if (!r.ok()) {
     run.status = r.status();

@@ -19,6 +19,7 @@
 #include "client/report.h"
 #include "client/smooth_client.h"
 #include "client/transfer.h"
+#include "client/upload_quantization.h"
 #include "server/job_store.h"
 #include "server/options.h"
 
@@ -227,8 +228,12 @@ int RunSubmit(const JobCommand& command, const ConnectionOptions& c) {
     std::cerr << "meshsmooth: submit --wait writes the result as Draco bytes: give -o FILE.drc\n";
     return kExitUsage;
   }
-  absl::StatusOr<Upload> upload = PrepareUpload(command.input);
+  absl::StatusOr<Upload> upload = PrepareUpload(command.input, /*with_attributes=*/true, /*gltf_draco=*/false,
+                                                /*strength=*/{}, /*in_memory=*/false, command.quantize_upload);
   if (!upload.ok()) return Fail(upload.status());
+  // On stderr: stdout is the job's id alone, for scripts.
+  if (command.quantize_upload > 0.0)
+    std::fprintf(stderr, "%s\n", DescribeUploadQuantization(upload->quantization).c_str());
   if (upload->origin.x != 0.0 || upload->origin.y != 0.0 || upload->origin.z != 0.0) {
     return Fail(absl::InvalidArgumentError(
         "the input lies far from the origin, and the job store keeps the positions relative to a local origin "

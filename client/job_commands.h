@@ -11,15 +11,16 @@
 namespace meshsmooth::client {
 
 struct JobCommand {
-  std::string input;         // submit: the mesh file (or builtin:NAME)
-  std::string output;        // fetch (and submit --wait): the result's .drc file
-  std::string job_id;        // status, watch, fetch, cancel
-  std::string request_id;    // submit; empty = the SHA-256 of the spec and the upload (the same job again)
-  std::string flow;          // submit: JobSpec.flow; empty = the default job
-  unsigned iterations = 0;   // submit: JobSpec.iterations; 0 = automatic
-  std::string callback_url;  // submit: JobSpec.callback_url; empty = none
-  bool wait = false;         // submit: watch to the end, then fetch into `output`
-  std::string state;         // jobs: only this state (queued, running, succeeded, failed, cancelled)
+  std::string input;             // submit: the mesh file (or builtin:NAME)
+  std::string output;            // fetch (and submit --wait): the result's .drc file
+  std::string job_id;            // status, watch, fetch, cancel
+  std::string request_id;        // submit; empty = the SHA-256 of the spec and the upload (the same job again)
+  std::string flow;              // submit: JobSpec.flow; empty = the default job
+  unsigned iterations = 0;       // submit: JobSpec.iterations; 0 = automatic
+  std::string callback_url;      // submit: JobSpec.callback_url; empty = none
+  bool wait = false;             // submit: watch to the end, then fetch into `output`
+  double quantize_upload = 0.0;  // submit: --quantize-upload's fraction of the mean edge; 0 = lossless
+  std::string state;             // jobs: only this state (queued, running, succeeded, failed, cancelled)
 };
 
 // `meshsmooth submit IN`: uploads (resuming a broken upload), prints the job id; with --wait

@@ -435,12 +435,44 @@ CLI::App* AddEnhanceSubcommand(CLI::App& app, SmoothOptions& eo, ConnectionOptio
   return enhance;
 }
 
+// --quantize-upload[=FRACTION] on `command` (smooth, submit): its value into `value`, parsed after
+// the command line (ParseQuantizeUpload). `when` starts the help: when it applies, and "for".
+CLI::Option* AddQuantizeUploadOption(CLI::App* command, std::string& value, const std::string& when) {
+  return command
+      ->add_option("--quantize-upload", value,
+                   absl::StrCat(when,
+                                " a mesh too large to send losslessly (about 36 bytes a vertex): "
+                                "send positions quantized so that no coordinate moves more than FRACTION of the mean "
+                                "edge length (0 < FRACTION <= ",
+                                kMaxUploadQuantization, "; default ", kDefaultUploadQuantization,
+                                "); the bound is printed in mesh units and bits. The job smooths the quantized "
+                                "positions: a vertex it does not move comes back at its quantized position. Give the "
+                                "value with '=' before the input file "
+                                "(--quantize-upload=0.001). Default: a lossless upload"))
+      ->expected(0, 1)
+      ->type_name("[FRACTION]");
+}
+
+// The fraction of a --quantize-upload given on the command line into `fraction` (left as it is
+// when the flag was not given); false after printing the error (a usage error, exit 2).
+bool ParseQuantizeUpload(const CLI::Option* option, const std::string& value, double& fraction) {
+  if (option->count() == 0) return true;
+  absl::StatusOr<double> parsed = ParseUploadQuantization(value);
+  if (!parsed.ok()) {
+    std::fprintf(stderr, "meshsmooth: %s\n", std::string(parsed.status().message()).c_str());
+    return false;
+  }
+  fraction = *parsed;
+  return true;
+}
+
 // The subcommands of jobs a server keeps (meshsmoothd --job-store); their options go into `jc`
 // and their connection into `jcc`.
 struct JobSubcommands {
   CLI::App *submit, *status, *watch, *fetch, *cancel, *jobs;
+  CLI::Option* submit_quantize;  // --quantize-upload, its value in `quantize_upload`
 };
-JobSubcommands AddJobSubcommands(CLI::App& app, JobCommand& jc, ConnectionOptions& jcc) {
+JobSubcommands AddJobSubcommands(CLI::App& app, JobCommand& jc, ConnectionOptions& jcc, std::string& quantize_upload) {
   CLI::App* submit = app.add_subcommand(
       "submit",
       "Upload a mesh as a job the server keeps (meshsmoothd --job-store) and print its id; a broken upload "
@@ -458,6 +490,7 @@ JobSubcommands AddJobSubcommands(CLI::App& app, JobCommand& jc, ConnectionOption
                      "--callback-secret-file; docs/deployment.md)");
   submit->add_flag("--wait", jc.wait, "watch the job to its end, then fetch the result into -o");
   submit->add_option("-o,--output", jc.output, "with --wait: the result's .drc file");
+  CLI::Option* submit_quantize = AddQuantizeUploadOption(submit, quantize_upload, "for");
   AddConnectionOptions(submit, jcc);
   CLI::App* status = app.add_subcommand("status", "A kept job's state, progress, times and summary");
   status->add_option("id", jc.job_id, "the job's id (as submit printed it)")->required();
@@ -478,7 +511,7 @@ JobSubcommands AddJobSubcommands(CLI::App& app, JobCommand& jc, ConnectionOption
   jobs->add_option("--state", jc.state, "only jobs in this state")
       ->check(CLI::IsMember({"queued", "running", "succeeded", "failed", "cancelled"}));
   AddConnectionOptions(jobs, jcc);
-  return {submit, status, watch, fetch, cancel, jobs};
+  return {submit, status, watch, fetch, cancel, jobs, submit_quantize};
 }
 
 }  // namespace
@@ -515,21 +548,7 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
   std::string quantize_upload;
-  CLI::Option* quantize_option =
-      smooth
-          ->add_option(
-              "--quantize-upload", quantize_upload,
-              absl::StrCat(
-                  "with --server, for a mesh too large to send losslessly (about 36 bytes a vertex): "
-                  "send positions quantized so that no coordinate moves more than FRACTION of the mean edge length "
-                  "(0 < FRACTION <= ",
-                  kMaxUploadQuantization, "; default ", kDefaultUploadQuantization,
-                  "); the summary states the bound in mesh units and the bits. The result comes back as the service "
-                  "smoothed it (lossless unless --quantization-bits); a vertex the job does not move comes back at "
-                  "its quantized position. Give the value with '=' before the input file "
-                  "(--quantize-upload=0.001). Default: a lossless upload"))
-          ->expected(0, 1)
-          ->type_name("[FRACTION]");
+  CLI::Option* quantize_option = AddQuantizeUploadOption(smooth, quantize_upload, "with --server, for");
 
   ConnectionOptions fc;
   bool flows_json = false;
@@ -579,7 +598,8 @@ int main(int argc, char** argv) {
 
   JobCommand jc;
   ConnectionOptions jcc;
-  const JobSubcommands kept = AddJobSubcommands(app, jc, jcc);
+  std::string submit_quantize_upload;
+  const JobSubcommands kept = AddJobSubcommands(app, jc, jcc, submit_quantize_upload);
 
   try {
     app.parse(argc, argv);
@@ -589,16 +609,12 @@ int main(int argc, char** argv) {
   bool batch_mode = false;
   if (smooth->parsed()) {
     // Before the inputs: given alone before the input file, the flag takes the file as its value.
-    if (quantize_option->count() > 0) {
-      absl::StatusOr<double> fraction = ParseUploadQuantization(quantize_upload);
-      if (!fraction.ok() || sc.server.empty()) {
-        std::fprintf(stderr, "meshsmooth: %s\n",
-                     fraction.ok() ? "--quantize-upload quantizes what is sent to --server; without --server the job "
-                                     "runs on the mesh as read (nothing is uploaded)"
-                                   : std::string(fraction.status().message()).c_str());
-        return kExitUsage;
-      }
-      so.quantize_upload = *fraction;
+    if (!ParseQuantizeUpload(quantize_option, quantize_upload, so.quantize_upload)) return kExitUsage;
+    if (so.quantize_upload > 0.0 && sc.server.empty()) {
+      std::fprintf(stderr,
+                   "meshsmooth: --quantize-upload quantizes what is sent to --server; without --server the job runs "
+                   "on the mesh as read (nothing is uploaded)\n");
+      return kExitUsage;
     }
     if (const int code = SettleSmoothInputs(so, batch, batch_mode); code != 0) return code;
   }
@@ -619,7 +635,10 @@ int main(int argc, char** argv) {
   meshsmooth::ApplyKernelEnvironment();
   if (smooth->parsed()) return batch_mode ? RunBatch(so, sc, batch) : RunSmooth(so, sc);
   if (flows->parsed()) return RunFlows(fc, flows_json);
-  if (kept.submit->parsed()) return RunSubmit(jc, jcc);
+  if (kept.submit->parsed()) {
+    if (!ParseQuantizeUpload(kept.submit_quantize, submit_quantize_upload, jc.quantize_upload)) return kExitUsage;
+    return RunSubmit(jc, jcc);
+  }
   if (kept.status->parsed()) return RunStatus(jc, jcc);
   if (kept.watch->parsed()) return RunWatch(jc, jcc);
   if (kept.fetch->parsed()) return RunFetch(jc, jcc);

@@ -25,7 +25,7 @@ namespace meshsmooth::server {
 
 struct JobMemoryModel {
   int64_t fixed = int64_t{64} << 20;  // the process's own and the job's small buffers
-  // Every job: the mesh, its weld, topology, Morton-ordered copy, a flow's buffers, the metrics
+  // Every job: the mesh, its weld, topology, the Morton order, a flow's buffers, the metrics
   // and the input's positions for the displacement, beside the caller's own copy of the mesh.
   int64_t per_vertex = 190;
   int64_t per_face = 40;

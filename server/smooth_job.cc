@@ -161,7 +161,7 @@ void SmoothJob::SendAccepted(const ValidationReport& validation, int64_t seam_po
   Emit([&](JobSink& sink) { sink.OnAccepted(accepted); });
 }
 
-absl::StatusOr<FlowResult> SmoothJob::SmoothMesh(Mesh& mesh, const Topology& topo, Clock::time_point decoded,
+absl::StatusOr<FlowResult> SmoothJob::SmoothMesh(Mesh& mesh, Topology& topo, Clock::time_point decoded,
                                                  const StopToken& stop, std::vector<float> strength,
                                                  JobReport& report) {
   FlowParams flow = params_.flow;
@@ -276,7 +276,7 @@ void SmoothJob::Run() {
     return Fail(report, s);
   }
   ValidationReport validation;
-  const Topology topo = BuildTopology(mesh, &validation, stop);
+  Topology topo = BuildTopology(mesh, &validation, stop);
   if (stop.Fired()) {
     report.decode_seconds = Seconds(start, Clock::now());
     return Fail(report, StepStatus(stop.Check(), "validating the mesh"));

@@ -94,8 +94,8 @@ class SmoothJob {
   // The flow (or, for JobSpec.enhance, the enhancement) with what is left of the job's time and
   // the per-vertex `strength` (empty: none), progress throttled to ~10/s; the iterations done so
   // far go to `report` as they complete, an enhancement's result too.
-  absl::StatusOr<FlowResult> SmoothMesh(Mesh& mesh, const Topology& topo, Clock::time_point decoded,
-                                        const StopToken& stop, std::vector<float> strength, JobReport& report);
+  absl::StatusOr<FlowResult> SmoothMesh(Mesh& mesh, Topology& topo, Clock::time_point decoded, const StopToken& stop,
+                                        std::vector<float> strength, JobReport& report);
   // Ridges and ravines as the result's attributes when the spec asks; counts in `report`.
   absl::StatusOr<std::vector<GenericAttribute>> DetectFeaturesIfAsked(const Mesh& mesh, const Topology& topo,
                                                                       const StopToken& stop, JobReport& report) const;

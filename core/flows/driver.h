@@ -73,8 +73,9 @@ absl::StatusOr<FlowResult> RunIterations(Mesh& mesh, const Topology& topo, const
                                          const RunControl& control, double h, const RunPlan& plan);
 
 // One flow (p.flow set, p valid) in the vertex order that pays (reorder.h), with `plan` for
-// automatic iterations; h is the input's mean edge length. Defined in smooth.cc.
-absl::StatusOr<FlowResult> SmoothOneFlow(Mesh& mesh, const Topology& topo, const FlowParams& p,
-                                         const RunControl& control, double h, const RunPlan& plan = {});
+// automatic iterations; h is the input's mean edge length; `topo` is lent as Smooth()'s is.
+// Defined in smooth.cc.
+absl::StatusOr<FlowResult> SmoothOneFlow(Mesh& mesh, Topology& topo, const FlowParams& p, const RunControl& control,
+                                         double h, const RunPlan& plan = {});
 
 }  // namespace meshsmooth::flows

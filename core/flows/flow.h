@@ -59,8 +59,8 @@ enum class AdaptiveMode {
   kRing2,     // T(P) = mean |H| over the first and second rings of P
 };
 
-// Whether Smooth() runs a large mesh on a Morton-ordered copy of its vertices (MortonOrder()),
-// undone on return. Positions are identical either way.
+// Whether Smooth() runs a large mesh with its vertices renumbered into Morton order
+// (MortonOrder()), undone on return. Positions are identical either way.
 enum class ReorderMode {
   kAuto,    // when MortonOrderPaysOff(topology, iterations)
   kAlways,  // for every mesh of 100k .. 2^25 vertices (tests and measurements)
@@ -187,8 +187,8 @@ struct FlowParams {
   double cg_tolerance = 1e-8;
 
   int threads = 0;  // worker threads for the per-vertex loops; 0 = all hardware threads
-  // Large meshes whose own vertex order leaves neighbours far apart in memory run on a
-  // Morton-ordered copy, when the run is long enough to repay the copy (ReorderMode).
+  // Large meshes whose own vertex order leaves neighbours far apart in memory run renumbered
+  // into Morton order, when the run is long enough to repay the renumbering (ReorderMode).
   ReorderMode reorder = ReorderMode::kAuto;
 };
 
@@ -289,9 +289,10 @@ double DisplacementBound(const FlowParams& p, double h);
 // chosen on a sample runs as one polynomial, core/flows/chebyshev.h: its positions are then
 // no iteration's); FailedPrecondition,
 // naming the iteration and suggesting a smaller step, when the flow diverges (the mesh holds
-// the last iteration before it).
-absl::StatusOr<FlowResult> Smooth(Mesh& mesh, const Topology& topo, const FlowParams& p,
-                                  const RunControl& control = {});
+// the last iteration before it). `topo` is lent, not changed: a run in Morton order
+// (FlowParams::reorder) renumbers it and the mesh's faces in place and gives both back exactly
+// as they were (core/flows/reorder.h), so no copy of them is held beside the caller's.
+absl::StatusOr<FlowResult> Smooth(Mesh& mesh, Topology& topo, const FlowParams& p, const RunControl& control = {});
 
 // Same, building the topology itself.
 absl::StatusOr<FlowResult> Smooth(Mesh& mesh, const FlowParams& p, const RunControl& control = {});

@@ -98,77 +98,93 @@ bool MortonOrderPaysOff(const Topology& topo, int iterations) {
   return share > kLocalFarShare && share * iterations >= kRepayingFarShareIterations;
 }
 
-ReorderedMesh ReorderByMorton(const Mesh& mesh, const Topology& topo, const std::vector<uint8_t>& locked, int threads) {
-  const int32_t n = mesh.num_vertices();
-  ReorderedMesh r;
-  // A pure permutation, so it runs on the job's threads without changing a bit.
-  r.order = MortonOrder(mesh.positions, threads);
-  const std::vector<int32_t>& order = r.order;  // new -> old
-  std::vector<int32_t> rank(n);                 // old -> new
+// The loops below read the old arrays in the new order (or write them back so), scattered: they
+// prefetch what vertex i + kAhead reads and the ring of vertex i + kAhead / 2 (whose offset is
+// then in cache).
+void Renumber(const std::vector<int32_t>& order, Mesh& mesh, Topology& topo, int threads) {
+  constexpr int32_t kAhead = 16;
+  const int32_t n = static_cast<int32_t>(order.size());
+  std::vector<int32_t> rank(n);  // old -> new
 #pragma omp parallel for schedule(static) num_threads(threads)
   for (int32_t i = 0; i < n; ++i) rank[order[i]] = i;
-  r.mesh.positions.resize(n);
-  Topology& t = r.topo;
-  t.kind.resize(n);
-  t.ring_offsets.resize(static_cast<size_t>(n) + 1);
-  t.ring.resize(topo.ring.size());
-  if (!locked.empty()) r.locked.resize(n);
-  // The loops below read the caller's arrays in the new order, scattered: they prefetch what
-  // vertex i + 16 reads and the ring of vertex i + 8 (whose offset is then in cache).
-  constexpr int32_t kAhead = 16;
-  t.ring_offsets[0] = 0;
-  for (int32_t i = 0; i < n; ++i) {
-    if (i + kAhead < n) __builtin_prefetch(&topo.ring_offsets[order[i + kAhead]]);
-    t.ring_offsets[i + 1] = t.ring_offsets[i] + topo.valence(order[i]);
-  }
+  {
+    std::vector<Vec3> positions(n);
 #pragma omp parallel for schedule(static) num_threads(threads)
-  for (int32_t i = 0; i < n; ++i) {
-    if (i + kAhead < n) {
-      __builtin_prefetch(&mesh.positions[order[i + kAhead]]);
-      __builtin_prefetch(&topo.ring_offsets[order[i + kAhead]]);
+    for (int32_t i = 0; i < n; ++i) {
+      if (i + kAhead < n) __builtin_prefetch(&mesh.positions[order[i + kAhead]]);
+      positions[i] = mesh.positions[order[i]];
     }
-    if (i + kAhead / 2 < n) __builtin_prefetch(&topo.ring[topo.ring_offsets[order[i + kAhead / 2]]]);
-    const int32_t old = order[i];
-    r.mesh.positions[i] = mesh.positions[old];
-    t.kind[i] = topo.kind[old];
-    if (!locked.empty()) r.locked[i] = locked[old];
-    int32_t out = t.ring_offsets[i];
-    for (int32_t k = topo.ring_offsets[old]; k < topo.ring_offsets[old + 1]; ++k) t.ring[out++] = rank[topo.ring[k]];
+    mesh.positions.swap(positions);
   }
-  // The faces, renumbered, in their order (the normal-filtering flows order them by their
-  // centroids, whatever the vertex numbering); a corner out of range stays as it was (such a
-  // face is not in topo.faces).
+  {
+    std::vector<VertexKind> kind(n);
+#pragma omp parallel for schedule(static) num_threads(threads)
+    for (int32_t i = 0; i < n; ++i) kind[i] = topo.kind[order[i]];
+    topo.kind.swap(kind);
+  }
+  {
+    std::vector<int32_t> offsets(static_cast<size_t>(n) + 1);
+    offsets[0] = 0;
+    for (int32_t i = 0; i < n; ++i) {
+      if (i + kAhead < n) __builtin_prefetch(&topo.ring_offsets[order[i + kAhead]]);
+      offsets[i + 1] = offsets[i] + topo.valence(order[i]);
+    }
+    std::vector<int32_t> ring(topo.ring.size());
+#pragma omp parallel for schedule(static) num_threads(threads)
+    for (int32_t i = 0; i < n; ++i) {
+      if (i + kAhead < n) __builtin_prefetch(&topo.ring_offsets[order[i + kAhead]]);
+      if (i + kAhead / 2 < n) __builtin_prefetch(&topo.ring[topo.ring_offsets[order[i + kAhead / 2]]]);
+      const int32_t old = order[i];
+      int32_t out = offsets[i];
+      for (int32_t k = topo.ring_offsets[old]; k < topo.ring_offsets[old + 1]; ++k) ring[out++] = rank[topo.ring[k]];
+    }
+    topo.ring_offsets.swap(offsets);
+    topo.ring.swap(ring);
+  }
   const auto faces = static_cast<int64_t>(mesh.triangles.size());
-  r.mesh.triangles.resize(mesh.triangles.size());
 #pragma omp parallel for schedule(static) num_threads(threads)
   for (int64_t f = 0; f < faces; ++f) {
-    Triangle t2 = mesh.triangles[f];
-    for (int32_t& v : t2) {
+    for (int32_t& v : mesh.triangles[f]) {
       if (v >= 0 && v < n) v = rank[v];
     }
-    r.mesh.triangles[f] = t2;
   }
-  t.faces = topo.faces;
-  return r;
 }
 
-void RestoreOrder(const ReorderedMesh& r, Mesh& mesh, int threads) {
-  const int32_t n = static_cast<int32_t>(r.order.size());
-#pragma omp parallel for schedule(static) num_threads(threads)
-  for (int32_t i = 0; i < n; ++i) mesh.positions[r.order[i]] = r.mesh.positions[i];
-}
-
-void RestoreFaces(const ReorderedMesh& r, Mesh& mesh, int threads) {
-  const int32_t n = static_cast<int32_t>(r.order.size());
-  const auto faces = static_cast<int64_t>(r.mesh.triangles.size());
-  mesh.triangles.resize(r.mesh.triangles.size());
+void RenumberBack(const std::vector<int32_t>& order, Mesh& mesh, Topology& topo, int threads) {
+  const int32_t n = static_cast<int32_t>(order.size());
+  const auto faces = static_cast<int64_t>(mesh.triangles.size());
 #pragma omp parallel for schedule(static) num_threads(threads)
   for (int64_t f = 0; f < faces; ++f) {
-    Triangle t = r.mesh.triangles[f];
-    for (int32_t& v : t) {
-      if (v >= 0 && v < n) v = r.order[v];
+    for (int32_t& v : mesh.triangles[f]) {
+      if (v >= 0 && v < n) v = order[v];
     }
-    mesh.triangles[f] = t;
+  }
+  {
+    std::vector<Vec3> positions(n);
+#pragma omp parallel for schedule(static) num_threads(threads)
+    for (int32_t i = 0; i < n; ++i) positions[order[i]] = mesh.positions[i];
+    mesh.positions.swap(positions);
+  }
+  {
+    std::vector<VertexKind> kind(n);
+#pragma omp parallel for schedule(static) num_threads(threads)
+    for (int32_t i = 0; i < n; ++i) kind[order[i]] = topo.kind[i];
+    topo.kind.swap(kind);
+  }
+  {
+    std::vector<int32_t> offsets(static_cast<size_t>(n) + 1);
+    offsets[0] = 0;
+#pragma omp parallel for schedule(static) num_threads(threads)
+    for (int32_t i = 0; i < n; ++i) offsets[order[i] + 1] = topo.valence(i);
+    for (int32_t v = 0; v < n; ++v) offsets[v + 1] += offsets[v];
+    std::vector<int32_t> ring(topo.ring.size());
+#pragma omp parallel for schedule(static) num_threads(threads)
+    for (int32_t i = 0; i < n; ++i) {
+      int32_t out = offsets[order[i]];
+      for (int32_t k = topo.ring_offsets[i]; k < topo.ring_offsets[i + 1]; ++k) ring[out++] = order[topo.ring[k]];
+    }
+    topo.ring_offsets.swap(offsets);
+    topo.ring.swap(ring);
   }
 }
 

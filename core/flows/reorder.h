@@ -1,6 +1,6 @@
 // Running a large mesh in an order that keeps each vertex's neighbours near it in memory:
-// Smooth() copies the mesh and its topology into Morton order when that pays off
-// (FlowParams::reorder), runs there and copies the positions back, so indices stay stable.
+// Smooth() renumbers the mesh and its topology into Morton order in place when that pays off
+// (FlowParams::reorder), runs there and renumbers them back, so indices stay stable.
 // Each ring keeps its order and the faces keep theirs, so every vertex sums the same terms in
 // the same order: reordering changes no position.
 #pragma once
@@ -28,23 +28,25 @@ bool MortonOrderPaysOff(const Topology& topo, int iterations);
 // Sizes Smooth() may reorder (FlowParams::reorder = kAlways): 100k .. 2^25 vertices.
 bool ReorderableSize(int32_t n);
 
-// A mesh, its topology and its lock mask copied into an order (new -> old).
-struct ReorderedMesh {
-  std::vector<int32_t> order;   // new -> old
-  Mesh mesh;                    // positions and triangles, renumbered
-  Topology topo;                // kind, rings and usable faces, renumbered
-  std::vector<uint8_t> locked;  // empty when the caller's was
-};
+// Renumbers `mesh` (its positions, and its faces' corners: the faces keep their order) and `topo`
+// (kinds and rings; its list of usable faces names faces, so it stays as it is) in place into
+// `order` (new -> old), on `threads`. Each array is made anew and the old one freed before the
+// next, so nothing is held twice but one array at a time (at most the rings, 24 bytes a vertex):
+// a run in that order needs no copy of the mesh or topology beside the caller's. A corner out of
+// range stays as it was (such a face is not in topo.faces).
+void Renumber(const std::vector<int32_t>& order, Mesh& mesh, Topology& topo, int threads);
 
-// The copy of (mesh, topo, locked) in Morton order, made on `threads`.
-ReorderedMesh ReorderByMorton(const Mesh& mesh, const Topology& topo, const std::vector<uint8_t>& locked, int threads);
+// Undoes Renumber(order, mesh, topo, ...): the positions back in the caller's order and the
+// faces and topology exactly as they were.
+void RenumberBack(const std::vector<int32_t>& order, Mesh& mesh, Topology& topo, int threads);
 
-// Writes r's positions back to `mesh` in the caller's order.
-void RestoreOrder(const ReorderedMesh& r, Mesh& mesh, int threads);
-
-// Makes `mesh`'s faces anew from r's, in the caller's numbering: the same faces as those r was
-// made from (each corner renumbered back; a corner out of range was kept as it was), so a caller
-// may free its own while it runs on r.
-void RestoreFaces(const ReorderedMesh& r, Mesh& mesh, int threads);
+// values[order[i]] at i: a per-vertex array (lock mask, strengths, centres) in `order`.
+template <typename T>
+std::vector<T> InOrder(const std::vector<int32_t>& order, const std::vector<T>& values) {
+  if (values.empty()) return {};
+  std::vector<T> out(order.size());
+  for (size_t i = 0; i < order.size(); ++i) out[i] = values[order[i]];
+  return out;
+}
 
 }  // namespace meshsmooth

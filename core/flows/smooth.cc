@@ -197,8 +197,8 @@ double DisplacementBound(const FlowParams& p, double h) {
 
 namespace flows {
 
-absl::StatusOr<FlowResult> SmoothOneFlow(Mesh& mesh, const Topology& topo, const FlowParams& p,
-                                         const RunControl& control, double h, const RunPlan& plan) {
+absl::StatusOr<FlowResult> SmoothOneFlow(Mesh& mesh, Topology& topo, const FlowParams& p, const RunControl& control,
+                                         double h, const RunPlan& plan) {
   const int32_t n = mesh.num_vertices();
   const int iterations = p.iterations != kAutoIterations ? p.iterations
                          : plan.fixed_iterations > 0     ? plan.fixed_iterations
@@ -210,24 +210,17 @@ absl::StatusOr<FlowResult> SmoothOneFlow(Mesh& mesh, const Topology& topo, const
   if (!reorder) return RunIterations(mesh, topo, p, control, h, plan);
 
   const int threads = ThreadsFor(n, p);
-  ReorderedMesh local = ReorderByMorton(mesh, topo, p.locked, threads);
+  // The run takes the caller's mesh and topology renumbered in place, and gives them back
+  // renumbered the other way: no copy of either is held beside them.
+  const std::vector<int32_t> order = MortonOrder(mesh.positions, threads);
   FlowParams q = p;
-  q.locked = std::move(local.locked);
-  if (!p.strength.empty()) {
-    for (int32_t i = 0; i < n; ++i) q.strength[i] = p.strength[local.order[i]];
-  }
-  if (!p.bound_centre.empty()) {
-    for (int32_t i = 0; i < n; ++i) q.bound_centre[i] = p.bound_centre[local.order[i]];
-  }
-  // The caller's positions are all written back below and its faces made anew from the copy's:
-  // their memory is free during the run (48 bytes a vertex off the job's peak).
-  std::vector<Vec3>().swap(mesh.positions);
-  std::vector<Triangle>().swap(mesh.triangles);
-  absl::StatusOr<FlowResult> result = RunIterations(local.mesh, local.topo, q, control, h, plan);
+  q.locked = InOrder(order, p.locked);
+  q.strength = InOrder(order, p.strength);
+  q.bound_centre = InOrder(order, p.bound_centre);
+  Renumber(order, mesh, topo, threads);
+  absl::StatusOr<FlowResult> result = RunIterations(mesh, topo, q, control, h, plan);
   // The positions as the run left them (the last good iteration on failure).
-  mesh.positions.resize(n);
-  RestoreOrder(local, mesh, threads);
-  RestoreFaces(local, mesh, threads);
+  RenumberBack(order, mesh, topo, threads);
   return result;
 }
 

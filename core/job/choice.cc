@@ -69,8 +69,8 @@ namespace {
 // stopping; the least estimated error gives the result, a later candidate's less `margin_h2`
 // (the first candidate's estimate decides whether there is anything to do). Progress: one
 // kChoosing report per candidate. `repair_idle`: JobRule's.
-absl::StatusOr<FlowResult> Choose(Mesh& mesh, const Topology& topo, const FlowParams& p, const RunControl& control,
-                                  double h, const NoiseEstimate& noise, const JobPolicy& policy,
+absl::StatusOr<FlowResult> Choose(Mesh& mesh, Topology& topo, const FlowParams& p, const RunControl& control, double h,
+                                  const NoiseEstimate& noise, const JobPolicy& policy,
                                   const std::vector<uint8_t>* measured = nullptr, double margin_h2 = 0.0,
                                   bool repair_idle = false) {
   const std::vector<FlowId> candidates = CandidatesOf(p);
@@ -221,9 +221,9 @@ void SampleLocks(Sample& sample, const Topology& sample_topo, const Topology& to
 
 }  // namespace
 
-absl::StatusOr<FlowResult> SmoothByRisk(Mesh& mesh, const Topology& topo, const FlowParams& q,
-                                        const RunControl& control, double h, const NoiseEstimate& noise,
-                                        const JobPolicy& policy, bool repair_idle) {
+absl::StatusOr<FlowResult> SmoothByRisk(Mesh& mesh, Topology& topo, const FlowParams& q, const RunControl& control,
+                                        double h, const NoiseEstimate& noise, const JobPolicy& policy,
+                                        bool repair_idle) {
   const int32_t n = mesh.num_vertices();
   const int32_t size = SampleSize(n, policy);
   // With strengths, the estimate measures the vertices free to move only (a held rim's would count).
@@ -236,7 +236,7 @@ absl::StatusOr<FlowResult> SmoothByRisk(Mesh& mesh, const Topology& topo, const 
   if (size >= n) return Choose(mesh, topo, q, control, h, noise, policy, measured, 0.0, repair_idle);
 
   Sample sample = SamplePatches(mesh, topo, size, policy, q.locked);
-  const Topology sample_topo = BuildTopology(sample.mesh);
+  Topology sample_topo = BuildTopology(sample.mesh);
   FlowParams on_sample = q;
   on_sample.reorder = ReorderMode::kNever;  // `core` is in the sample's order
   // The patches' rims are cuts, not the mesh's boundary: they stay fixed and unmeasured
@@ -270,7 +270,7 @@ namespace {
 // Every candidate (p.flow when set, else kChoiceFlows) on a copy of `mesh`, stopped once its
 // faces turned by `target` (TurnStop); the result whose face normals vary least
 // (NormalVariation) wins, none when every result varies more than the input.
-absl::StatusOr<std::optional<FlowResult>> ChooseByTurn(Mesh& mesh, const Topology& topo, const FlowParams& p,
+absl::StatusOr<std::optional<FlowResult>> ChooseByTurn(Mesh& mesh, Topology& topo, const FlowParams& p,
                                                        const RunControl& control, double h, const NoiseEstimate& noise,
                                                        const JobPolicy& policy, double target) {
   const std::vector<FlowId> candidates = CandidatesOf(p);
@@ -302,7 +302,7 @@ absl::StatusOr<std::optional<FlowResult>> ChooseByTurn(Mesh& mesh, const Topolog
 
 }  // namespace
 
-absl::StatusOr<std::optional<FlowResult>> SmoothByTurn(Mesh& mesh, const Topology& topo, const FlowParams& q,
+absl::StatusOr<std::optional<FlowResult>> SmoothByTurn(Mesh& mesh, Topology& topo, const FlowParams& q,
                                                        const RunControl& control, double h, const NoiseEstimate& noise,
                                                        const JobPolicy& policy, double turnable) {
   const double target = turnable * policy.discrepancy_turn_share * noise.normal_turn;
@@ -310,7 +310,7 @@ absl::StatusOr<std::optional<FlowResult>> SmoothByTurn(Mesh& mesh, const Topolog
   if (n <= policy.max_whole_turn_vertices) return ChooseByTurn(mesh, topo, q, control, h, noise, policy, target);
   const int32_t size = SampleSize(n, policy);
   Sample sample = SamplePatches(mesh, topo, size, policy, q.locked);
-  const Topology sample_topo = BuildTopology(sample.mesh);
+  Topology sample_topo = BuildTopology(sample.mesh);
   FlowParams on_sample = q;
   on_sample.reorder = ReorderMode::kNever;
   SampleLocks(sample, sample_topo, topo, q, on_sample);

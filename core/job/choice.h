@@ -35,14 +35,14 @@ void ReportPhase(const RunControl& control, Phase phase, FlowId flow);
 
 // `q` has its flow set unless the job chooses it; h is the input's mean edge length, `noise` its
 // estimate; `repair_idle` when outliers were moved (JobRule).
-absl::StatusOr<FlowResult> SmoothByRisk(Mesh& mesh, const Topology& topo, const FlowParams& q,
-                                        const RunControl& control, double h, const NoiseEstimate& noise,
-                                        const JobPolicy& policy, bool repair_idle);
+absl::StatusOr<FlowResult> SmoothByRisk(Mesh& mesh, Topology& topo, const FlowParams& q, const RunControl& control,
+                                        double h, const NoiseEstimate& noise, const JobPolicy& policy,
+                                        bool repair_idle);
 
 // As SmoothByRisk, by the turn; none (the mesh as it was) when every result's normals vary more
 // than the input's. `turnable`: the share of the faces a run can turn (with strengths, those
 // with a vertex free to move), which scales the turn the runs stop at.
-absl::StatusOr<std::optional<FlowResult>> SmoothByTurn(Mesh& mesh, const Topology& topo, const FlowParams& q,
+absl::StatusOr<std::optional<FlowResult>> SmoothByTurn(Mesh& mesh, Topology& topo, const FlowParams& q,
                                                        const RunControl& control, double h, const NoiseEstimate& noise,
                                                        const JobPolicy& policy, double turnable = 1.0);
 

@@ -107,8 +107,8 @@ class KeptPositions {
 
 // `centre`: the bound's centres, the job's input unless the caller gave them (null without a
 // bound).
-absl::StatusOr<FlowResult> SmoothAutomatic(Mesh& mesh, const Topology& topo, const FlowParams& p,
-                                           const RunControl& control, double h, const JobPolicy& policy,
+absl::StatusOr<FlowResult> SmoothAutomatic(Mesh& mesh, Topology& topo, const FlowParams& p, const RunControl& control,
+                                           double h, const JobPolicy& policy,
                                            const std::vector<Vec3>* centre = nullptr) {
   FlowParams q = p;
   if (!ChoosesFlow(p)) q.flow = p.flow.value_or(kDefaultFlow);
@@ -149,10 +149,10 @@ absl::StatusOr<FlowResult> SmoothAutomatic(Mesh& mesh, const Topology& topo, con
 
 }  // namespace
 
-// Large meshes whose order scatters neighbours run on a Morton-ordered copy (reorder.h); h is
+// Large meshes whose order scatters neighbours run renumbered into Morton order (reorder.h); h is
 // taken in the caller's order, so it is the same value whatever the order the run uses.
-absl::StatusOr<FlowResult> SmoothWithPolicy(Mesh& mesh, const Topology& topo, const FlowParams& p,
-                                            const RunControl& control, const JobPolicy& policy) {
+absl::StatusOr<FlowResult> SmoothWithPolicy(Mesh& mesh, Topology& topo, const FlowParams& p, const RunControl& control,
+                                            const JobPolicy& policy) {
   const int32_t n = mesh.num_vertices();
   if (absl::Status s = ValidateFlowParams(p, n); !s.ok()) return s;
   if (topo.num_vertices() != n) {
@@ -192,11 +192,11 @@ absl::StatusOr<FlowResult> SmoothWithPolicy(Mesh& mesh, const Topology& topo, co
 }  // namespace job
 
 absl::StatusOr<FlowResult> Smooth(Mesh& mesh, const FlowParams& p, const RunControl& control) {
-  const Topology topo = BuildTopology(mesh);
+  Topology topo = BuildTopology(mesh);
   return Smooth(mesh, topo, p, control);
 }
 
-absl::StatusOr<FlowResult> Smooth(Mesh& mesh, const Topology& topo, const FlowParams& p, const RunControl& control) {
+absl::StatusOr<FlowResult> Smooth(Mesh& mesh, Topology& topo, const FlowParams& p, const RunControl& control) {
   return job::SmoothWithPolicy(mesh, topo, p, control, job::kPolicy);
 }
 

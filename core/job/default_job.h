@@ -8,7 +8,7 @@
 
 namespace meshsmooth::job {
 
-absl::StatusOr<FlowResult> SmoothWithPolicy(Mesh& mesh, const Topology& topo, const FlowParams& p,
-                                            const RunControl& control, const JobPolicy& policy);
+absl::StatusOr<FlowResult> SmoothWithPolicy(Mesh& mesh, Topology& topo, const FlowParams& p, const RunControl& control,
+                                            const JobPolicy& policy);
 
 }  // namespace meshsmooth::job

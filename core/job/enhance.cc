@@ -103,7 +103,7 @@ absl::Status ValidateEnhanceParams(const Mesh& mesh, const EnhanceParams& p) {
 
 // The default job on a copy of `mesh`: its result when it smoothed (the input is noisy), else
 // nothing.
-absl::StatusOr<std::optional<std::pair<Mesh, FlowResult>>> SmoothIfNoisy(const Mesh& mesh, const Topology& topo,
+absl::StatusOr<std::optional<std::pair<Mesh, FlowResult>>> SmoothIfNoisy(const Mesh& mesh, Topology& topo,
                                                                          const EnhanceParams& p,
                                                                          const RunControl& control) {
   FlowParams job;
@@ -214,8 +214,7 @@ void HoldBackTurnedFaces(const Mesh& mesh, const Topology& topo, const Vec3* inp
 
 }  // namespace
 
-absl::StatusOr<EnhanceResult> Enhance(Mesh& mesh, const Topology& topo, const EnhanceParams& p,
-                                      const RunControl& control) {
+absl::StatusOr<EnhanceResult> Enhance(Mesh& mesh, Topology& topo, const EnhanceParams& p, const RunControl& control) {
   if (absl::Status s = ValidateEnhanceParams(mesh, p); !s.ok()) return s;
   if (topo.num_vertices() != mesh.num_vertices()) {
     return absl::InvalidArgumentError("the topology was built for another mesh");

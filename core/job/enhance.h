@@ -85,7 +85,7 @@ struct EnhanceResult {
 // out of range, a bad strength or lock mask, non-finite coordinates; FailedPrecondition when the
 // input is noisy (the default job would smooth it: its estimated noise is named) and
 // smooth_first is not set, or when the solve fails. Reports Phase::kEnhancing to
-// control.on_progress before the solve.
+// control.on_progress before the solve. `topo` is lent as Smooth()'s is (flow.h).
 //
 // No face turns over: sharpening grows the finest detail most, and on needles and thin triangles
 // it grows a vertex across its face's far edge. The result is F + t_v (E - F) per vertex, F the
@@ -94,8 +94,7 @@ struct EnhanceResult {
 // by more than 90 degrees from the input's (NormalFlipped, core/measure/metrics.h: the summary's
 // flipped normals) and had not at F, and after turn_halvings rounds sets it to 0 (there the face
 // is F's). The same bits for any thread count.
-
-absl::StatusOr<EnhanceResult> Enhance(Mesh& mesh, const Topology& topo, const EnhanceParams& p,
+absl::StatusOr<EnhanceResult> Enhance(Mesh& mesh, Topology& topo, const EnhanceParams& p,
                                       const RunControl& control = {});
 
 }  // namespace meshsmooth

@@ -2,8 +2,8 @@
 """A local run (no --server) is bounded by the machine's memory, not by a network service's
 limits; a job's memory is estimated before it runs and a job above the bound is refused naming
 both figures, by the CLI's local run (--max-memory) and by meshsmoothd's admission
-(--max-job-bytes) at the head of the upload. A quantized upload (--quantize-upload) fits a service's
-upload limit that the lossless one exceeds, and states its bound.
+(--max-job-bytes) at the head of the upload. A quantized upload (--quantize-upload, smooth's and
+submit's) fits a service's upload limit that the lossless one exceeds, and states its bound.
 
 Input: a noisy height field of 141 x 141 = 19,881 vertices written here as binary PLY (its
 lossless Draco upload is ~0.7 MB).
@@ -135,7 +135,8 @@ def local_limits_checks(a, check, tmp):
         assert ply_counts(out) == (vertices, faces)
     check("the same job runs with --max-memory at its estimate", the_local_run_names_available_memory)
 
-    with Server(a.server, "--quiet", "--max-upload-bytes", "300000") as limited:
+    with Server(a.server, "--quiet", "--max-upload-bytes", "300000", "--job-store",
+                os.path.join(tmp, "store")) as limited:
         def a_quantized_upload_fits_where_the_lossless_one_does_not():
             lossless = run([a.cli, "smooth", mesh, "-o", os.path.join(tmp, "lossless.ply"), "--server",
                             limited.address, "--retries", "0", "-q"])
@@ -157,6 +158,29 @@ def local_limits_checks(a, check, tmp):
               "the summary states the bound (at most 0.001 mean edges) and the bits",
               a_quantized_upload_fits_where_the_lossless_one_does_not)
 
+        def a_quantized_submit_fits_and_states_its_bound():
+            lossless = run([a.cli, "submit", mesh, "--server", limited.address, "--retries", "0"])
+            assert lossless.returncode == 1 and "--max-upload-bytes" in lossless.stderr, lossless.stderr
+            out = os.path.join(tmp, "submitted.drc")
+            r = run([a.cli, "submit", mesh, "--server", limited.address, "--retries", "0",
+                     "--quantize-upload=0.002", "--wait", "-o", out])
+            assert r.returncode == 0, (r.returncode, r.stderr)
+            m = re.search(r"^upload quantized to (\d+) bits: each coordinate within ([0-9.e+-]+) of the input "
+                          r"\(0\.002 of the mean edge ([0-9.e+-]+)\)$", r.stderr, re.M)
+            assert m is not None, r.stderr
+            bits, bound, mean_edge = int(m.group(1)), float(m.group(2)), float(m.group(3))
+            assert 1.13 < mean_edge < 1.3, mean_edge
+            assert 0 < bound <= 0.002 * mean_edge and 1 <= bits <= 24, (bits, bound, mean_edge)
+            # stdout is the job's id alone (then the watch's lines), as without the flag.
+            job_id = r.stdout.splitlines()[0]
+            assert re.fullmatch(r"[0-9a-f-]+", job_id), r.stdout
+            assert os.path.getsize(out) > 0
+            info = run([a.cli, "info", out])
+            assert info.returncode == 0 and re.search(rf"^vertices: {vertices}$", info.stdout, re.M), info.stdout
+        check("submit --quantize-upload=0.002 sends the job under a 300 kB upload limit that refuses the lossless "
+              "one, states the bound (at most 0.002 mean edges) on stderr, and the job succeeds",
+              a_quantized_submit_fits_and_states_its_bound)
+
         def a_bad_fraction_is_refused():
             for bad in ("0", "-0.5", "nan", "0.2"):
                 r = run([a.cli, "smooth", mesh, "-o", os.path.join(tmp, "bad.ply"), "--server", limited.address,
@@ -164,10 +188,13 @@ def local_limits_checks(a, check, tmp):
                 assert r.returncode == 2, (bad, r.returncode, r.stderr)
                 assert ("--quantize-upload takes the bound as a fraction of the mean edge length, above 0 and at "
                         f"most 0.1 (default 0.001 when given alone); got '{bad}'") in r.stderr, r.stderr
+            r = run([a.cli, "submit", mesh, "--server", limited.address, "--quantize-upload=0.2"])
+            assert r.returncode == 2 and "--quantize-upload takes the bound as a fraction" in r.stderr, r.stderr
             r = run([a.cli, "smooth", mesh, "-o", os.path.join(tmp, "bad.ply"), "--quantize-upload"])
             assert r.returncode == 2 and "--quantize-upload quantizes what is sent to --server" in r.stderr, r.stderr
             assert not os.path.exists(os.path.join(tmp, "bad.ply"))
-        check("--quantize-upload refuses 0, a negative value, NaN and 0.2, and a run without --server (exit 2)",
+        check("--quantize-upload refuses 0, a negative value, NaN and 0.2 (smooth and submit), and a run without "
+              "--server (exit 2)",
               a_bad_fraction_is_refused)
 
     with Server(a.server, "--quiet", "--max-job-bytes", "2000000", "--metrics-listen", "127.0.0.1:0") as bounded:

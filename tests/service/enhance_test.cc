@@ -59,7 +59,8 @@ TEST(EnhanceServiceTest, GainMultipliesTheBumpThroughARealServer) {
     EnhanceParams e;
     e.gain = gain;
     e.detail_scale = 4.0;
-    ASSERT_TRUE(Enhance(expected, BuildTopology(expected), e).ok());
+    Topology topo = BuildTopology(expected);
+    ASSERT_TRUE(Enhance(expected, topo, e).ok());
     for (size_t v = 0; v < start.positions.size(); ++v) {
       ASSERT_EQ(got->positions[v], RoundToFloat(expected.positions[v])) << "vertex " << v;
     }
@@ -95,7 +96,8 @@ TEST(EnhanceServiceTest, TheSummaryCountsTheVerticesHeldBack) {
   EnhanceParams e;
   e.gain = 3.0;
   e.detail_scale = 0.5;
-  const absl::StatusOr<EnhanceResult> r = Enhance(expected, BuildTopology(expected), e);
+  Topology topo = BuildTopology(expected);
+  const absl::StatusOr<EnhanceResult> r = Enhance(expected, topo, e);
   ASSERT_TRUE(r.ok()) << r.status();
   EXPECT_GE(r->held_back, 256);  // a vertex of each needle at least
   EXPECT_EQ(out->summary.parameters().enhance_held_back(), r->held_back);

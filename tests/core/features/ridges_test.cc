@@ -70,7 +70,7 @@ void Print(const char* what, const Score& s) {
 
 TEST(RidgesTest, CleanWaveHasRidgesOnTheCrestsAndRavinesInTheTroughs) {
   const Mesh m = Wave();
-  const Topology topo = BuildTopology(m);
+  Topology topo = BuildTopology(m);
   // Threshold 0.1 A. Where the wave is concave its kmax is 0 along y on the smooth surface; the
   // estimate there is near 0 and exactly constant along y, its own curvature line, so the strict
   // comparison is decided by rounding, and the threshold guards against that (Taubin's closed
@@ -111,7 +111,7 @@ TEST(RidgesTest, CleanWaveHasRidgesOnTheCrestsAndRavinesInTheTroughs) {
 // so its noise stays in the nearby rings.
 TEST(RidgesTest, MedianSmoothingRecoversTheCrestsOfANoisyWave) {
   const Mesh clean = Wave();
-  const Topology topo = BuildTopology(clean);
+  Topology topo = BuildTopology(clean);
   Mesh noisy = clean;
   AddUniformNoise(noisy, 0.5, 1);
   Mesh smoothed = noisy;
@@ -166,7 +166,7 @@ TEST(RidgesTest, BrokenVerticesAreNotLabelledAndNothingIsNaN) {
   m.triangles.push_back({apex, apex + 1, apex + 2});  // two triangles sharing only the apex
   m.triangles.push_back({apex, apex + 3, apex + 4});
   m.positions.push_back({9, 9, 9});  // isolated
-  const Topology topo = BuildTopology(m);
+  Topology topo = BuildTopology(m);
   ASSERT_EQ(topo.kind[apex], VertexKind::kNonManifold);
 
   const Features f = DetectFeatures(m, topo);

@@ -67,7 +67,7 @@ int64_t RecountAtBound(const Mesh& in, const Mesh& out, double bound) {
 TEST(DisplacementBoundTest, EveryFlowAndTheDefaultJobKeepTheBound) {
   Mesh noisy = Icosphere(4);
   AddRandomDirectionNoise(noisy, 0.3, 7);
-  const Topology topo = BuildTopology(noisy);
+  Topology topo = BuildTopology(noisy);
   const double h = MeanEdgeLength(noisy, topo);
   const double bound = 0.15 * h;
   const FaceFolds folds(noisy, topo);
@@ -97,7 +97,7 @@ TEST(DisplacementBoundTest, EveryFlowAndTheDefaultJobKeepTheBound) {
 // The bound in mean edge lengths is the same run as the bound in mesh units it stands for.
 TEST(DisplacementBoundTest, BoundInMeanEdgeLengthsIsTheSameRun) {
   const Mesh noisy = NoisySphere(4);
-  const Topology topo = BuildTopology(noisy);
+  Topology topo = BuildTopology(noisy);
   const double h = MeanEdgeLength(noisy, topo);
   for (auto [name, p] : Jobs(5)) {
     SCOPED_TRACE(name);
@@ -117,7 +117,7 @@ TEST(DisplacementBoundTest, BoundInMeanEdgeLengthsIsTheSameRun) {
 // the bits of the run without it.
 TEST(DisplacementBoundTest, BoundNoVertexReachesChangesNoBit) {
   const Mesh noisy = NoisySphere(4);
-  const Topology topo = BuildTopology(noisy);
+  Topology topo = BuildTopology(noisy);
   for (const std::string& flow : FlowNames()) {
     SCOPED_TRACE(flow);
     FlowParams p = Params(flow, 5);
@@ -135,7 +135,7 @@ TEST(DisplacementBoundTest, DefaultJobMeasuresFromTheInputAfterMovingOutliers) {
   Mesh noisy = Icosphere(4);
   AddNormalNoise(noisy, 0.1, 3);
   AddImpulsiveNoise(noisy, 0.1, 3.0, 4);
-  const Topology topo = BuildTopology(noisy);
+  Topology topo = BuildTopology(noisy);
   const double h = MeanEdgeLength(noisy, topo);
   FlowParams p;
   p.max_displacement = 0.5 * h;
@@ -153,7 +153,7 @@ TEST(DisplacementBoundTest, DefaultJobMeasuresFromTheInputAfterMovingOutliers) {
 // above the parallel threshold, whose default job chooses on patches) and in the Morton order.
 TEST(DisplacementBoundTest, BoundedRunsAreTheSameOnAnyThreadCountAndOrder) {
   const Mesh noisy = NoisySphere(6);  // 40,962 vertices: two threads
-  const Topology topo = BuildTopology(noisy);
+  Topology topo = BuildTopology(noisy);
   const double h = MeanEdgeLength(noisy, topo);
   for (auto [name, p] : Jobs(3)) {
     SCOPED_TRACE(name);
@@ -168,7 +168,7 @@ TEST(DisplacementBoundTest, BoundedRunsAreTheSameOnAnyThreadCountAndOrder) {
   }
   Mesh large = Icosphere(7);  // 163,842 vertices: reorderable
   AddUniformNoise(large, 0.3, 2);
-  const Topology large_topo = BuildTopology(large);
+  Topology large_topo = BuildTopology(large);
   FlowParams p = Params("taubin", 3);
   p.max_displacement_h = 0.1;
   p.reorder = ReorderMode::kNever;

@@ -58,8 +58,7 @@ bool SameBytes(const Mesh& a, const Mesh& b) {
 }
 
 // `mesh` smoothed with `p` on `threads` threads, and Smooth()'s result.
-std::pair<Mesh, absl::StatusOr<FlowResult>> SmoothedOn(const Mesh& mesh, const Topology& topo, FlowParams p,
-                                                       int threads) {
+std::pair<Mesh, absl::StatusOr<FlowResult>> SmoothedOn(const Mesh& mesh, Topology& topo, FlowParams p, int threads) {
   p.threads = threads;
   Mesh out = mesh;
   absl::StatusOr<FlowResult> r = Smooth(out, topo, p);
@@ -68,7 +67,7 @@ std::pair<Mesh, absl::StatusOr<FlowResult>> SmoothedOn(const Mesh& mesh, const T
 
 TEST(FlowInvariantsTest, EveryFlowOnEveryMesh) {
   for (const Case& c : Meshes()) {
-    const Topology topo = BuildTopology(c.mesh);
+    Topology topo = BuildTopology(c.mesh);
     const int32_t n = c.mesh.num_vertices();
     std::vector<uint8_t> locked(n, 0);
     for (int32_t v = 0; v < n; v += 17) locked[v] = 1;
@@ -108,7 +107,7 @@ TEST(FlowInvariantsTest, ProbeBesideTheRunChangesNoPosition) {
   AddNormalNoise(needles, 0.3, 3);
   cases.push_back({"sphere with needles", needles});
   for (const Case& c : cases) {
-    const Topology topo = BuildTopology(c.mesh);
+    Topology topo = BuildTopology(c.mesh);
     for (const std::string& flow : {std::string(), std::string("bilaplacian"), std::string("bilateral_normal")}) {
       SCOPED_TRACE(c.name + " / " + (flow.empty() ? "default job" : flow));
       FlowParams p;
@@ -126,7 +125,7 @@ TEST(FlowInvariantsTest, ProbeBesideTheRunChangesNoPosition) {
   // Above kParallelThreshold a run with a probe (a default job's sample of 20,000 vertices)
   // goes side by side on exactly two threads, and keeps every thread otherwise.
   const Mesh large = NoisySphere(6);  // 40,962 vertices
-  const Topology topo = BuildTopology(large);
+  Topology topo = BuildTopology(large);
   const double h = MeanEdgeLength(large, topo);
   std::vector<Mesh> results;
   std::vector<int> counts;
@@ -149,11 +148,11 @@ TEST(FlowInvariantsTest, ProbeBesideTheRunChangesNoPosition) {
   EXPECT_TRUE(SameBytes(results[0], results[2])) << "1 and 3 threads differ";
 }
 
-// Large meshes run on a Morton-reordered copy: the positions must be exactly those of the
+// Large meshes run renumbered into Morton order: the positions must be exactly those of the
 // caller's order, for every flow and eq. (14).
 TEST(FlowInvariantsTest, InternalReorderingChangesNoPosition) {
   const Mesh noisy = NoisySphere(7);  // 163,842 vertices: above the reordering threshold
-  const Topology topo = BuildTopology(noisy);
+  Topology topo = BuildTopology(noisy);
   std::vector<FlowParams> list;
   for (const std::string& flow : FlowNames()) list.push_back(Params(flow, 3));
   FlowParams ring2 = Params("median", 12);
@@ -170,12 +169,53 @@ TEST(FlowInvariantsTest, InternalReorderingChangesNoPosition) {
   }
 }
 
+// A reordered run renumbers the caller's faces and topology in place (no copy beside them) and
+// gives them back exactly as it was lent them, whether the run ends or is cancelled midway; a
+// face with a corner out of range (not in the topology) comes back as it was.
+TEST(FlowInvariantsTest, ReorderingGivesTheTopologyAndFacesBack) {
+  Mesh noisy = NoisySphere(7);
+  const auto n = static_cast<int32_t>(noisy.positions.size());
+  noisy.triangles.push_back({0, 1, n + 5});
+  const Topology built = BuildTopology(noisy);
+  ASSERT_EQ(built.faces.size() + 1, noisy.triangles.size());
+  for (const bool cancelled : {false, true}) {
+    Topology topo = built;
+    Mesh a = noisy, b = noisy;
+    FlowParams p = Params("laplacian", 6);
+    std::atomic<bool> cancel{false};
+    RunControl control;
+    control.stop = StopToken(&cancel, StopToken::Clock::time_point::max());
+    control.on_progress = [&](const Progress& pr) {
+      if (cancelled && pr.iteration == 3) cancel = true;
+    };
+    p.reorder = ReorderMode::kAlways;
+    const absl::StatusOr<FlowResult> r = Smooth(a, topo, p, control);
+    EXPECT_EQ(r.ok(), !cancelled) << r.status();
+    EXPECT_EQ(a.triangles, noisy.triangles) << cancelled;
+    EXPECT_EQ(topo.ring_offsets, built.ring_offsets) << cancelled;
+    EXPECT_EQ(topo.ring, built.ring) << cancelled;
+    EXPECT_EQ(topo.kind, built.kind) << cancelled;
+    EXPECT_EQ(topo.faces, built.faces) << cancelled;
+    if (cancelled) {
+      // The last completed iteration (the third), as the caller's order has it.
+      cancel = false;
+      control.on_progress = nullptr;
+      p.iterations = 3;
+      p.reorder = ReorderMode::kNever;
+      ASSERT_TRUE(Smooth(b, topo, p, control).ok());
+      EXPECT_TRUE(SameBytes(a, b));
+    } else {
+      EXPECT_FALSE(SameBytes(a, noisy));
+    }
+  }
+}
+
 // Reordering is chosen for scattered orders and runs long enough to repay it: the icosphere's
 // generation order leaves about half the neighbours far apart in memory, its Morton order about
 // 2%; small meshes stay in their order.
 TEST(FlowInvariantsTest, MortonOrderPaysOffForScatteredOrdersOnLongRuns) {
   const Mesh noisy = NoisySphere(7);
-  const Topology topo = BuildTopology(noisy);
+  Topology topo = BuildTopology(noisy);
   EXPECT_TRUE(MortonOrderPaysOff(topo, 20));
   EXPECT_TRUE(MortonOrderPaysOff(topo, 5));
   EXPECT_FALSE(MortonOrderPaysOff(topo, 4));
@@ -210,7 +250,7 @@ TEST(FlowInvariantsTest, MortonOrderIsOnePermutationForAnyThreads) {
   double sum = 0.0;
   for (size_t i = 1; i < one.size(); ++i) sum += Norm(noisy.positions[one[i]] - noisy.positions[one[i - 1]]);
   const double mean_step = sum / static_cast<double>(one.size() - 1);
-  const Topology topo = BuildTopology(noisy);
+  Topology topo = BuildTopology(noisy);
   EXPECT_LT(mean_step, 2.0 * MeanEdgeLength(noisy, topo));
 }
 
@@ -252,7 +292,7 @@ TEST(FlowInvariantsTest, InstructionSetChangesNoPosition) {
   AddUniformNoise(split, 0.3, 3);
   cases.push_back({"noisy icosphere(5), every 7th face split", split});
   for (const Case& c : cases) {
-    const Topology topo = BuildTopology(c.mesh);
+    Topology topo = BuildTopology(c.mesh);
     for (const char* flow : {"mcf", "mcf_tangential", "median", "bilateral_normal", "guided_normal"}) {
       SCOPED_TRACE(c.name + " / " + flow);
       FlowParams p = Params(flow, FlowOf(*ParseFlowName(flow)).kind == FlowKind::kNormalFilter ? 2 : 5);
@@ -278,7 +318,7 @@ TEST(FlowInvariantsTest, InstructionSetChangesNoPosition) {
 // per-vertex step. Positions and statistics must be the same bits.
 // Smooths `mesh` in lane batches and vertex by vertex (KernelOptions::lane_batches off): the same
 // bytes and statistics. Returns the batched run's result.
-FlowResult ExpectLanesMatchVertices(const Mesh& mesh, const Topology& topo, const FlowParams& p) {
+FlowResult ExpectLanesMatchVertices(const Mesh& mesh, Topology& topo, const FlowParams& p) {
   Mesh lanes = mesh, vertex = mesh;
   const absl::StatusOr<FlowResult> a = Smooth(lanes, topo, p);
   flows::KernelOptions vertex_by_vertex;
@@ -306,7 +346,7 @@ TEST(FlowInvariantsTest, LaneStepMatchesVertexStep) {
   std::vector<uint8_t> locked(plane.num_vertices(), 0);
   for (int32_t v = 0; v < plane.num_vertices(); ++v) locked[v] = v % 13 == 0 || v < 200;
   for (const Mesh* mesh : {&split, &plane}) {
-    const Topology topo = BuildTopology(*mesh);
+    Topology topo = BuildTopology(*mesh);
     for (const char* flow : {"mcf", "mcf_tangential", "median"}) {
       for (const AdaptiveMode adaptive : {AdaptiveMode::kNone, AdaptiveMode::kConstant, AdaptiveMode::kRing1}) {
         SCOPED_TRACE(::testing::Message() << (mesh == &plane ? "plane / " : "split sphere / ") << flow << " / adaptive "
@@ -324,7 +364,7 @@ TEST(FlowInvariantsTest, LaneStepMatchesVertexStep) {
   Mesh spiky = NoisySphere(5, 0.05);
   const double h = MeanEdgeLength(spiky, BuildTopology(spiky));
   for (int32_t v = 0; v < spiky.num_vertices(); v += 97) spiky.positions[v] *= 1.0 + 4.0 * h;
-  const Topology topo = BuildTopology(spiky);
+  Topology topo = BuildTopology(spiky);
   for (const char* flow : {"mcf", "median"}) {
     SCOPED_TRACE(flow);
     FlowParams p = Params(flow, 1);
@@ -336,7 +376,7 @@ TEST(FlowInvariantsTest, LaneStepMatchesVertexStep) {
 
 TEST(FlowInvariantsTest, LaneBatchesHoldEachBlocksFreeVerticesByValence) {
   const Mesh mesh = SplitEverySeventhFace(Icosphere(5));  // valences 3 .. 9, three blocks
-  const Topology topo = BuildTopology(mesh);
+  Topology topo = BuildTopology(mesh);
   const int32_t n = mesh.num_vertices();
   const std::vector<int32_t>& offsets = topo.ring_offsets;
   auto valence = [&](int32_t v) { return offsets[v + 1] - offsets[v]; };
@@ -388,7 +428,7 @@ TEST(FlowInvariantsTest, BoundaryCurveModeSmoothsTheLoopInItsPlane) {
   const Mesh plane = TwoRatePlane(24, 16);
   Mesh m = plane;
   // Wiggle the boundary inside the plane.
-  const Topology topo = BuildTopology(m);
+  Topology topo = BuildTopology(m);
   for (int32_t v = 0; v < m.num_vertices(); ++v) {
     if (topo.kind[v] == VertexKind::kBoundary)
       m.positions[v] += Vec3{0.01 * ((v * 7) % 3 - 1), 0.01 * ((v * 5) % 3 - 1), 0.0};

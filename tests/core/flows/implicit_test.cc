@@ -67,7 +67,7 @@ TEST(ImplicitTest, BackwardEulerShrinksTheIcosahedronByItsEigenvalue) {
       for (double step : {0.1, 1.0, 1000.0}) {
         SCOPED_TRACE(::testing::Message() << "solver " << static_cast<int>(solver) << " r " << r << " step " << step);
         Mesh m = Scaled(Icosphere(0), r);
-        const Topology topo = BuildTopology(m);
+        Topology topo = BuildTopology(m);
         const double h = MeanEdgeLength(m, topo);
         const double hn = Norm(MeanCurvatureNormals(m, topo)[0]);
         const double lambda = step * h * h;
@@ -86,7 +86,7 @@ TEST(ImplicitTest, BackwardEulerShrinksTheIcosahedronByItsEigenvalue) {
 // Crank-Nicolson's error at t = 2 falls 4 times when the step halves; backward Euler's 2 times.
 TEST(ImplicitTest, CrankNicolsonIsSecondOrderBackwardEulerFirst) {
   const Mesh start = HarmonicSphere(2, 1.0, 3, 0.1);
-  const Topology topo = BuildTopology(start);
+  Topology topo = BuildTopology(start);
   const int32_t n = start.num_vertices();
   Eigen::MatrixXd s = Eigen::MatrixXd::Zero(n, n);
   Eigen::VectorXd sqrt_d(n);
@@ -130,7 +130,7 @@ TEST(ImplicitTest, CrankNicolsonIsSecondOrderBackwardEulerFirst) {
 // every flow with an implicit form, with strengths between 0 and 1.
 TEST(ImplicitTest, DirectAndConjugateGradientsAgree) {
   const Mesh noisy = NoisySphere(4);
-  const Topology topo = BuildTopology(noisy);
+  Topology topo = BuildTopology(noisy);
   const double h = MeanEdgeLength(noisy, topo);
   std::vector<float> strength(noisy.num_vertices());
   for (int32_t v = 0; v < noisy.num_vertices(); ++v) strength[v] = 0.25f + 0.75f * static_cast<float>(v % 4) / 3.0f;
@@ -154,7 +154,7 @@ TEST(ImplicitTest, DirectAndConjugateGradientsAgree) {
 // A small implicit step is the explicit step to first order: the two differ by O(step^2).
 TEST(ImplicitTest, SmallStepsAgreeWithTheExplicitFlow) {
   const Mesh noisy = NoisySphere(3);
-  const Topology topo = BuildTopology(noisy);
+  Topology topo = BuildTopology(noisy);
   for (const std::string flow : {"laplacian", "bilaplacian", "mcf"}) {
     std::vector<double> gap;
     for (double step : {0.02, 0.01}) {
@@ -171,12 +171,12 @@ TEST(ImplicitTest, SmallStepsAgreeWithTheExplicitFlow) {
 // Strength 0 keeps every bit, as does a fixed boundary; the rest moves.
 TEST(ImplicitTest, StrengthZeroAndTheBoundaryDoNotMove) {
   const Mesh noisy = NoisySphere(4);
-  const Topology topo = BuildTopology(noisy);
+  Topology topo = BuildTopology(noisy);
   std::vector<float> strength(noisy.num_vertices(), 1.0f);
   for (int32_t v = 0; v < noisy.num_vertices(); ++v) strength[v] = noisy.positions[v].z > 0.3 ? 0.0f : 1.0f;
   Mesh sheet = CosineHeightField(0.1, 2, 8, 32);
   AddUniformNoise(sheet, 0.3, 7);
-  const Topology sheet_topo = BuildTopology(sheet);
+  Topology sheet_topo = BuildTopology(sheet);
   for (const std::string flow : {"laplacian", "bilaplacian", "mcf"}) {
     for (ImplicitSolver solver : {ImplicitSolver::kDirect, ImplicitSolver::kCg}) {
       SCOPED_TRACE(::testing::Message() << flow << " solver " << static_cast<int>(solver));
@@ -207,7 +207,7 @@ TEST(ImplicitTest, StrengthZeroAndTheBoundaryDoNotMove) {
 // with one thread and with four.
 TEST(ImplicitTest, SameBitsForAnyThreadCount) {
   const Mesh noisy = NoisySphere(6);
-  const Topology topo = BuildTopology(noisy);
+  Topology topo = BuildTopology(noisy);
   for (const std::string flow : {"laplacian", "bilaplacian", "mcf"}) {
     for (ImplicitSolver solver : {ImplicitSolver::kDirect, ImplicitSolver::kCg}) {
       SCOPED_TRACE(::testing::Message() << flow << " solver " << static_cast<int>(solver));
@@ -225,7 +225,7 @@ TEST(ImplicitTest, SameBitsForAnyThreadCount) {
 // Steps hundreds of times the explicit bound: backward Euler stays finite and smooths.
 TEST(ImplicitTest, LargeStepsAreStable) {
   const Mesh noisy = NoisySphere(4);
-  const Topology topo = BuildTopology(noisy);
+  Topology topo = BuildTopology(noisy);
   for (const auto& [flow, step] :
        {std::pair{"laplacian", 1000.0}, std::pair{"bilaplacian", 500.0}, std::pair{"mcf", 100.0}}) {
     SCOPED_TRACE(flow);
@@ -244,7 +244,7 @@ TEST(ImplicitTest, LargeStepsAreStable) {
 // faces in their own plane, and the same lambda (step h^2) shrinks both alike.
 TEST(ImplicitTest, NeedleTrianglesKeepTheSystemPositiveDefinite) {
   const Mesh plain = Icosphere(3), needles = SphereWithNeedles(1e-5);
-  const Topology plain_topo = BuildTopology(plain), topo = BuildTopology(needles);
+  Topology plain_topo = BuildTopology(plain), topo = BuildTopology(needles);
   const double h_plain = MeanEdgeLength(plain, plain_topo), h = MeanEdgeLength(needles, topo);
   for (double step : {1.8, 100.0}) {
     Mesh reference = plain;

@@ -10,7 +10,7 @@ using namespace meshsmooth::testing;
 // in both the convex (cos > eps) and the saddle (cos < -eps) case, or not at all.
 TEST(MedianTest, NormalSpeedEqualsMeanCurvature) {
   Mesh m = NoisySphere(3);
-  const Topology topo = BuildTopology(m);
+  Topology topo = BuildTopology(m);
   const std::vector<Vec3> hn = MeanCurvatureNormals(m, topo);
   const Mesh before = m;
   absl::StatusOr<FlowResult> r = Smooth(m, topo, Params("median", 1, 0.01));

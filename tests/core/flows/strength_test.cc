@@ -42,7 +42,7 @@ std::vector<std::pair<std::string, FlowParams>> Jobs() {
 
 TEST(StrengthTest, ZeroKeepsEveryBitInEveryFlowAndTheDefaultJob) {
   const Mesh noisy = NoisySphere(4);
-  const Topology topo = BuildTopology(noisy);
+  Topology topo = BuildTopology(noisy);
   const std::vector<float> strength = CapHeld(noisy);
   for (auto [name, p] : Jobs()) {
     SCOPED_TRACE(name);
@@ -63,7 +63,7 @@ TEST(StrengthTest, ZeroKeepsEveryBitInEveryFlowAndTheDefaultJob) {
 
 TEST(StrengthTest, AllOnesGiveTheBitsOfNoStrength) {
   const Mesh noisy = NoisySphere(4);
-  const Topology topo = BuildTopology(noisy);
+  Topology topo = BuildTopology(noisy);
   for (auto [name, p] : Jobs()) {
     SCOPED_TRACE(name);
     Mesh plain = noisy, ones = noisy;
@@ -78,7 +78,7 @@ TEST(StrengthTest, AllOnesGiveTheBitsOfNoStrength) {
 // half as far as with strength 1, in the same direction.
 TEST(StrengthTest, HalfStrengthMovesHalfAsFarInOneUmbrellaStep) {
   const Mesh noisy = NoisySphere(4);
-  const Topology topo = BuildTopology(noisy);
+  Topology topo = BuildTopology(noisy);
   const double lambda = 0.5;
   FlowParams p = Params("laplacian", 1, lambda);
   Mesh full = noisy, half = noisy;
@@ -107,7 +107,7 @@ TEST(StrengthTest, HalfStrengthMovesHalfAsFarInOneUmbrellaStep) {
 TEST(StrengthTest, ReorderedRunKeepsTheStrengths) {
   Mesh noisy = Icosphere(7);  // 163,842 vertices: reorderable
   AddUniformNoise(noisy, 0.3, 2);
-  const Topology topo = BuildTopology(noisy);
+  Topology topo = BuildTopology(noisy);
   FlowParams p = Params("laplacian", 2);
   p.strength = CapHeld(noisy);
   for (size_t v = 1; v < p.strength.size(); v += 3) p.strength[v] *= 0.25f;
@@ -124,7 +124,7 @@ TEST(StrengthTest, ReorderedRunKeepsTheStrengths) {
 // the default job's included, which chooses on patches of a mesh this large.
 TEST(StrengthTest, ScaledMovesAreTheSameOnAnyThreadCount) {
   const Mesh noisy = NoisySphere(6);  // 40,962 vertices: two threads
-  const Topology topo = BuildTopology(noisy);
+  Topology topo = BuildTopology(noisy);
   std::vector<float> strength = CapHeld(noisy);
   for (size_t v = 0; v < strength.size(); v += 3) strength[v] *= 0.4f;
   for (auto [name, p] : Jobs()) {
@@ -174,7 +174,7 @@ TEST(StrengthTest, DefaultJobReturnsNoMoreFoldedFaces) {
   for (uint64_t seed : {1, 2, 3}) {
     Mesh needles = SphereWithNeedles();
     AddNormalNoise(needles, 0.3, seed);
-    const Topology topo = BuildTopology(needles);
+    Topology topo = BuildTopology(needles);
     FlowParams p;
     p.strength = CapHeld(needles);
     for (size_t v = 0; v < p.strength.size(); v += 5) p.strength[v] = std::min(p.strength[v], 0.5f);
@@ -212,7 +212,7 @@ TEST(StrengthTest, DefaultJobReadsTheNoiseWhereVerticesMove) {
 // leaves the moves far from any fold.
 TEST(StrengthTest, KeepNoMoreFoldsPutsBackOnlyAroundTheFolds) {
   const Mesh sphere = Icosphere(3);
-  const Topology topo = BuildTopology(sphere);
+  Topology topo = BuildTopology(sphere);
   const FaceFolds folds(sphere, topo);
   ASSERT_EQ(folds.Count(sphere.positions.data()), 0);
   std::vector<Vec3> result = sphere.positions;

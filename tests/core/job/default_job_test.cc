@@ -33,7 +33,7 @@ namespace meshsmooth {
 namespace {
 
 double EstimateOf(const Mesh& clean, const Mesh& noisy, int threads = 0) {
-  const Topology topo = BuildTopology(clean);
+  Topology topo = BuildTopology(clean);
   return EstimateNoise(noisy, topo, MeanEdgeLength(clean, topo), threads).sigma_h;
 }
 
@@ -66,7 +66,7 @@ TEST(NoiseEstimateTest, SameForAnyThreadCount) {
     const Mesh clean = Icosphere(level);
     Mesh noisy = clean;
     AddNormalNoise(noisy, 0.2, 3);
-    const Topology topo = BuildTopology(noisy);
+    Topology topo = BuildTopology(noisy);
     const double h = MeanEdgeLength(clean, topo);
     const NoiseEstimate one = EstimateNoise(noisy, topo, h, 1), two = EstimateNoise(noisy, topo, h, 2);
     EXPECT_EQ(one.sigma_h, two.sigma_h);
@@ -83,7 +83,7 @@ TEST(NoiseEstimateTest, SameForAnyThreadCount) {
 // misfit, reads none on the clean wave and the noise on a noisy one (noise.h).
 TEST(NoiseEstimateTest, DetailIsNotReadAsNoise) {
   const Mesh clean = CosineHeightField(1.0, 12, 8, 60);
-  const Topology topo = BuildTopology(clean);
+  Topology topo = BuildTopology(clean);
   const double h = MeanEdgeLength(clean, topo);
   const NoiseEstimate e = EstimateNoise(clean, topo, h);
   std::printf("clean: sigma %.4f h, detail-free %.4f h\n", e.sigma_h, e.detail_free_h);
@@ -104,7 +104,7 @@ TEST(NoiseEstimateTest, DetailIsNotReadAsNoise) {
 // noisy, keep their estimate.
 TEST(NoiseEstimateTest, MeshOfCreasesHasNoEstimate) {
   const Mesh shaft = SliverShaft(128);
-  const Topology topo = BuildTopology(shaft);
+  Topology topo = BuildTopology(shaft);
   const double h = MeanEdgeLength(shaft, topo);
   const NoiseEstimate clean = EstimateNoise(shaft, topo, h);
   std::printf("clean shaft: %.1f%% of its vertices on a crease\n", 100 * clean.crease_share);
@@ -132,7 +132,7 @@ TEST(NoiseEstimateTest, MeshOfCreasesHasNoEstimate) {
   }
   Mesh sphere = Icosphere(4);
   AddNormalNoise(sphere, 0.3, 7);
-  const Topology sphere_topo = BuildTopology(sphere);
+  Topology sphere_topo = BuildTopology(sphere);
   EXPECT_LT(EstimateNoise(sphere, sphere_topo, MeanEdgeLength(sphere, sphere_topo)).crease_share, 0.2);
 }
 
@@ -140,7 +140,7 @@ TEST(NoiseEstimateTest, MeshOfCreasesHasNoEstimate) {
 // from the creases a cubic cannot follow; a thrown vertex goes back to where its ring puts it.
 TEST(NoiseEstimateTest, OutlierShareTellsThrownVerticesFromNoiseAndCreases) {
   const Mesh clean = Icosphere(5);
-  const Topology topo = BuildTopology(clean);
+  Topology topo = BuildTopology(clean);
   const double h = MeanEdgeLength(clean, topo);
   for (double sigma : {0.1, 0.3}) {
     Mesh noisy = clean;
@@ -167,7 +167,7 @@ TEST(NoiseEstimateTest, OutlierShareTellsThrownVerticesFromNoiseAndCreases) {
 
 TEST(NoiseEstimateTest, RemoveOutliersPutsAThrownVertexBackInItsPlane) {
   Mesh plane = TwoRatePlane(24, 16, 1.0);
-  const Topology topo = BuildTopology(plane);
+  Topology topo = BuildTopology(plane);
   const double h = MeanEdgeLength(plane, topo);
   // Two thrown neighbours: each one's ring holds the other, which must not tilt its plane.
   int32_t a = -1;
@@ -200,7 +200,7 @@ TEST(NoiseEstimateTest, RemoveOutliersPutsAThrownVertexBackInItsPlane) {
 // vertices within two rings of them moved, and the boundary stays on its line.
 TEST(NoiseEstimateTest, UnfoldFansTurnsFoldedFacesBack) {
   const Mesh plane = TwoRatePlane(24, 16, 1.0);
-  const Topology topo = BuildTopology(plane);
+  Topology topo = BuildTopology(plane);
   int32_t inner = -1, rim = -1;
   for (int32_t v = 0; v < plane.num_vertices(); ++v) {
     const Vec3& p = plane.positions[v];
@@ -257,7 +257,7 @@ TEST(NoiseEstimateTest, UnfoldFansTurnsFoldedFacesBack) {
 
 TEST(NoiseEstimateTest, RemoveOutliersIsTheSameForAnyThreadCount) {
   const Mesh clean = Icosphere(5);  // above kMinParallelFits: the threads share the rounds
-  const Topology topo = BuildTopology(clean);
+  Topology topo = BuildTopology(clean);
   const double h = MeanEdgeLength(clean, topo);
   Mesh one = clean;
   AddImpulsiveNoise(one, 0.1, 1.0, 5);
@@ -387,7 +387,7 @@ TEST(DefaultJobTest, SmallHolesLoseTheirNoiseWithTheSurface) {
   }
   clean.triangles = kept;
   ValidationReport report;
-  const Topology topo = BuildTopology(clean, &report);
+  Topology topo = BuildTopology(clean, &report);
   ASSERT_EQ(report.boundary_loops, holes + 1);
   ASSERT_EQ(report.nonmanifold_vertices, 0);
   ASSERT_GE(holes, 30);
@@ -486,7 +486,7 @@ TEST(DefaultJobTest, RunLeavingSliversRougherIsNotTaken) {
   for (double sigma : {0.1, 0.2}) {
     Mesh noisy = SliverShaft(128);
     AddNormalNoise(noisy, sigma, 5);
-    const Topology topo = BuildTopology(noisy);
+    Topology topo = BuildTopology(noisy);
     const double input = job::SurfaceArea(noisy.positions, noisy, topo);
     Mesh m = noisy;
     ASSERT_TRUE(Smooth(m, topo, testing::Params("bilateral_normal", 9)).ok());
@@ -497,7 +497,7 @@ TEST(DefaultJobTest, RunLeavingSliversRougherIsNotTaken) {
   const Mesh sphere = Icosphere(4);
   Mesh m = sphere;
   AddNormalNoise(m, 0.2, 5);
-  const Topology sphere_topo = BuildTopology(m);
+  Topology sphere_topo = BuildTopology(m);
   const double before = job::SurfaceArea(m.positions, m, sphere_topo);
   ASSERT_TRUE(Smooth(m, sphere_topo, testing::Params("bilaplacian", 20)).ok());
   EXPECT_LT(job::SurfaceArea(m.positions, m, sphere_topo), before);
@@ -541,7 +541,7 @@ TEST(DefaultJobTest, DefaultJobNeverFailsOnNeedles) {
     for (double sigma : {0.0, 0.1, 0.3}) {
       Mesh m = clean;
       if (sigma > 0.0) AddNormalNoise(m, sigma, 5);
-      const Topology topo = BuildTopology(m);
+      Topology topo = BuildTopology(m);
       absl::StatusOr<FlowResult> r = Smooth(m, topo, testing::Params("bilaplacian", kAutoIterations));
       ASSERT_TRUE(r.ok()) << name << " sigma " << sigma << ": " << r.status();
       for (const Vec3& p : m.positions) ASSERT_TRUE(IsFinite(p)) << name;
@@ -604,7 +604,7 @@ TEST(DefaultJobTest, OpenMeshLosesTheNoiseOfItsRims) {
   Case cases[] = {{"431 holes, level 5", HoleySphere(5, 700, 0.03, 7), 0.3},
                   {"240 holes, level 6 (sampled)", HoleySphere(6, 240, 0.035, 7), 0.25}};
   for (Case& c : cases) {
-    const Topology topo = BuildTopology(c.clean);
+    Topology topo = BuildTopology(c.clean);
     const double h = MeanEdgeLength(c.clean, topo);
     Mesh m = c.clean;
     AddNormalNoise(m, 0.2, 1);
@@ -653,7 +653,7 @@ TEST(DefaultJobTest, OpenMeshLosesTheNoiseOfItsRims) {
 // An explicit flow keeps the boundary fixed unless asked otherwise, automatic count or not.
 TEST(DefaultJobTest, ExplicitFlowKeepsItsRimsUnlessAsked) {
   const Mesh clean = HoleySphere(5, 60, 0.07, 7);
-  const Topology topo = BuildTopology(clean);
+  Topology topo = BuildTopology(clean);
   Mesh noisy = clean;
   AddNormalNoise(noisy, 0.2, 1);
   for (int iterations : {kAutoIterations, 10}) {
@@ -715,7 +715,7 @@ void RunOnNoisySharedMesh(const char* file, double sigma, const FlowParams& p, N
 // the rival's; one whose rival it beats at once runs exactly as it would alone.
 TEST(DefaultJobTest, RunGivesUpOnceItCannotBeatItsRival) {
   const Mesh noisy = testing::NoisySphere(4);
-  const Topology topo = BuildTopology(noisy);
+  Topology topo = BuildTopology(noisy);
   const double h = MeanEdgeLength(noisy, topo);
   FlowParams p;
   p.flow = FlowId::kBilateralNormal;  // automatic iterations

@@ -26,7 +26,7 @@ using namespace meshsmooth::testing;
 TEST(EnhanceTest, GainMultipliesADegreeEightBumpAndKeepsTheRadius) {
   const int l = 8;
   const Mesh start = BumpySphere(5, l, 0.002);
-  const Topology topo = BuildTopology(start);
+  Topology topo = BuildTopology(start);
   const BumpFit before = FitBump(start, l);
   ASSERT_NEAR(before.amplitude, 0.002, 2e-4);
   for (double gain : {2.0, 3.0, 0.5}) {
@@ -61,7 +61,7 @@ TEST(EnhanceTest, GainMultipliesADegreeEightBumpAndKeepsTheRadius) {
 // vertices, 34% of the move kept: a needle turns unless its three vertices move together).
 TEST(EnhanceTest, NeedleTrianglesSolveWithBothSolvers) {
   const Mesh start = SphereWithNeedles(1e-5);
-  const Topology topo = BuildTopology(start);
+  Topology topo = BuildTopology(start);
   for (ImplicitSolver solver : {ImplicitSolver::kDirect, ImplicitSolver::kCg}) {
     SCOPED_TRACE(::testing::Message() << "solver " << static_cast<int>(solver));
     Mesh m = start;
@@ -95,7 +95,7 @@ TEST(EnhanceTest, NeedleTrianglesSolveWithBothSolvers) {
 TEST(EnhanceTest, InvertedFlowMultipliesTheBumpAndStaysBounded) {
   const int l = 8;
   const Mesh start = BumpySphere(5, l, 0.002);
-  const Topology topo = BuildTopology(start);
+  Topology topo = BuildTopology(start);
   const BumpFit before = FitBump(start, l);
   for (double gain : {2.0, 3.0}) {
     for (int steps : {EnhanceParams{}.inverted_iterations, 30000}) {
@@ -134,7 +134,7 @@ TEST(EnhanceTest, AWornScanSharpenedHardTurnsNoFace) {
   absl::StatusOr<Mesh> scan = ReadMesh(SharedData("meshes/stanford-bunny.ply").string());
   ASSERT_TRUE(scan.ok()) << scan.status();
   const Mesh worn = Smoothed(*std::move(scan), Params("laplacian", 10));
-  const Topology topo = BuildTopology(worn);
+  Topology topo = BuildTopology(worn);
   for (EnhanceMethod method : {EnhanceMethod::kScreenedPoisson, EnhanceMethod::kInvertedFlow}) {
     SCOPED_TRACE(method == EnhanceMethod::kScreenedPoisson ? "screened Poisson" : "inverted flow");
     EnhanceParams p;
@@ -168,7 +168,7 @@ TEST(EnhanceTest, AWornScanSharpenedHardTurnsNoFace) {
 
 TEST(EnhanceTest, SameBitsForAnyThreadCountAndStrengthZeroHolds) {
   const Mesh start = BumpySphere(6, 8, 0.01);
-  const Topology topo = BuildTopology(start);
+  Topology topo = BuildTopology(start);
   EnhanceParams p;
   p.detail_scale = 1.0;
   p.strength.assign(start.num_vertices(), 1.0f);
@@ -197,7 +197,7 @@ TEST(EnhanceTest, SameBitsForAnyThreadCountAndStrengthZeroHolds) {
 // Noise is the finest detail: enhancing it would grow it most. Refused, or smoothed first.
 TEST(EnhanceTest, ANoisyInputIsRefusedOrSmoothedFirst) {
   const Mesh noisy = NoisySphere(4);
-  const Topology topo = BuildTopology(noisy);
+  Topology topo = BuildTopology(noisy);
   Mesh m = noisy;
   const absl::StatusOr<EnhanceResult> refused = Enhance(m, topo, EnhanceParams{});
   ASSERT_FALSE(refused.ok());
@@ -222,7 +222,7 @@ TEST(EnhanceTest, ANoisyInputIsRefusedOrSmoothedFirst) {
 
 TEST(EnhanceTest, BadParametersAreRefused) {
   Mesh m = Icosphere(2);
-  const Topology topo = BuildTopology(m);
+  Topology topo = BuildTopology(m);
   for (double gain : {-1.0, 101.0, std::nan("")}) {
     EnhanceParams p;
     p.gain = gain;
