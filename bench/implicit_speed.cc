@@ -199,7 +199,10 @@ int RunMesh(const std::string& self, const std::string& name, const Options& opt
   const int count = chosen->iterations_run;
   const double job_rms = in->Rms(job);
   rows.push_back(
-      {absl::StrFormat("default job: %s, %d iterations (explicit, automatic)", flow, count), job_rms, job_seconds, {}});
+      {absl::StrFormat("default job: %s, %d iterations (explicit, automatic)", FlowName(chosen->flow), count),
+       job_rms,
+       job_seconds,
+       {}});
 
   const double step = DefaultStep(ParseFlowName(flow).value());
   std::fprintf(stderr, "%s: %s explicit, %d iterations\n", name.c_str(), flow.c_str(), count);
