@@ -37,7 +37,7 @@ constexpr char kUsage[] =
     "usage: meshsmooth_implicit_bench [--meshes icosphere,stanford-dragon] [--level 9] [--sigma 0.2]\n"
     "                                 [--seed 1] [--steps 1,2,4] [--solvers cg,direct]\n"
     "                                 [--cg-tolerances 1e-8,1e-4,1e-2] [--time-scales 1] [--max-direct 700000]\n"
-    "                                 [--shared DIR]\n"
+    "                                 [--flow F] [--shared DIR]\n"
     "Time to the same error, implicit against explicit steps. For each mesh (icosphere: Icosphere(--level),\n"
     "the distance to the clean surface measured to the unit sphere; else a mesh of DIR/data/meshes, measured\n"
     "with the quality benchmark's GroundTruth), Gaussian noise of --sigma h along the normals (seed --seed),\n"
@@ -48,7 +48,8 @@ constexpr char kUsage[] =
     "clean surface (h), smoothing time (s,\n"
     "in-process, all threads), the ratio to the default job's, and the smoothing's peak memory in a fresh\n"
     "process (the growth of VmHWM over the process holding the mesh and its topology, and the whole\n"
-    "process's VmHWM, bytes per vertex).\n";
+    "process's VmHWM, bytes per vertex). --flow F (laplacian, bilaplacian, mcf) runs F explicitly and implicitly in\n"
+    "place of the default job's flow, for the default job's count N.\n";
 
 struct Options {
   std::vector<std::string> meshes = {"icosphere", "stanford-dragon"};
@@ -60,6 +61,7 @@ struct Options {
   std::vector<double> cg_tolerances = {1e-8, 1e-4, 1e-2};
   std::vector<double> time_scales = {1.0};
   int32_t max_direct = 700000;
+  std::string flow;  // empty: the default job's
   fs::path shared = fs::path(MESHSMOOTH_SOURCE_DIR) / ".." / "shared";
 };
 
@@ -193,13 +195,16 @@ int RunMesh(const std::string& self, const std::string& name, const Options& opt
     std::fprintf(stderr, "%s: the default job did not smooth\n", name.c_str());
     return 1;
   }
-  const std::string flow(FlowName(chosen->flow));
+  const std::string flow = opt.flow.empty() ? std::string(FlowName(chosen->flow)) : opt.flow;
   const int count = chosen->iterations_run;
   const double job_rms = in->Rms(job);
   rows.push_back(
-      {absl::StrFormat("default job: %s, %d iterations (explicit, automatic)", flow, count), job_rms, job_seconds, {}});
+      {absl::StrFormat("default job: %s, %d iterations (explicit, automatic)", FlowName(chosen->flow), count),
+       job_rms,
+       job_seconds,
+       {}});
 
-  const double step = DefaultStep(chosen->flow);
+  const double step = DefaultStep(ParseFlowName(flow).value());
   std::fprintf(stderr, "%s: %s explicit, %d iterations\n", name.c_str(), flow.c_str(), count);
   Mesh ex = in->noisy;
   t0 = Clock::now();
@@ -277,6 +282,13 @@ int Main(int argc, char** argv) {
       for (absl::string_view t : absl::StrSplit(v, ',')) opt.time_scales.push_back(std::atof(std::string(t).c_str()));
     } else if (a == "--max-direct") {
       opt.max_direct = std::atoi(v.c_str());
+    } else if (a == "--flow") {
+      const absl::StatusOr<FlowId> id = ParseFlowName(v);
+      if (!id.ok() || !HasImplicitForm(*id)) {
+        std::fprintf(stderr, "--flow %s: not a flow with an implicit form\n%s", v.c_str(), kUsage);
+        return 2;
+      }
+      opt.flow = v;
     } else if (a == "--shared") {
       opt.shared = v;
     } else {

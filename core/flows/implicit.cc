@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <utility>
 #include <vector>
 
 #include "absl/strings/str_format.h"
@@ -85,6 +86,92 @@ double CotangentRing(const int32_t* offsets, const int32_t* ring, const Vec3* po
 
 }  // namespace
 
+absl::Status ConjugateGradients(int32_t n, int threads, absl::FunctionRef<Vec3(const Vec3*, Vec3*)> apply,
+                                const double* diag, const Vec3& goal, Vec3* x, Vec3* r, int* iterations) {
+  std::vector<Vec3> p(n), q(n);
+  // r . r and r . z with z = r / diag, in block order.
+  auto residual_sums = [&](int32_t begin, int32_t end) {
+    std::pair<Vec3, Vec3> s;
+    for (int32_t v = begin; v < end; ++v) {
+      s.first += Times(r[v], r[v]);
+      s.second += Times(r[v], r[v] * (1.0 / diag[v]));
+    }
+    return s;
+  };
+  std::vector<std::pair<Vec3, Vec3>> sums((n + kBlock - 1) / kBlock);
+  auto reduce = [&](Vec3& rr, Vec3& rz) {
+    rr = {}, rz = {};
+    for (const auto& [a, b] : sums) rr += a, rz += b;
+  };
+  Vec3 rr, rz;
+  ForBlocks(n, threads, [&](int32_t blk, int32_t begin, int32_t end) {
+    for (int32_t v = begin; v < end; ++v) p[v] = r[v] * (1.0 / diag[v]);
+    sums[blk] = residual_sums(begin, end);
+  });
+  reduce(rr, rz);
+  auto done = [&](int c) { return (&rr.x)[c] <= (&goal.x)[c]; };
+  // The largest residual against its goal over the coordinates (one done is at most 1, and the
+  // loop runs while one is above): it must halve in every window of kCgStallWindow iterations.
+  auto behind = [&] {
+    double worst = 0.0;
+    for (int c = 0; c < 3; ++c) worst = std::max(worst, (&rr.x)[c] / (&goal.x)[c]);
+    return worst;
+  };
+  double best = behind(), window_best = std::numeric_limits<double>::infinity();
+  int& k = *iterations;
+  for (k = 0; !(done(0) && done(1) && done(2)); ++k) {
+    if (k == kMaxCgIterations) {
+      return absl::FailedPreconditionError(absl::StrFormat(
+          "the implicit step's conjugate gradients did not converge in %d iterations; try a smaller step",
+          kMaxCgIterations));
+    }
+    const Vec3 pq = apply(p.data(), q.data());
+    Vec3 alpha;
+    for (int c = 0; c < 3; ++c) {
+      const double den = (&pq.x)[c];
+      if (!done(c) && !(den > 0.0)) {
+        return absl::FailedPreconditionError(
+            absl::StrFormat("the implicit step's matrix is not positive definite (conjugate gradients met p.Ap = %g at "
+                            "iteration %d)",
+                            den, k));
+      }
+      (&alpha.x)[c] = done(c) ? 0.0 : (&rz.x)[c] / den;
+    }
+    ForBlocks(n, threads, [&](int32_t blk, int32_t begin, int32_t end) {
+      for (int32_t v = begin; v < end; ++v) {
+        x[v] += Times(alpha, p[v]);
+        r[v] -= Times(alpha, q[v]);
+      }
+      sums[blk] = residual_sums(begin, end);
+    });
+    const Vec3 old_rz = rz;
+    reduce(rr, rz);
+    window_best = std::min(window_best, behind());
+    if ((k + 1) % kCgStallWindow == 0) {
+      if (!(window_best < 0.5 * best)) {
+        return absl::FailedPreconditionError(absl::StrFormat(
+            "the implicit step's conjugate gradients stopped converging (the residual did not halve in %d "
+            "iterations, %d in all); try a smaller step",
+            kCgStallWindow, k + 1));
+      }
+      best = window_best;
+      window_best = std::numeric_limits<double>::infinity();
+    }
+    Vec3 beta;
+    for (int c = 0; c < 3; ++c) {
+      const double den = (&old_rz.x)[c];
+      (&beta.x)[c] = den > 0.0 ? (&rz.x)[c] / den : 0.0;
+    }
+    ForBlocks(n, threads, [&](int32_t, int32_t begin, int32_t end) {
+      for (int32_t v = begin; v < end; ++v) p[v] = r[v] * (1.0 / diag[v]) + Times(beta, p[v]);
+    });
+  }
+  for (int32_t v = 0; v < n; ++v) {
+    if (!IsFinite(x[v])) return absl::FailedPreconditionError("the implicit step became NaN or infinite");
+  }
+  return absl::OkStatus();
+}
+
 class ImplicitStepper::Impl {
  public:
   Impl(const Topology& topo, const FlowParams& p, const uint8_t* role, ImplicitWeights weights, double h, int threads)
@@ -120,16 +207,24 @@ class ImplicitStepper::Impl {
 
   absl::Status Step(const Vec3* cur, Vec3* next, bool next_holds_previous) {
     const bool constant = op_ == Operator::kUmbrella || op_ == Operator::kBilaplacian;
-    if (!constant || steps_ == 0) UpdateOperator(cur);
+    if (!constant || steps_ == 0) {
+      UpdateOperator(cur);
+      // Factored before r_ exists: the factorisation's peak is the run's.
+      if (solver_ == ImplicitSolver::kDirect) {
+        if (absl::Status s = Factor(); !s.ok()) return s;
+      }
+    }
     // The right-hand side rhs K P into r_ (K over every vertex's position).
     r_.resize(n_);
     ApplyK(cur, r_.data());  // (its sum unused)
     ForBlocks(n_, threads_, [&](int32_t, int32_t begin, int32_t end) {
       for (int32_t v = begin; v < end; ++v) r_[v] = active_[v] ? r_[v] * rhs_ : Vec3{};
     });
-    absl::Status s = solver_ == ImplicitSolver::kDirect ? SolveDirect(constant, next)
-                                                        : SolveCg(cur, next, next_holds_previous && steps_ > 0);
-    if (!s.ok()) return s;
+    if (solver_ == ImplicitSolver::kDirect) {
+      SolveDirect(next);
+    } else if (absl::Status s = SolveCg(cur, next, next_holds_previous && steps_ > 0); !s.ok()) {
+      return s;
+    }
     ForBlocks(n_, threads_, [&](int32_t, int32_t begin, int32_t end) {
       for (int32_t v = begin; v < end; ++v) next[v] = active_[v] ? cur[v] + next[v] : cur[v];
     });
@@ -268,54 +363,78 @@ class ImplicitStepper::Impl {
     });
   }
 
-  // The lower triangle of the system over the free vertices (row_), in the same pattern every
-  // step: entries of inactive vertices are explicit zeros, their diagonal 1.
+  // The lower triangle of the system over the free vertices (row_), built column by column in
+  // place (no triplets: their list and Eigen's sorted copy took more than the matrix), in the
+  // same pattern every step: entries of inactive vertices are explicit zeros, their diagonal 1.
   Eigen::SparseMatrix<double> Assemble() const {
-    using Triplet = Eigen::Triplet<double>;
-    std::vector<Triplet> triplets;
+    const int32_t size = static_cast<int32_t>(vertex_.size());
     const double tl = lhs_;
-    triplets.reserve(static_cast<size_t>(vertex_.size()) * (op_ == Operator::kBilaplacian ? 26 : 4));
-    for (int32_t r = 0; r < static_cast<int32_t>(vertex_.size()); ++r) {
-      const int32_t v = vertex_[r];
-      triplets.emplace_back(r, r, diag_[v]);
-      const int32_t b = offsets_[v], e = offsets_[v + 1];
+    std::vector<std::pair<int32_t, double>> column;
+    // Column c's entries below the diagonal: A(k, v) = A(v, k) for the free k after v.
+    auto gather = [&](int32_t c) {
+      column.clear();
+      const int32_t v = vertex_[c], b = offsets_[v], e = offsets_[v + 1];
       auto add = [&](int32_t k, double value) {
-        const int32_t c = row_[k];
-        if (c < 0 || c >= r) return;  // fixed (moved to the right-hand side), or the upper triangle
-        triplets.emplace_back(r, c, active_[v] && active_[k] ? tl * value : 0.0);
+        if (row_[k] > c) column.emplace_back(row_[k], active_[v] && active_[k] ? tl * value : 0.0);
       };
       if (op_ != Operator::kBilaplacian) {
         for (int32_t i = b; i < e; ++i) add(ring_[i], w_.empty() ? -1.0 : -w_[i]);
-        continue;
-      }
-      // Row v of L D^-1 L: L_vj L_jk / d_j over j in v and its ring (the diagonal is in diag_).
-      for (int32_t i = b; i < e; ++i) add(ring_[i], -1.0);  // j = v
-      for (int32_t i = b; i < e; ++i) {
-        const int32_t j = ring_[i], jb = offsets_[j], je = offsets_[j + 1];
-        if (jb == je) continue;
-        const double inv = 1.0 / (je - jb);
-        add(j, -1.0);  // L_vj L_jj / d_j
-        for (int32_t l = jb; l < je; ++l) {
-          if (ring_[l] != v) add(ring_[l], inv);
+      } else {
+        // Row v of L D^-1 L: L_vj L_jk / d_j over j in v and its ring (the diagonal is in diag_).
+        for (int32_t i = b; i < e; ++i) add(ring_[i], -1.0);  // j = v
+        for (int32_t i = b; i < e; ++i) {
+          const int32_t j = ring_[i], jb = offsets_[j], je = offsets_[j + 1];
+          if (jb == je) continue;
+          const double inv = 1.0 / (je - jb);
+          add(j, -1.0);  // L_vj L_jj / d_j
+          for (int32_t l = jb; l < je; ++l) {
+            if (ring_[l] != v) add(ring_[l], inv);
+          }
         }
       }
+      std::stable_sort(column.begin(), column.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
+      size_t kept = 0;  // the sums of repeated rows (two-ring paths, a ring naming a vertex twice)
+      for (size_t i = 0; i < column.size(); ++i) {
+        if (kept > 0 && column[kept - 1].first == column[i].first) {
+          column[kept - 1].second += column[i].second;
+        } else {
+          column[kept++] = column[i];
+        }
+      }
+      column.resize(kept);
+    };
+    Eigen::SparseMatrix<double> a(size, size);
+    Eigen::Index count = 0;
+    for (int32_t c = 0; c < size; ++c) gather(c), count += 1 + static_cast<Eigen::Index>(column.size());
+    a.resizeNonZeros(count);
+    int* outer = a.outerIndexPtr();
+    int* inner = a.innerIndexPtr();
+    double* value = a.valuePtr();
+    outer[0] = 0;
+    for (int32_t c = 0; c < size; ++c) {
+      gather(c);
+      int32_t at = outer[c];
+      inner[at] = c, value[at++] = diag_[vertex_[c]];
+      for (const auto& [r, x] : column) inner[at] = r, value[at++] = x;
+      outer[c + 1] = at;
     }
-    Eigen::SparseMatrix<double> a(static_cast<int>(vertex_.size()), static_cast<int>(vertex_.size()));
-    a.setFromTriplets(triplets.begin(), triplets.end());
     return a;
   }
 
-  // The solve with the factorisation: once for a constant matrix, else every step on the
-  // pattern analysed at the first. The move goes into `d`.
-  absl::Status SolveDirect(bool constant, Vec3* d) {
-    if (!constant || steps_ == 0) {
-      const Eigen::SparseMatrix<double> a = Assemble();
-      if (steps_ == 0) ldlt_.analyzePattern(a);
-      ldlt_.factorize(a);
-      if (ldlt_.info() != Eigen::Success) {
-        return absl::FailedPreconditionError("the implicit step's matrix could not be factored");
-      }
+  // The factorisation: once for a constant matrix, else every step on the pattern analysed at
+  // the first.
+  absl::Status Factor() {
+    const Eigen::SparseMatrix<double> a = Assemble();
+    if (steps_ == 0) ldlt_.analyzePattern(a);
+    ldlt_.factorize(a);
+    if (ldlt_.info() != Eigen::Success) {
+      return absl::FailedPreconditionError("the implicit step's matrix could not be factored");
     }
+    return absl::OkStatus();
+  }
+
+  // The solve with the factorisation; the move goes into `d`.
+  void SolveDirect(Vec3* d) {
     const int rows = static_cast<int>(vertex_.size());
     Eigen::MatrixX3d rhs(rows, 3);
     for (int r = 0; r < rows; ++r) {
@@ -325,16 +444,12 @@ class ImplicitStepper::Impl {
     const Eigen::MatrixX3d x = ldlt_.solve(rhs);
     for (int32_t v = 0; v < n_; ++v) d[v] = {};
     for (int r = 0; r < rows; ++r) d[vertex_[r]] = {x(r, 0), x(r, 1), x(r, 2)};
-    return absl::OkStatus();
   }
 
-  // Conjugate gradients on the three coordinates at once, each with its own step lengths,
-  // preconditioned by the diagonal. x (the move) lives in `d`; with `warm`, d holds the previous
-  // positions and the solve starts from the previous move cur - d. Three passes an iteration:
-  // q = A p (with p . q), the update of x and r (with r . r and r . z), the update of p.
+  // Conjugate gradients (ConjugateGradients) with the system's diagonal. x (the move) lives in
+  // `d`; with `warm`, d holds the previous positions and the solve starts from the previous move
+  // cur - d.
   absl::Status SolveCg(const Vec3* cur, Vec3* d, bool warm) {
-    p_.resize(n_);
-    q_.resize(n_);
     const Vec3 b2 = SumBlocks(n_, threads_, partial_, [&](int32_t begin, int32_t end) {
       Vec3 s;
       for (int32_t v = begin; v < end; ++v) s += Times(r_[v], r_[v]);
@@ -355,91 +470,15 @@ class ImplicitStepper::Impl {
       for (int32_t v = begin; v < end; ++v) d[v] = warm && active_[v] ? cur[v] - d[v] : Vec3{};
     });
     if (warm) {  // r = b - A x
-      ApplyK(d, q_.data(), true);
+      std::vector<Vec3> ax(n_);
+      ApplyK(d, ax.data(), true);
       ForBlocks(n_, threads_, [&](int32_t, int32_t begin, int32_t end) {
-        for (int32_t v = begin; v < end; ++v) r_[v] -= q_[v];
+        for (int32_t v = begin; v < end; ++v) r_[v] -= ax[v];
       });
     }
-    // r . r and r . z with z = r / diag, in block order.
-    auto residual_sums = [&](int32_t begin, int32_t end) {
-      std::pair<Vec3, Vec3> s;
-      for (int32_t v = begin; v < end; ++v) {
-        s.first += Times(r_[v], r_[v]);
-        s.second += Times(r_[v], r_[v] * (1.0 / diag_[v]));
-      }
-      return s;
-    };
-    std::vector<std::pair<Vec3, Vec3>> sums((n_ + kBlock - 1) / kBlock);
-    auto reduce = [&](Vec3& rr, Vec3& rz) {
-      rr = {}, rz = {};
-      for (const auto& [a, b] : sums) rr += a, rz += b;
-    };
-    Vec3 rr, rz;
-    ForBlocks(n_, threads_, [&](int32_t blk, int32_t begin, int32_t end) {
-      for (int32_t v = begin; v < end; ++v) p_[v] = r_[v] * (1.0 / diag_[v]);
-      sums[blk] = residual_sums(begin, end);
-    });
-    reduce(rr, rz);
-    auto done = [&](int c) { return (&rr.x)[c] <= (&goal.x)[c]; };
-    // The largest residual against its goal over the coordinates (one done is at most 1, and the
-    // loop runs while one is above): it must halve in every window of kCgStallWindow iterations.
-    auto behind = [&] {
-      double worst = 0.0;
-      for (int c = 0; c < 3; ++c) worst = std::max(worst, (&rr.x)[c] / (&goal.x)[c]);
-      return worst;
-    };
-    double best = behind(), window_best = std::numeric_limits<double>::infinity();
-    for (cg_iterations_ = 0; !(done(0) && done(1) && done(2)); ++cg_iterations_) {
-      if (cg_iterations_ == kMaxCgIterations) {
-        return absl::FailedPreconditionError(absl::StrFormat(
-            "the implicit step's conjugate gradients did not converge in %d iterations; try a smaller step",
-            kMaxCgIterations));
-      }
-      const Vec3 pq = ApplyK(p_.data(), q_.data(), true);
-      Vec3 alpha;
-      for (int c = 0; c < 3; ++c) {
-        const double den = (&pq.x)[c];
-        if (!done(c) && !(den > 0.0)) {
-          return absl::FailedPreconditionError(absl::StrFormat(
-              "the implicit step's matrix is not positive definite (conjugate gradients met p.Ap = %g at "
-              "iteration %d)",
-              den, cg_iterations_));
-        }
-        (&alpha.x)[c] = done(c) ? 0.0 : (&rz.x)[c] / den;
-      }
-      ForBlocks(n_, threads_, [&](int32_t blk, int32_t begin, int32_t end) {
-        for (int32_t v = begin; v < end; ++v) {
-          d[v] += Times(alpha, p_[v]);
-          r_[v] -= Times(alpha, q_[v]);
-        }
-        sums[blk] = residual_sums(begin, end);
-      });
-      const Vec3 old_rz = rz;
-      reduce(rr, rz);
-      window_best = std::min(window_best, behind());
-      if ((cg_iterations_ + 1) % kCgStallWindow == 0) {
-        if (!(window_best < 0.5 * best)) {
-          return absl::FailedPreconditionError(absl::StrFormat(
-              "the implicit step's conjugate gradients stopped converging (the residual did not halve in %d "
-              "iterations, %d in all); try a smaller step",
-              kCgStallWindow, cg_iterations_ + 1));
-        }
-        best = window_best;
-        window_best = std::numeric_limits<double>::infinity();
-      }
-      Vec3 beta;
-      for (int c = 0; c < 3; ++c) {
-        const double den = (&old_rz.x)[c];
-        (&beta.x)[c] = den > 0.0 ? (&rz.x)[c] / den : 0.0;
-      }
-      ForBlocks(n_, threads_, [&](int32_t, int32_t begin, int32_t end) {
-        for (int32_t v = begin; v < end; ++v) p_[v] = r_[v] * (1.0 / diag_[v]) + Times(beta, p_[v]);
-      });
-    }
-    for (int32_t v = 0; v < n_; ++v) {
-      if (!IsFinite(d[v])) return absl::FailedPreconditionError("the implicit step became NaN or infinite");
-    }
-    return absl::OkStatus();
+    return ConjugateGradients(
+        n_, threads_, [&](const Vec3* p, Vec3* q) { return ApplyK(p, q, true); }, diag_.data(), goal, d, r_.data(),
+        &cg_iterations_);
   }
 
   const int32_t n_;
@@ -458,7 +497,7 @@ class ImplicitStepper::Impl {
   std::vector<double> w_;         // per ring entry (U1, mcf); empty: 1
   std::vector<int32_t> reverse_;  // mcf: the entry of the same edge in the neighbour's ring, or -1
   std::vector<double> diag_;      // the system's diagonal (1 where inactive)
-  std::vector<Vec3> r_, p_, q_, u_;
+  std::vector<Vec3> r_, u_;
   std::vector<Vec3> partial_;  // SumBlocks' per-block sums
   // The direct solver's rows: free vertices in order.
   std::vector<int32_t> row_, vertex_;

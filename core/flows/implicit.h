@@ -21,6 +21,7 @@
 #include <cstdint>
 #include <memory>
 
+#include "absl/functional/function_ref.h"
 #include "absl/status/status.h"
 #include "core/flows/flow.h"
 #include "core/topology.h"
@@ -39,6 +40,16 @@ inline constexpr int32_t kMaxDirectVertices = 20000;
 // It fails at once when p.Ap <= 0 (the matrix is not positive definite).
 inline constexpr int kMaxCgIterations = 5000;
 inline constexpr int kCgStallWindow = 500;
+
+// Conjugate gradients for A x = b on the three coordinates of n vertices at once, each with its
+// own step lengths, preconditioned by `diag` (A's diagonal, > 0): `apply(p, q)` sets q = A p and
+// returns p . q per coordinate. On entry x holds the start and r = b - A x; a coordinate is done
+// once its r . r <= goal (> 0). Three passes an iteration: q = A p (with p . q), the update of x
+// and r (with r . r and r . z), the update of p; every sum in fixed blocks reduced in block
+// order. FailedPrecondition on p . Ap <= 0, on a stall (kCgStallWindow), after kMaxCgIterations
+// and on a result that is not finite. `iterations` gets the count.
+absl::Status ConjugateGradients(int32_t n, int threads, absl::FunctionRef<Vec3(const Vec3*, Vec3*)> apply,
+                                const double* diag, const Vec3& goal, Vec3* x, Vec3* r, int* iterations);
 
 // The system of one step: (M / s + lhs K) d = rhs K P. A flow's step at effective step lambda is
 // {theta lambda, -lambda}; shape enhancement (core/job/enhance.h) is {1 / alpha, (gain - 1) / alpha}.

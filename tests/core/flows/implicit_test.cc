@@ -1,7 +1,8 @@
 // Implicit steps (FlowParams::integration): backward Euler shrinks a sphere as the discrete
 // operator's eigenvalue says, Crank-Nicolson is second order in the step against the exact
 // solution of the same linear flow, both solvers agree, strength 0 and the boundary hold, the
-// result is the same for any thread count, a large step stays stable, and a bad job is refused.
+// result is the same for any thread count, a large step stays stable, a bad job is refused, and
+// conjugate gradients fail with a reason on the systems they cannot solve.
 #include <Eigen/Dense>
 #include <cmath>
 #include <cstring>
@@ -11,6 +12,7 @@
 
 #include "core/flows/catalogue.h"
 #include "core/flows/flow.h"
+#include "core/flows/implicit.h"
 #include "core/shapes/parametric.h"
 #include "gtest/gtest.h"
 #include "tests/bump_sphere.h"
@@ -294,6 +296,62 @@ TEST(ImplicitTest, BadJobsAreRefusedWithAReason) {
   // The explicit bound does not apply to an implicit step.
   Mesh copy = m;
   EXPECT_TRUE(Smooth(copy, Implicit("bilaplacian", 1, 50.0)).ok());
+}
+
+// Conjugate gradients on A x = b with A = `diagonal` on the diagonal and -1 between the
+// neighbours of a path of n vertices (2 + eps: a 1D Laplacian plus a mass eps, definite; -2.5:
+// negative definite), the same b on the three coordinates, x from 0, to the relative residual 1e-8.
+absl::Status PathCg(int32_t n, double diagonal, const std::vector<double>& b, int* iterations) {
+  const std::vector<double> diag(n, diagonal);
+  std::vector<Vec3> x(n), r(n);
+  double b2 = 0.0;
+  for (int32_t v = 0; v < n; ++v) r[v] = {b[v], b[v], b[v]}, b2 += b[v] * b[v];
+  auto apply = [&](const Vec3* p, Vec3* q) {
+    Vec3 dot;
+    for (int32_t v = 0; v < n; ++v) {
+      q[v] = p[v] * diagonal;
+      if (v > 0) q[v] -= p[v - 1];
+      if (v + 1 < n) q[v] -= p[v + 1];
+      dot += Vec3{p[v].x * q[v].x, p[v].y * q[v].y, p[v].z * q[v].z};
+    }
+    return dot;
+  };
+  const double goal = 1e-16 * b2;
+  return flows::ConjugateGradients(n, 1, apply, diag.data(), {goal, goal, goal}, x.data(), r.data(), iterations);
+}
+
+void ExpectFailure(const absl::Status& s, const std::string& message) {
+  EXPECT_EQ(s.code(), absl::StatusCode::kFailedPrecondition) << s;
+  EXPECT_EQ(s.message(), message);
+}
+
+// The iteration counts and residuals below are those of the same iteration in double precision
+// (a NumPy model gives the same figures).
+TEST(ImplicitTest, ConjugateGradientsFailWithAReason) {
+  const int32_t n = 20000;
+  std::vector<double> first(n, 0.0);
+  first[0] = 1.0;
+  const std::vector<double> ones(n, 1.0);
+  int iterations = -1;
+  // eps = 1e-5, b = e_0: it converges, the squared residual falling some 24x in every window.
+  ASSERT_TRUE(PathCg(n, 2.0 + 1e-5, first, &iterations).ok());
+  EXPECT_GT(iterations, 4 * flows::kCgStallWindow);
+  EXPECT_LT(iterations, flows::kMaxCgIterations);
+  // Negative definite: p = r / diag = e_0 / -2.5 and p.Ap = -0.4 at once.
+  ExpectFailure(PathCg(n, -2.5, first, &iterations),
+                "the implicit step's matrix is not positive definite (conjugate gradients met p.Ap = -0.4 at "
+                "iteration 0)");
+  EXPECT_EQ(iterations, 0);
+  // eps = 1e-6, b = 1: the best squared residual of the first window is some 250x the start's (it grows
+  // while the smooth part of x builds up), so the solve stops after kCgStallWindow iterations.
+  ExpectFailure(PathCg(n, 2.0 + 1e-6, ones, &iterations),
+                "the implicit step's conjugate gradients stopped converging (the residual did not halve in 500 "
+                "iterations, 500 in all); try a smaller step");
+  // eps = 3e-6, b = e_0: the squared residual falls 6-8x in every window, too slowly for 1e-8 within
+  // kMaxCgIterations.
+  ExpectFailure(PathCg(n, 2.0 + 3e-6, first, &iterations),
+                "the implicit step's conjugate gradients did not converge in 5000 iterations; try a smaller step");
+  EXPECT_EQ(iterations, flows::kMaxCgIterations);
 }
 
 // With automatic iterations an implicit run goes through the default job's rule: it stops at its
