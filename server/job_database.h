@@ -6,8 +6,8 @@
 //
 // The store writes each statement once for both: parameters ?1 .. ?N (the PostgreSQL side sends
 // them as $1 .. $N), the columns named "offset" quoted, functions both know (length, COALESCE,
-// SUM, MIN, COUNT). What differs lives here: the schema, how a write transaction starts, the row
-// lock a claim takes, what gives deleted pages back.
+// SUM, MIN, COUNT). What differs lives here: the schema's types, how a write transaction starts,
+// the row lock a claim takes, what gives deleted pages back.
 #pragma once
 
 #include <cstdint>
@@ -69,6 +69,10 @@ class JobDatabase {
   // on its own (SQLite's incremental vacuum).
   virtual void Reclaim() {}
 };
+
+// The store's tables and indexes, the one text both databases make (job_database.cc), with their
+// type for bytes (BLOB, BYTEA) and for 64-bit integers (INTEGER, BIGINT).
+std::string JobStoreSchema(std::string_view bytes_type, std::string_view int64_type);
 
 // DIR/jobs.sqlite3, made with its directory when missing; the exclusive lock DIR/lock held while
 // it is open. FailedPrecondition when the directory cannot be made or another process holds it;

@@ -16,26 +16,6 @@
 namespace meshsmooth::server {
 namespace {
 
-constexpr char kSchema[] = R"sql(
-CREATE TABLE IF NOT EXISTS uploads(
-  request_id TEXT PRIMARY KEY, spec BYTEA NOT NULL, total_bytes BIGINT NOT NULL, sha256 BYTEA NOT NULL,
-  received BIGINT NOT NULL DEFAULT 0, job_id TEXT);
-CREATE TABLE IF NOT EXISTS upload_chunks(
-  request_id TEXT NOT NULL, "offset" BIGINT NOT NULL, data BYTEA NOT NULL, PRIMARY KEY(request_id, "offset"));
-CREATE TABLE IF NOT EXISTS jobs(
-  job_id TEXT PRIMARY KEY, request_id TEXT NOT NULL UNIQUE, state INTEGER NOT NULL, spec BYTEA NOT NULL,
-  upload_bytes BIGINT NOT NULL, upload_sha256 BYTEA NOT NULL, progress BYTEA, summary BYTEA,
-  error_code INTEGER NOT NULL DEFAULT 0, error_message TEXT NOT NULL DEFAULT '',
-  create_us BIGINT NOT NULL, start_us BIGINT NOT NULL DEFAULT 0, end_us BIGINT NOT NULL DEFAULT 0,
-  attempts INTEGER NOT NULL DEFAULT 0, event_sequence BIGINT NOT NULL DEFAULT 1,
-  result_bytes BIGINT NOT NULL DEFAULT 0, result_sha256 BYTEA,
-  lease_owner TEXT NOT NULL DEFAULT '', lease_until_us BIGINT NOT NULL DEFAULT 0);
-CREATE INDEX IF NOT EXISTS jobs_by_state ON jobs(state, create_us, job_id);
-CREATE INDEX IF NOT EXISTS jobs_by_time ON jobs(create_us, job_id);
-CREATE TABLE IF NOT EXISTS result_chunks(
-  job_id TEXT NOT NULL, "offset" BIGINT NOT NULL, data BYTEA NOT NULL, PRIMARY KEY(job_id, "offset"));
-)sql";
-
 // Held while the schema is made: replicas starting together would otherwise race on
 // CREATE TABLE IF NOT EXISTS (a unique violation in PostgreSQL's catalog).
 constexpr int64_t kSchemaLock = 0x6d657368736d6f6f;  // "meshsmoo"
@@ -67,7 +47,7 @@ class PostgresJobDatabase final : public JobDatabase {
       conn_ = std::make_unique<pqxx::connection>(uri_);
       pqxx::work w(*conn_);
       w.exec_params("SELECT pg_advisory_xact_lock($1)", kSchemaLock);
-      w.exec(kSchema);
+      w.exec(JobStoreSchema("BYTEA", "BIGINT"));
       w.commit();
     } catch (const std::exception& e) {
       return absl::UnavailableError(

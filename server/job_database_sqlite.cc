@@ -18,26 +18,6 @@
 namespace meshsmooth::server {
 namespace {
 
-constexpr char kSchema[] = R"sql(
-CREATE TABLE IF NOT EXISTS uploads(
-  request_id TEXT PRIMARY KEY, spec BLOB NOT NULL, total_bytes INTEGER NOT NULL, sha256 BLOB NOT NULL,
-  received INTEGER NOT NULL DEFAULT 0, job_id TEXT);
-CREATE TABLE IF NOT EXISTS upload_chunks(
-  request_id TEXT NOT NULL, offset INTEGER NOT NULL, data BLOB NOT NULL, PRIMARY KEY(request_id, offset));
-CREATE TABLE IF NOT EXISTS jobs(
-  job_id TEXT PRIMARY KEY, request_id TEXT NOT NULL UNIQUE, state INTEGER NOT NULL, spec BLOB NOT NULL,
-  upload_bytes INTEGER NOT NULL, upload_sha256 BLOB NOT NULL, progress BLOB, summary BLOB,
-  error_code INTEGER NOT NULL DEFAULT 0, error_message TEXT NOT NULL DEFAULT '',
-  create_us INTEGER NOT NULL, start_us INTEGER NOT NULL DEFAULT 0, end_us INTEGER NOT NULL DEFAULT 0,
-  attempts INTEGER NOT NULL DEFAULT 0, event_sequence INTEGER NOT NULL DEFAULT 1,
-  result_bytes INTEGER NOT NULL DEFAULT 0, result_sha256 BLOB,
-  lease_owner TEXT NOT NULL DEFAULT '', lease_until_us INTEGER NOT NULL DEFAULT 0);
-CREATE INDEX IF NOT EXISTS jobs_by_state ON jobs(state, create_us, job_id);
-CREATE INDEX IF NOT EXISTS jobs_by_time ON jobs(create_us, job_id);
-CREATE TABLE IF NOT EXISTS result_chunks(
-  job_id TEXT NOT NULL, offset INTEGER NOT NULL, data BLOB NOT NULL, PRIMARY KEY(job_id, offset));
-)sql";
-
 // Columns added after the first release of the store: added to a database made before them.
 constexpr const char* kAddedColumns[] = {
     "ALTER TABLE jobs ADD COLUMN lease_owner TEXT NOT NULL DEFAULT ''",
@@ -75,7 +55,7 @@ class SqliteJobDatabase final : public JobDatabase {
                                "PRAGMA busy_timeout=5000"}) {
       if (absl::Status s = Exec(pragma); !s.ok()) return s;
     }
-    if (absl::Status s = Exec(kSchema); !s.ok()) return s;
+    if (absl::Status s = Exec(JobStoreSchema("BLOB", "INTEGER").c_str()); !s.ok()) return s;
     for (const char* alter : kAddedColumns) Exec(alter).IgnoreError();  // "duplicate column" once added
     return absl::OkStatus();
   }
