@@ -137,6 +137,16 @@ def local_limits_checks(a, check, tmp):
 
     with Server(a.server, "--quiet", "--max-upload-bytes", "300000", "--job-store",
                 os.path.join(tmp, "store")) as limited:
+        def check_quantized_bound(text, fraction):
+            """The CLI's line on a quantized upload: its bits, and a bound of at most `fraction` mean edges."""
+            m = re.search(r"^upload quantized to (\d+) bits: each coordinate within ([0-9.e+-]+) of the input "
+                          rf"\({re.escape(fraction)} of the mean edge ([0-9.e+-]+)\)$", text, re.M)
+            assert m is not None, text
+            bits, bound, mean_edge = int(m.group(1)), float(m.group(2)), float(m.group(3))
+            # Two legs of 1 and a diagonal of about sqrt 2 a cell, lengthened a little by the waves and the noise.
+            assert 1.13 < mean_edge < 1.3, mean_edge
+            assert 0 < bound <= float(fraction) * mean_edge and 1 <= bits <= 24, (bits, bound, mean_edge)
+
         def a_quantized_upload_fits_where_the_lossless_one_does_not():
             lossless = run([a.cli, "smooth", mesh, "-o", os.path.join(tmp, "lossless.ply"), "--server",
                             limited.address, "--retries", "0", "-q"])
@@ -145,13 +155,7 @@ def local_limits_checks(a, check, tmp):
             r = run([a.cli, "smooth", mesh, "-o", out, "--server", limited.address, "--retries", "0",
                      "--quantize-upload"])
             assert r.returncode == 0, (r.returncode, r.stderr)
-            m = re.search(r"^upload quantized to (\d+) bits: each coordinate within ([0-9.e+-]+) of the input "
-                          r"\(0\.001 of the mean edge ([0-9.e+-]+)\)$", r.stdout, re.M)
-            assert m is not None, r.stdout
-            bits, bound, mean_edge = int(m.group(1)), float(m.group(2)), float(m.group(3))
-            # Two legs of 1 and a diagonal of about sqrt 2 a cell, lengthened a little by the waves and the noise.
-            assert 1.13 < mean_edge < 1.3, mean_edge
-            assert 0 < bound <= 0.001 * mean_edge and 1 <= bits <= 24, (bits, bound, mean_edge)
+            check_quantized_bound(r.stdout, "0.001")
             assert ply_counts(out) == (vertices, faces)
             assert rms_to_clean(read_binary_ply_vertices(out)) < 0.5 * noisy_rms
         check("--quantize-upload sends the mesh under a 300 kB upload limit that refuses the lossless upload, and "
@@ -165,12 +169,7 @@ def local_limits_checks(a, check, tmp):
             r = run([a.cli, "submit", mesh, "--server", limited.address, "--retries", "0",
                      "--quantize-upload=0.002", "--wait", "-o", out])
             assert r.returncode == 0, (r.returncode, r.stderr)
-            m = re.search(r"^upload quantized to (\d+) bits: each coordinate within ([0-9.e+-]+) of the input "
-                          r"\(0\.002 of the mean edge ([0-9.e+-]+)\)$", r.stderr, re.M)
-            assert m is not None, r.stderr
-            bits, bound, mean_edge = int(m.group(1)), float(m.group(2)), float(m.group(3))
-            assert 1.13 < mean_edge < 1.3, mean_edge
-            assert 0 < bound <= 0.002 * mean_edge and 1 <= bits <= 24, (bits, bound, mean_edge)
+            check_quantized_bound(r.stderr, "0.002")
             # stdout is the job's id alone (then the watch's lines), as without the flag.
             job_id = r.stdout.splitlines()[0]
             assert re.fullmatch(r"[0-9a-f-]+", job_id), r.stdout
