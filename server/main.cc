@@ -16,6 +16,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <thread>
+#include <utility>
 
 #include "CLI/CLI.hpp"
 #include "absl/strings/str_cat.h"
@@ -149,21 +150,16 @@ int main(int argc, char** argv) {
     return 2;
   }
   o.log_format = log_format == "json" ? meshsmooth::server::LogFormat::kJson : meshsmooth::server::LogFormat::kText;
-  if (!token_file.empty()) {
-    absl::StatusOr<std::string> token = meshsmooth::ReadTokenFile(token_file);
-    if (!token.ok()) {
-      meshsmooth::server::LogEvent(o.log_format, "error", "start_failed", std::string(token.status().message()));
-      return 1;
-    }
-    o.auth_token = *std::move(token);
-  }
-  if (!callback_secret_file.empty()) {
-    absl::StatusOr<std::string> secret = meshsmooth::ReadTokenFile(callback_secret_file);
+  // The bearer token and the callback secret: each file's one line, when given.
+  for (auto [file, into] :
+       {std::pair{&token_file, &o.auth_token}, std::pair{&callback_secret_file, &o.callback_secret}}) {
+    if (file->empty()) continue;
+    absl::StatusOr<std::string> secret = meshsmooth::ReadTokenFile(*file);
     if (!secret.ok()) {
       meshsmooth::server::LogEvent(o.log_format, "error", "start_failed", std::string(secret.status().message()));
       return 1;
     }
-    o.callback_secret = *std::move(secret);
+    *into = *std::move(secret);
   }
 
   // Block the shutdown signals before gRPC starts its threads, then wait for them on one
