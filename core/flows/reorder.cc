@@ -151,41 +151,12 @@ void Renumber(const std::vector<int32_t>& order, Mesh& mesh, Topology& topo, int
 }
 
 void RenumberBack(const std::vector<int32_t>& order, Mesh& mesh, Topology& topo, int threads) {
+  // Renumbering by the inverse permutation (old -> new, read as new -> old) is the way back.
   const int32_t n = static_cast<int32_t>(order.size());
-  const auto faces = static_cast<int64_t>(mesh.triangles.size());
+  std::vector<int32_t> inverse(n);
 #pragma omp parallel for schedule(static) num_threads(threads)
-  for (int64_t f = 0; f < faces; ++f) {
-    for (int32_t& v : mesh.triangles[f]) {
-      if (v >= 0 && v < n) v = order[v];
-    }
-  }
-  {
-    std::vector<Vec3> positions(n);
-#pragma omp parallel for schedule(static) num_threads(threads)
-    for (int32_t i = 0; i < n; ++i) positions[order[i]] = mesh.positions[i];
-    mesh.positions.swap(positions);
-  }
-  {
-    std::vector<VertexKind> kind(n);
-#pragma omp parallel for schedule(static) num_threads(threads)
-    for (int32_t i = 0; i < n; ++i) kind[order[i]] = topo.kind[i];
-    topo.kind.swap(kind);
-  }
-  {
-    std::vector<int32_t> offsets(static_cast<size_t>(n) + 1);
-    offsets[0] = 0;
-#pragma omp parallel for schedule(static) num_threads(threads)
-    for (int32_t i = 0; i < n; ++i) offsets[order[i] + 1] = topo.valence(i);
-    for (int32_t v = 0; v < n; ++v) offsets[v + 1] += offsets[v];
-    std::vector<int32_t> ring(topo.ring.size());
-#pragma omp parallel for schedule(static) num_threads(threads)
-    for (int32_t i = 0; i < n; ++i) {
-      int32_t out = offsets[order[i]];
-      for (int32_t k = topo.ring_offsets[i]; k < topo.ring_offsets[i + 1]; ++k) ring[out++] = order[topo.ring[k]];
-    }
-    topo.ring_offsets.swap(offsets);
-    topo.ring.swap(ring);
-  }
+  for (int32_t i = 0; i < n; ++i) inverse[order[i]] = i;
+  Renumber(inverse, mesh, topo, threads);
 }
 
 }  // namespace meshsmooth
